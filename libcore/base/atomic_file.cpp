@@ -1,0 +1,94 @@
+#include "base/atomic_file.h"
+
+#include <signal.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstdlib>
+#include <fstream>
+#include <locale>
+
+#include "base/error.h"
+
+namespace mvtm {
+
+namespace {
+std::atomic<unsigned> g_counter{0};
+
+bool ProcessAlive(long pid) { return pid > 0 && (kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM); }
+}  // namespace
+
+AtomicFile::AtomicFile(const fs::path& final_path) : final_(final_path) {
+  fs::path dir = final_.parent_path();
+  if (!dir.empty()) {
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec) throw Error(dir.string(), 0, "cannot create folder: " + ec.message());
+  }
+  std::string name = "." + final_.stem().string() + ".tmp-" + std::to_string(getpid()) + "-" +
+                     std::to_string(g_counter++) + final_.extension().string();
+  temp_ = dir / name;
+}
+
+AtomicFile::~AtomicFile() {
+  if (!committed_) {
+    std::error_code ec;
+    fs::remove(temp_, ec);
+  }
+}
+
+void AtomicFile::Commit() {
+  std::error_code ec;
+  fs::rename(temp_, final_, ec);
+  if (ec) throw Error(final_.string(), 0, "cannot write: " + ec.message());
+  committed_ = true;
+}
+
+static void WriteAtomic(const fs::path& path, std::ios::openmode mode,
+                        const std::function<void(std::ostream&)>& write) {
+  AtomicFile out(path);
+  {
+    std::ofstream f(out.temp_path(), mode | std::ios::trunc);
+    if (!f) throw Error(path.string(), 0, "cannot open for writing");
+    f.imbue(std::locale::classic());
+    f.precision(17);
+    write(f);
+    f.flush();
+    if (!f) throw Error(path.string(), 0, "write failed (disk full?)");
+  }
+  out.Commit();
+}
+
+void WriteTextAtomic(const fs::path& path, const std::function<void(std::ostream&)>& write) {
+  WriteAtomic(path, std::ios::out, write);
+}
+
+void WriteBinaryAtomic(const fs::path& path, const std::function<void(std::ostream&)>& write) {
+  WriteAtomic(path, std::ios::out | std::ios::binary, write);
+}
+
+bool IsUpToDate(const fs::path& output, const std::vector<fs::path>& inputs) {
+  std::error_code ec;
+  auto out_time = fs::last_write_time(output, ec);
+  if (ec) return false;
+  for (const auto& in : inputs) {
+    auto t = fs::last_write_time(in, ec);
+    if (ec) continue;
+    if (t > out_time) return false;
+  }
+  return true;
+}
+
+void RemoveStaleTemporaries(const fs::path& dir) {
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    std::string n = it->path().filename().string();
+    auto p = n.find(".tmp-");
+    if (n.empty() || n[0] != '.' || p == std::string::npos) continue;
+    long pid = std::strtol(n.c_str() + p + 5, nullptr, 10);
+    if (!ProcessAlive(pid)) fs::remove(it->path(), ec);
+  }
+}
+
+}  // namespace mvtm

@@ -1,0 +1,53 @@
+// mvtm — atomic output files and up-to-date checks.
+//
+// Every output of every tool is written to a temporary name in the destination folder
+// (".NAME.tmp-PID.EXT", hidden, same extension so format-by-extension writers still work) and
+// renamed over the final name only once it is complete, so a crash or `kill -9` never leaves a
+// half-written output. A re-run skips outputs that exist and are newer than all their inputs
+// (unless the tool is given --force).
+//
+// Thread safety: distinct AtomicFile objects may be used from different threads.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace mvtm {
+
+namespace fs = std::filesystem;
+
+class AtomicFile {
+ public:
+  // Creates the parent folder of `final_path` if needed.
+  explicit AtomicFile(const fs::path& final_path);
+  ~AtomicFile();  // removes the temporary file unless Commit() succeeded
+  AtomicFile(const AtomicFile&) = delete;
+  AtomicFile& operator=(const AtomicFile&) = delete;
+
+  const fs::path& temp_path() const { return temp_; }
+  const fs::path& final_path() const { return final_; }
+  // Renames the temporary file over the final path (atomic on POSIX within one filesystem).
+  void Commit();
+
+ private:
+  fs::path final_;
+  fs::path temp_;
+  bool committed_ = false;
+};
+
+// Writes text through `write` (stream imbued with the classic "C" locale, precision 17) to a
+// temporary file and renames it to `path`. Throws Error when the stream fails.
+void WriteTextAtomic(const fs::path& path, const std::function<void(std::ostream&)>& write);
+// Same for binary content.
+void WriteBinaryAtomic(const fs::path& path, const std::function<void(std::ostream&)>& write);
+
+// True when `output` exists and is at least as new as every existing input.
+bool IsUpToDate(const fs::path& output, const std::vector<fs::path>& inputs);
+
+// Removes stale temporary files ".NAME.tmp-PID.EXT" left in `dir` by processes that died.
+void RemoveStaleTemporaries(const fs::path& dir);
+
+}  // namespace mvtm

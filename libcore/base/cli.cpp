@@ -1,0 +1,78 @@
+#include "base/cli.h"
+
+#include <unistd.h>
+
+#include <clocale>
+#include <cstdio>
+#include <iostream>
+#include <locale>
+
+#include "base/error.h"
+#include "base/version.h"
+
+namespace mvtm {
+
+void ConfigureApp(CLI::App& app, const std::string& tool, const std::string& description) {
+  app.name(tool);
+  app.description(description);
+  app.set_version_flag("--version", std::string(tool) + " (mvtm) " + kVersion);
+  app.footer("See man " + tool + " for details. Exit status: 0 success, 1 data or I/O error, 2 usage error.");
+  app.get_formatter()->column_width(34);
+}
+
+int RunMain(CLI::App& app, const std::string& tool, int argc, char** argv,
+            const std::function<int()>& run) {
+  std::setlocale(LC_ALL, "C");
+  std::locale::global(std::locale::classic());
+  try {
+    try {
+      app.parse(argc, argv);
+    } catch (const CLI::CallForHelp&) {
+      std::cout << app.help();
+      return 0;
+    } catch (const CLI::CallForAllHelp&) {
+      std::cout << app.help("", CLI::AppFormatMode::All);
+      return 0;
+    } catch (const CLI::CallForVersion&) {
+      std::cout << app.version() << "\n";
+      return 0;
+    } catch (const CLI::ParseError& e) {
+      std::cerr << tool << ": error: " << e.what() << " (try --help)\n";
+      return 2;
+    }
+    return run();
+  } catch (const UsageError& e) {
+    std::cerr << tool << ": error: " << e.what() << "\n";
+    return 2;
+  } catch (const Error& e) {
+    std::cerr << tool << ": error: " << e.what() << "\n";
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << tool << ": error: " << e.what() << "\n";
+    return 1;
+  }
+}
+
+bool StderrIsTerminal() { return isatty(2) == 1; }
+
+Progress::Progress(std::string label, size_t total, bool quiet)
+    : label_(std::move(label)), total_(total), enabled_(!quiet && total > 0 && StderrIsTerminal()) {}
+
+Progress::~Progress() {
+  if (enabled_ && last_percent_ >= 0) std::fputs("\n", stderr);
+}
+
+void Progress::Step(size_t n) {
+  done_ += n;
+  if (!enabled_) return;
+  int percent = static_cast<int>(100 * done_ / total_);
+  if (percent == last_percent_) return;
+  last_percent_ = percent;
+  const int width = 30;
+  int fill = percent * width / 100;
+  std::fprintf(stderr, "\r%s [%.*s%*s] %3d%% %zu/%zu", label_.c_str(), fill,
+               "##############################", width - fill, "", percent, done_, total_);
+  std::fflush(stderr);
+}
+
+}  // namespace mvtm

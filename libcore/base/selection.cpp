@@ -1,0 +1,50 @@
+#include "base/selection.h"
+
+#include <algorithm>
+
+#include "base/error.h"
+#include "base/text.h"
+
+namespace mvtm {
+
+Selection Selection::Frames(const std::string& spec) {
+  Selection s;
+  auto colon = spec.find(':');
+  if (colon == std::string::npos) {
+    s.begin = ParseIntArg(spec, "--frames");
+    s.end = s.begin + 1;
+    s.has_end = true;
+    if (s.begin == -1) s.has_end = false;
+    return s;
+  }
+  std::string a = spec.substr(0, colon), b = spec.substr(colon + 1);
+  if (!a.empty()) s.begin = ParseIntArg(a, "--frames start");
+  if (!b.empty()) {
+    s.end = ParseIntArg(b, "--frames end");
+    s.has_end = true;
+  }
+  return s;
+}
+
+Selection Selection::Shard(const std::string& spec) {
+  Selection s;
+  auto slash = spec.find('/');
+  if (slash == std::string::npos) throw UsageError("--shard: '" + spec + "' is not I/N");
+  s.shard_index = static_cast<int>(ParseIntArg(spec.substr(0, slash), "--shard index"));
+  s.shard_count = static_cast<int>(ParseIntArg(spec.substr(slash + 1), "--shard count"));
+  if (s.shard_count < 1 || s.shard_index < 0 || s.shard_index >= s.shard_count)
+    throw UsageError("--shard: '" + spec + "' needs 0 <= I < N");
+  return s;
+}
+
+std::vector<size_t> Selection::Apply(size_t n) const {
+  long ln = static_cast<long>(n);
+  auto clampi = [ln](long v) { return std::clamp(v < 0 ? v + ln : v, 0L, ln); };
+  long b = clampi(begin), e = has_end ? clampi(end) : ln;
+  std::vector<size_t> out;
+  for (long i = b; i < e; ++i)
+    if (i % shard_count == shard_index) out.push_back(static_cast<size_t>(i));
+  return out;
+}
+
+}  // namespace mvtm

@@ -1,0 +1,132 @@
+#include "base/text.h"
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+
+#include "base/error.h"
+
+namespace mvtm {
+
+LineReader::LineReader(const std::string& path)
+    : owned_(std::make_unique<std::ifstream>(path, std::ios::binary)), name_(path) {
+  if (!*owned_) throw Error(path, 0, "cannot open");
+  in_ = owned_.get();
+}
+
+LineReader::LineReader(std::istream& in, std::string name) : in_(&in), name_(std::move(name)) {}
+
+bool LineReader::NextRaw(std::string& line) {
+  if (!std::getline(*in_, line)) return false;
+  ++line_no_;
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  return true;
+}
+
+bool LineReader::Next(std::string& line, bool skip_comments) {
+  std::string raw;
+  while (NextRaw(raw)) {
+    std::string_view t = Trim(raw);
+    if (t.empty()) continue;
+    if (skip_comments && t.front() == '#') continue;
+    line.assign(t);
+    return true;
+  }
+  return false;
+}
+
+void LineReader::Fail(const std::string& what) const { throw Error(name_, line_no_, what); }
+
+std::string_view Trim(std::string_view s) {
+  const char* ws = " \t\r\n\v\f";
+  size_t b = s.find_first_not_of(ws);
+  if (b == std::string_view::npos) return {};
+  size_t e = s.find_last_not_of(ws);
+  return s.substr(b, e - b + 1);
+}
+
+std::vector<std::string_view> SplitBlank(std::string_view s) {
+  std::vector<std::string_view> out;
+  size_t i = 0;
+  while (i < s.size()) {
+    while (i < s.size() && (s[i] == ' ' || s[i] == '\t')) ++i;
+    size_t j = i;
+    while (j < s.size() && s[j] != ' ' && s[j] != '\t') ++j;
+    if (j > i) out.push_back(s.substr(i, j - i));
+    i = j;
+  }
+  return out;
+}
+
+std::vector<std::string_view> SplitChar(std::string_view s, char c) {
+  std::vector<std::string_view> out;
+  size_t i = 0;
+  for (;;) {
+    size_t j = s.find(c, i);
+    if (j == std::string_view::npos) {
+      out.push_back(s.substr(i));
+      return out;
+    }
+    out.push_back(s.substr(i, j - i));
+    i = j + 1;
+  }
+}
+
+namespace {
+
+// Returns false when `token` is not entirely a number.
+bool ToDouble(std::string_view token, double& v) {
+  if (!token.empty() && token.front() == '+') token.remove_prefix(1);
+  if (token.empty()) return false;
+  auto r = std::from_chars(token.data(), token.data() + token.size(), v);
+  return r.ec == std::errc() && r.ptr == token.data() + token.size();
+}
+
+bool ToInt(std::string_view token, int64_t& v) {
+  if (!token.empty() && token.front() == '+') token.remove_prefix(1);
+  if (token.empty()) return false;
+  auto r = std::from_chars(token.data(), token.data() + token.size(), v);
+  return r.ec == std::errc() && r.ptr == token.data() + token.size();
+}
+
+}  // namespace
+
+double ParseDouble(std::string_view token, const LineReader& at, const char* field,
+                   bool allow_nonfinite) {
+  double v = 0;
+  if (!ToDouble(token, v))
+    at.Fail(std::string(field) + ": '" + std::string(token) + "' is not a number");
+  if (!allow_nonfinite && !std::isfinite(v))
+    at.Fail(std::string(field) + ": '" + std::string(token) + "' is not finite");
+  return v;
+}
+
+int64_t ParseInt(std::string_view token, const LineReader& at, const char* field) {
+  int64_t v = 0;
+  if (!ToInt(token, v))
+    at.Fail(std::string(field) + ": '" + std::string(token) + "' is not an integer");
+  return v;
+}
+
+double ParseDoubleArg(std::string_view token, const std::string& what) {
+  double v = 0;
+  if (!ToDouble(Trim(token), v) || !std::isfinite(v))
+    throw UsageError(what + ": '" + std::string(token) + "' is not a finite number");
+  return v;
+}
+
+int64_t ParseIntArg(std::string_view token, const std::string& what) {
+  int64_t v = 0;
+  if (!ToInt(Trim(token), v))
+    throw UsageError(what + ": '" + std::string(token) + "' is not an integer");
+  return v;
+}
+
+std::string FormatDouble(double v) {
+  char buf[40];
+  // to_chars is locale-independent; with a precision of 17 it prints like "%.17g".
+  auto r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::general, 17);
+  return std::string(buf, r.ptr);
+}
+
+}  // namespace mvtm
