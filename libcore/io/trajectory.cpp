@@ -1,0 +1,303 @@
+#include "io/trajectory.h"
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+
+#include "base/atomic_file.h"
+#include "base/error.h"
+#include "base/text.h"
+
+namespace mvtm {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+Eigen::Quaterniond QuaternionOrFail(double w, double x, double y, double z, const LineReader& in) {
+  double n = std::sqrt(w * w + x * x + y * y + z * z);
+  if (!(n > 1e-12)) in.Fail("quaternion has zero norm");
+  Eigen::Quaterniond q(w / n, x / n, y / n, z / n);
+  return q;
+}
+
+}  // namespace
+
+TrajectoryFormat DetectTrajectoryFormat(const std::string& path) {
+  LineReader in(path);
+  std::string raw;
+  bool colmap_header = false;
+  while (in.NextRaw(raw)) {
+    std::string_view t = Trim(raw);
+    if (t.empty()) continue;
+    if (t.front() == '#') {
+      if (t.find("IMAGE_ID, QW") != std::string_view::npos) colmap_header = true;
+      continue;
+    }
+    if (colmap_header) return TrajectoryFormat::kColmap;
+    size_t n = SplitBlank(t).size();
+    if (n == 8) return TrajectoryFormat::kTum;
+    if (n == 12) return TrajectoryFormat::kKitti;
+    if (n == 10) return TrajectoryFormat::kColmap;
+    in.Fail("cannot tell the trajectory format: " + std::to_string(n) +
+            " fields (TUM has 8, KITTI 12, COLMAP images.txt 10)");
+  }
+  throw Error(path, 0, "trajectory file has no poses");
+}
+
+Trajectory ReadTum(const std::string& path) {
+  LineReader in(path);
+  Trajectory tr;
+  std::string line;
+  while (in.Next(line)) {
+    auto tok = SplitBlank(line);
+    if (tok.size() != 8)
+      in.Fail("TUM pose needs 8 fields (timestamp tx ty tz qx qy qz qw), found " +
+              std::to_string(tok.size()));
+    static const char* names[8] = {"timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
+    double v[8];
+    for (int i = 0; i < 8; ++i) v[i] = ParseDouble(tok[i], in, names[i]);
+    StampedPose p;
+    p.time = v[0];
+    p.line = in.line();
+    p.pose = Rigid3d(QuaternionOrFail(v[7], v[4], v[5], v[6], in), Eigen::Vector3d(v[1], v[2], v[3]));
+    tr.poses.push_back(p);
+  }
+  if (tr.poses.empty()) throw Error(path, 0, "trajectory file has no poses");
+  return tr;
+}
+
+Trajectory ReadKittiPoses(const std::string& path, const std::string& times_path) {
+  LineReader in(path);
+  Trajectory tr;
+  std::string line;
+  while (in.Next(line)) {
+    auto tok = SplitBlank(line);
+    if (tok.size() != 12)
+      in.Fail("KITTI pose needs 12 numbers (row-major 3x4), found " + std::to_string(tok.size()));
+    Eigen::Matrix<double, 3, 4> m;
+    for (int i = 0; i < 12; ++i) m(i / 4, i % 4) = ParseDouble(tok[i], in, "matrix entry");
+    double det = m.leftCols<3>().determinant();
+    if (!(std::abs(det - 1) < 1e-3)) in.Fail("rotation part is not a rotation (det " + FormatDouble(det) + ")");
+    StampedPose p;
+    p.time = static_cast<double>(tr.poses.size());
+    p.line = in.line();
+    p.pose = Rigid3d::FromMatrix(m);
+    tr.poses.push_back(p);
+  }
+  if (tr.poses.empty()) throw Error(path, 0, "trajectory file has no poses");
+  if (!times_path.empty()) {
+    auto times = ReadTimestamps(times_path);
+    if (times.size() != tr.poses.size())
+      throw Error(times_path, 0,
+                  std::to_string(times.size()) + " timestamps for " +
+                      std::to_string(tr.poses.size()) + " poses in " + path);
+    for (size_t i = 0; i < times.size(); ++i) tr.poses[i].time = times[i].time;
+  }
+  return tr;
+}
+
+static Trajectory ReadColmapImagesTxt(const std::string& path) {
+  LineReader in(path);
+  Trajectory tr;
+  std::string line, pts;
+  while (in.Next(line)) {
+    auto tok = SplitBlank(line);
+    if (tok.size() != 10) in.Fail("image line needs 10 fields, found " + std::to_string(tok.size()));
+    double v[7];
+    for (int i = 0; i < 7; ++i) v[i] = ParseDouble(tok[1 + i], in, "pose");
+    Rigid3d w2c(QuaternionOrFail(v[0], v[1], v[2], v[3], in), Eigen::Vector3d(v[4], v[5], v[6]));
+    StampedPose p;
+    p.time = static_cast<double>(ParseInt(tok[0], in, "IMAGE_ID"));
+    p.line = in.line();
+    p.pose = w2c.Inverse();
+    tr.poses.push_back(p);
+    tr.names.emplace_back(tok[9]);
+    in.NextRaw(pts);  // the POINTS2D line
+  }
+  if (tr.poses.empty()) throw Error(path, 0, "trajectory file has no poses");
+  return tr;
+}
+
+Trajectory ReadTrajectory(const std::string& path, TrajectoryFormat format) {
+  if (format == TrajectoryFormat::kAuto) format = DetectTrajectoryFormat(path);
+  switch (format) {
+    case TrajectoryFormat::kTum: return ReadTum(path);
+    case TrajectoryFormat::kKitti: return ReadKittiPoses(path);
+    case TrajectoryFormat::kColmap: return ReadColmapImagesTxt(path);
+    default: break;
+  }
+  throw Error(path, 0, "unknown trajectory format");
+}
+
+void WriteTum(const std::string& path, const std::vector<StampedPose>& c2w) {
+  WriteTextAtomic(path, [&](std::ostream& f) {
+    f << "# timestamp tx ty tz qx qy qz qw (camera-to-world)\n";
+    for (const auto& p : c2w) {
+      const auto& q = p.pose.q;
+      const auto& t = p.pose.t;
+      f << FormatDouble(p.time) << ' ' << FormatDouble(t.x()) << ' ' << FormatDouble(t.y()) << ' '
+        << FormatDouble(t.z()) << ' ' << FormatDouble(q.x()) << ' ' << FormatDouble(q.y()) << ' '
+        << FormatDouble(q.z()) << ' ' << FormatDouble(q.w()) << '\n';
+    }
+  });
+}
+
+void WriteKittiPoses(const std::string& path, const std::vector<StampedPose>& c2w) {
+  WriteTextAtomic(path, [&](std::ostream& f) {
+    for (const auto& p : c2w) {
+      auto m = p.pose.Matrix3x4();
+      for (int i = 0; i < 12; ++i) f << (i ? " " : "") << FormatDouble(m(i / 4, i % 4));
+      f << '\n';
+    }
+  });
+}
+
+std::vector<TimedName> ReadTimestamps(const std::string& path) {
+  LineReader in(path);
+  std::vector<TimedName> out;
+  std::string line;
+  while (in.Next(line)) {
+    auto tok = SplitBlank(line);
+    if (tok.size() > 2) in.Fail("timestamp line needs 'timestamp [name]', found " + std::to_string(tok.size()) + " fields");
+    TimedName t;
+    t.time = ParseDouble(tok[0], in, "timestamp");
+    if (tok.size() == 2) t.name = std::string(tok[1]);
+    t.line = in.line();
+    out.push_back(t);
+  }
+  if (out.empty()) throw Error(path, 0, "no timestamps");
+  return out;
+}
+
+Camera ReadKittiCalib(const std::string& path, int cam_index, uint64_t width, uint64_t height) {
+  LineReader in(path);
+  std::string line, key = "P" + std::to_string(cam_index) + ":";
+  while (in.Next(line)) {
+    auto tok = SplitBlank(line);
+    if (tok.empty() || tok[0] != key) continue;
+    if (tok.size() != 13) in.Fail(key + " needs 12 numbers, found " + std::to_string(tok.size() - 1));
+    double p[12];
+    for (int i = 0; i < 12; ++i) p[i] = ParseDouble(tok[1 + i], in, "projection entry");
+    if (!(p[0] > 0) || !(p[5] > 0)) in.Fail(key + " focal lengths must be positive");
+    Camera c;
+    c.model = CameraModel::kPinhole;
+    c.width = width;
+    c.height = height;
+    c.params = {p[0], p[5], p[2], p[6]};
+    return c;
+  }
+  throw Error(path, 0, "no line '" + key + "'");
+}
+
+Camera ReadOrbSettings(const std::string& path, uint64_t width, uint64_t height) {
+  if (!fs::exists(path)) throw Error(path, 0, "cannot open");
+  cv::FileStorage fsr;
+  try {
+    fsr.open(path, cv::FileStorage::READ);
+  } catch (const cv::Exception& e) {
+    throw Error(path, 0, "not a readable ORB-SLAM2 settings file: " + e.msg);
+  }
+  if (!fsr.isOpened()) throw Error(path, 0, "not a readable ORB-SLAM2 settings file");
+  auto get = [&](const char* key, bool required, double def) {
+    cv::FileNode n = fsr[key];
+    if (n.empty()) {
+      if (required) throw Error(path, 0, std::string("missing key ") + key);
+      return def;
+    }
+    if (!n.isReal() && !n.isInt()) throw Error(path, 0, std::string(key) + " is not a number");
+    double v = n.real();
+    if (!std::isfinite(v)) throw Error(path, 0, std::string(key) + " is not finite");
+    return v;
+  };
+  double fx = get("Camera.fx", true, 0), fy = get("Camera.fy", true, 0);
+  double cx = get("Camera.cx", true, 0), cy = get("Camera.cy", true, 0);
+  double k1 = get("Camera.k1", false, 0), k2 = get("Camera.k2", false, 0);
+  double p1 = get("Camera.p1", false, 0), p2 = get("Camera.p2", false, 0);
+  double k3 = get("Camera.k3", false, 0);
+  double w = get("Camera.width", false, 0), h = get("Camera.height", false, 0);
+  if (width) w = static_cast<double>(width);
+  if (height) h = static_cast<double>(height);
+  if (!(w > 0) || !(h > 0))
+    throw Error(path, 0, "no Camera.width/Camera.height: give the image size (--size)");
+  if (!(fx > 0) || !(fy > 0)) throw Error(path, 0, "focal lengths must be positive");
+  Camera c;
+  c.width = static_cast<uint64_t>(w);
+  c.height = static_cast<uint64_t>(h);
+  if (k1 == 0 && k2 == 0 && p1 == 0 && p2 == 0 && k3 == 0) {
+    c.model = CameraModel::kPinhole;
+    c.params = {fx, fy, cx, cy};
+  } else if (k3 == 0) {
+    c.model = CameraModel::kOpenCV;
+    c.params = {fx, fy, cx, cy, k1, k2, p1, p2};
+  } else {
+    c.model = CameraModel::kFullOpenCV;
+    c.params = {fx, fy, cx, cy, k1, k2, p1, p2, k3, 0, 0, 0};
+  }
+  return c;
+}
+
+NerfScene ReadNerfTransforms(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) throw Error(path, 0, "cannot open");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(f);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw Error(path, 0, std::string("invalid JSON: ") + e.what());
+  }
+  auto num = [&](const nlohmann::json& obj, const char* key, const std::string& where) {
+    if (!obj.contains(key)) throw Error(path, 0, where + key + " is missing");
+    if (!obj[key].is_number()) throw Error(path, 0, where + key + " is not a number");
+    double v = obj[key].get<double>();
+    if (!std::isfinite(v)) throw Error(path, 0, where + key + " is not finite");
+    return v;
+  };
+  NerfScene s;
+  double w = num(j, "w", "/"), h = num(j, "h", "/");
+  double fx = num(j, "fl_x", "/");
+  double fy = j.contains("fl_y") ? num(j, "fl_y", "/") : fx;
+  double cx = j.contains("cx") ? num(j, "cx", "/") : w / 2, cy = j.contains("cy") ? num(j, "cy", "/") : h / 2;
+  double k1 = j.contains("k1") ? num(j, "k1", "/") : 0, k2 = j.contains("k2") ? num(j, "k2", "/") : 0;
+  double p1 = j.contains("p1") ? num(j, "p1", "/") : 0, p2 = j.contains("p2") ? num(j, "p2", "/") : 0;
+  s.camera.width = static_cast<uint64_t>(w);
+  s.camera.height = static_cast<uint64_t>(h);
+  if (k1 == 0 && k2 == 0 && p1 == 0 && p2 == 0) {
+    s.camera.model = CameraModel::kPinhole;
+    s.camera.params = {fx, fy, cx, cy};
+  } else {
+    s.camera.model = CameraModel::kOpenCV;
+    s.camera.params = {fx, fy, cx, cy, k1, k2, p1, p2};
+  }
+  if (!j.contains("frames") || !j["frames"].is_array()) throw Error(path, 0, "/frames is missing");
+  size_t i = 0;
+  for (const auto& fr : j["frames"]) {
+    std::string where = "/frames/" + std::to_string(i) + "/";
+    if (!fr.contains("file_path") || !fr["file_path"].is_string())
+      throw Error(path, 0, where + "file_path is missing");
+    const auto& m = fr.value("transform_matrix", nlohmann::json());
+    if (!m.is_array() || m.size() < 3) throw Error(path, 0, where + "transform_matrix is not 4x4");
+    Eigen::Matrix<double, 3, 4> c2w;
+    for (int r = 0; r < 3; ++r) {
+      if (!m[r].is_array() || m[r].size() != 4) throw Error(path, 0, where + "transform_matrix is not 4x4");
+      for (int c = 0; c < 4; ++c) {
+        if (!m[r][c].is_number()) throw Error(path, 0, where + "transform_matrix has a non-number");
+        c2w(r, c) = m[r][c].get<double>();
+        if (!std::isfinite(c2w(r, c))) throw Error(path, 0, where + "transform_matrix is not finite");
+      }
+    }
+    // OpenGL camera axes (y up, z backward) → camera axes (y down, z forward).
+    c2w.col(1) = -c2w.col(1);
+    c2w.col(2) = -c2w.col(2);
+    StampedPose p;
+    p.time = static_cast<double>(i);
+    p.pose = Rigid3d::FromMatrix(c2w);
+    s.frames.poses.push_back(p);
+    s.frames.names.push_back(fr["file_path"].get<std::string>());
+    ++i;
+  }
+  return s;
+}
+
+}  // namespace mvtm

@@ -1,0 +1,141 @@
+#include "workspace/workspace.h"
+
+#include <chrono>
+#include <cstdio>
+#include <ctime>
+#include <fstream>
+
+#include "base/atomic_file.h"
+#include "base/error.h"
+#include "base/version.h"
+
+namespace mvtm {
+
+namespace {
+// "dir/A_0001.jpg" → "dir/A_0001" + ext
+fs::path Derived(const fs::path& dir, const std::string& name, const char* ext) {
+  fs::path p = dir / name;
+  p.replace_extension(ext);
+  return p;
+}
+}  // namespace
+
+Workspace::Workspace(fs::path root) : root_(std::move(root)) {}
+
+fs::path Workspace::SparseDir() const { return root_ / "sparse"; }
+fs::path Workspace::ImagesDir() const { return root_ / "images"; }
+fs::path Workspace::ImagePath(const std::string& name) const { return root_ / "images" / name; }
+fs::path Workspace::TexturePath(const std::string& name) const { return root_ / "textures" / name; }
+fs::path Workspace::SourceImagePath(const std::string& name) const {
+  fs::path t = TexturePath(name);
+  return fs::exists(t) ? t : ImagePath(name);
+}
+fs::path Workspace::MeshPath() const {
+  for (const char* n : {"mesh.ply", "meshed-poisson.ply", "meshed-delaunay.ply"})
+    if (fs::exists(root_ / n)) return root_ / n;
+  return root_ / "mesh.ply";
+}
+fs::path Workspace::LabelsDir() const { return root_ / "labels"; }
+fs::path Workspace::LabelPath(const std::string& name) const { return Derived(LabelsDir(), name, ".png"); }
+fs::path Workspace::MasksDir() const { return root_ / "masks"; }
+fs::path Workspace::MaskPath(const std::string& name) const { return Derived(MasksDir(), name, ".png"); }
+fs::path Workspace::DepthPath(const std::string& name) const { return Derived(root_ / "depth", name, ".exr"); }
+fs::path Workspace::TracksPath() const { return root_ / "tracks.tsv"; }
+fs::path Workspace::PartnersPath() const { return root_ / "partners.tsv"; }
+fs::path Workspace::ProvenancePath(const std::string& tool) const {
+  return root_ / "provenance" / (tool + ".json");
+}
+
+std::vector<std::string> Workspace::Missing(const std::vector<WsItem>& needs) const {
+  std::vector<std::string> out;
+  auto model = [&] {
+    for (const char* ext : {".txt", ".bin"}) {
+      bool all = true;
+      for (const char* f : {"cameras", "images", "points3D"})
+        all = all && fs::exists(SparseDir() / (std::string(f) + ext));
+      if (all) return true;
+    }
+    return false;
+  };
+  for (WsItem n : needs) {
+    switch (n) {
+      case WsItem::kSparse:
+        if (!model()) out.push_back("sparse/ (COLMAP model: cameras, images, points3D)");
+        break;
+      case WsItem::kImages:
+        if (!fs::is_directory(ImagesDir())) out.push_back("images/");
+        break;
+      case WsItem::kMesh:
+        if (!fs::exists(MeshPath())) out.push_back("mesh.ply (or meshed-poisson.ply)");
+        break;
+      case WsItem::kLabels:
+        if (!fs::is_directory(LabelsDir())) out.push_back("labels/");
+        break;
+      case WsItem::kMasks:
+        if (!fs::is_directory(MasksDir())) out.push_back("masks/ (run segtrack)");
+        break;
+      case WsItem::kTracks:
+        if (!fs::exists(TracksPath())) out.push_back("tracks.tsv (run segtrack)");
+        break;
+      case WsItem::kPartners:
+        if (!fs::exists(PartnersPath())) out.push_back("partners.tsv (run pickview --partners)");
+        break;
+      case WsItem::kDepth:
+        if (!fs::is_directory(root_ / "depth")) out.push_back("depth/ (run bakedepth)");
+        break;
+      case WsItem::kTextures:
+        if (!fs::is_directory(root_ / "textures")) out.push_back("textures/ (run inpaint3d)");
+        break;
+    }
+  }
+  return out;
+}
+
+void Workspace::Require(const std::string& tool, const std::vector<WsItem>& needs) const {
+  if (!fs::is_directory(root_)) throw Error(root_.string(), 0, "workspace folder does not exist");
+  auto miss = Missing(needs);
+  if (miss.empty()) return;
+  std::string list;
+  for (const auto& m : miss) list += (list.empty() ? "" : ", ") + m;
+  throw Error(root_.string(), 0, "not ready for " + tool + ": missing " + list);
+}
+
+std::string FileChecksum(const fs::path& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw Error(path.string(), 0, "cannot open");
+  uint64_t h = 1469598103934665603ULL;
+  char buf[1 << 16];
+  while (f) {
+    f.read(buf, sizeof buf);
+    for (std::streamsize i = 0; i < f.gcount(); ++i) {
+      h ^= static_cast<unsigned char>(buf[i]);
+      h *= 1099511628211ULL;
+    }
+  }
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+  return hex;
+}
+
+void Workspace::WriteProvenance(const std::string& tool, const nlohmann::json& options,
+                                const std::vector<fs::path>& inputs) const {
+  nlohmann::json j;
+  j["tool"] = tool;
+  j["version"] = kVersion;
+  std::time_t now = std::time(nullptr);
+  char stamp[32];
+  std::strftime(stamp, sizeof stamp, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
+  j["time"] = stamp;
+  j["options"] = options;
+  nlohmann::json in = nlohmann::json::array();
+  for (const auto& p : inputs) {
+    if (!fs::is_regular_file(p)) continue;
+    in.push_back({{"path", fs::relative(p, root_).string()},
+                  {"bytes", fs::file_size(p)},
+                  {"fnv1a64", FileChecksum(p)}});
+  }
+  j["inputs"] = in;
+  WriteTextAtomic(ProvenancePath(tool), [&](std::ostream& o) { o << j.dump(2) << "\n"; });
+}
+
+}  // namespace mvtm

@@ -1,0 +1,69 @@
+// mvtm — the workspace: one road fragment on disk. The only code that knows folder names.
+//
+// Layout (man mvtm-workspace(5)):
+//   sparse/               COLMAP model (cameras, images, points3D; .txt or .bin) — poses of record
+//   images/NAME           undistorted source images, named as in images.txt
+//   mesh.ply              (or meshed-poisson.ply, meshed-delaunay.ply) — first found wins
+//   labels/NAME.png       semantic labels (segtrack input)
+//   masks/NAME.png        8-bit masks, 255 = remove (segtrack output)
+//   tracks.tsv            segtrack's tracks
+//   partners.tsv          pickview's view selection
+//   depth/NAME.exr        float32 linear camera-space depth, +inf = no surface (bakedepth)
+//   textures/NAME         images with vehicles removed (inpaint3d); preferred over images/
+//   provenance/TOOL.json  resolved options, version and input checksums of each tool's last run
+// NAME keeps any sub-folders of the image name; derived files replace the extension (".png",
+// ".exr") after the full name's stem, e.g. "A_0001.jpg" → "masks/A_0001.png".
+// A COLMAP dense workspace (image_undistorter output + meshed-poisson.ply) is a valid workspace.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace mvtm {
+
+namespace fs = std::filesystem;
+
+enum class WsItem { kSparse, kImages, kMesh, kLabels, kMasks, kTracks, kPartners, kDepth, kTextures };
+
+class Workspace {
+ public:
+  explicit Workspace(fs::path root);
+
+  const fs::path& root() const { return root_; }
+  fs::path SparseDir() const;
+  fs::path ImagesDir() const;
+  fs::path ImagePath(const std::string& name) const;
+  // textures/NAME when it exists, else images/NAME.
+  fs::path SourceImagePath(const std::string& name) const;
+  fs::path TexturePath(const std::string& name) const;
+  fs::path MeshPath() const;  // the first existing of mesh.ply, meshed-poisson.ply, meshed-delaunay.ply; else mesh.ply
+  fs::path LabelPath(const std::string& name) const;
+  fs::path LabelsDir() const;
+  fs::path MaskPath(const std::string& name) const;
+  fs::path MasksDir() const;
+  fs::path DepthPath(const std::string& name) const;
+  fs::path TracksPath() const;
+  fs::path PartnersPath() const;
+  fs::path ProvenancePath(const std::string& tool) const;
+
+  // What `tool` needs that is missing, one human-readable item each (empty: ready).
+  std::vector<std::string> Missing(const std::vector<WsItem>& needs) const;
+  // Throws Error("WS: not ready for TOOL: missing a, b") when anything is missing.
+  void Require(const std::string& tool, const std::vector<WsItem>& needs) const;
+
+  // Writes provenance/TOOL.json atomically: tool, version, time, options, and the size and
+  // FNV-1a 64 checksum of each input file.
+  void WriteProvenance(const std::string& tool, const nlohmann::json& options,
+                       const std::vector<fs::path>& inputs) const;
+
+ private:
+  fs::path root_;
+};
+
+// 64-bit FNV-1a of a file's bytes, as 16 hex digits. Throws Error when unreadable.
+std::string FileChecksum(const fs::path& path);
+
+}  // namespace mvtm
