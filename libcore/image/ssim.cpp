@@ -4,28 +4,32 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <sstream>
 #include <thread>
 
-namespace mvtm {
-
-// The row kernels are compiled for AVX-512, AVX2 and baseline x86-64 and picked at run time
-// (no -march=native in the build). FP contraction stays off so every clone rounds the SSIM
-// formula alike and identical images give exactly 1.
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
-#define MVTM_SIMD_CLONES \
-  __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+// The row kernels are compiled three times, for AVX-512, AVX2+FMA and baseline x86-64, with
+// block sizes that fit each register file, and picked at run time (no -march=native in the
+// build). Elsewhere only the baseline variant exists.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define MVTM_X86_DISPATCH 1
+#define MVTM_TARGET(arch) __attribute__((target(arch)))
 #define MVTM_INLINE inline __attribute__((always_inline))
 #else
-#define MVTM_SIMD_CLONES
+#define MVTM_X86_DISPATCH 0
+#define MVTM_TARGET(arch)
 #define MVTM_INLINE inline
 #endif
+
+namespace mvtm {
 
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr int kLanes = 4;  // partial sums per row: vectorisable, and the same order everywhere
+constexpr int kLanes = 4;     // partial sums per row: vectorisable, and the same order everywhere
+constexpr int kMaxRows = 4;   // most output rows computed together (see VerticalRows)
+constexpr int kMaxBlock = 8;  // most doubles per vector block
 
 std::string Dims(const Image& img) {
   std::ostringstream s;
@@ -35,6 +39,33 @@ std::string Dims(const Image& img) {
 
 // scipy.ndimage mode 'reflect' (d c b a | a b c d | d c b a); valid for -n <= i < 2n.
 inline int Reflect(int i, int n) { return i < 0 ? -i - 1 : (i >= n ? 2 * n - i - 1 : i); }
+
+// GCC vector extensions: kB doubles, lowered to whatever the enclosing target offers.
+template <int kB>
+struct VecOf;
+template <>
+struct VecOf<2> {
+  typedef double type __attribute__((vector_size(16)));
+};
+template <>
+struct VecOf<4> {
+  typedef double type __attribute__((vector_size(32)));
+};
+template <>
+struct VecOf<8> {
+  typedef double type __attribute__((vector_size(64)));
+};
+
+template <typename V>
+MVTM_INLINE V Load(const double* p) {
+  V v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+template <typename V>
+MVTM_INLINE void Store(double* p, V v) {
+  std::memcpy(p, &v, sizeof v);
+}
 
 // One colour channel of a pair, as contiguous float planes.
 struct PlanePair {
@@ -50,109 +81,174 @@ struct Job {
   float* map = nullptr;           // w*h; channel maps are summed here
 };
 
-struct Scratch {
-  std::array<std::vector<double>, 5> v;  // vertical pass of x, y, x², y², xy; r pad each side
-  std::vector<double> s;                 // one row of the SSIM map
-  std::vector<const float*> xr, yr;      // the 2r+1 source rows of the window
+// The four planes filtered per channel: x, y, xy and d² = (x − y)². With
+//   σx² + σy² = 2σxy + (E[d²] − (µx − µy)²)   and   µx² + µy² = 2µxµy + (µx − µy)²
+// the denominator terms are the numerator terms plus a non-negative remainder that is exactly
+// zero for identical images, so S = 1 exactly there whatever the compiler contracts into FMAs.
+enum Plane { kX, kY, kXY, kDD, kPlanes };
 
-  Scratch(int w, int r) : s(w), xr(2 * r + 1), yr(2 * r + 1) {
-    for (auto& b : v) b.assign(w + 2 * r, 0.0);
+struct Scratch {
+  int w, r, slots;
+  // Products of the source rows of the window, kPlanes×w doubles per slot; source row q lives
+  // in slot q % slots (the reflected windows of kMaxRows rows span at most `slots`
+  // consecutive source rows).
+  std::vector<double> ring;
+  std::vector<int> ring_row;  // source row held by each slot, -1 = none
+  // Vertical sums of up to kMaxRows rows, each kPlanes planes of w + 2r doubles (r mirrored
+  // columns each side).
+  std::vector<double> v;
+  std::vector<double> s;            // one row of the SSIM map
+  std::vector<const double*> rows;  // the ring rows of the current window
+  std::vector<double> wv;           // the weights, each repeated kMaxBlock times
+
+  Scratch(int width, int radius)
+      : w(width),
+        r(radius),
+        slots(2 * radius + kMaxRows),
+        ring(static_cast<size_t>(slots) * kPlanes * width),
+        ring_row(slots, -1),
+        v(static_cast<size_t>(kMaxRows) * kPlanes * VStride()),
+        s(width),
+        rows(slots),
+        wv(static_cast<size_t>(2 * radius + 1) * kMaxBlock) {}
+
+  size_t VStride() const { return static_cast<size_t>(w) + 2 * r; }
+  // Plane q of vertical-sum row t, at column 0.
+  double* V(int t, int q) {
+    return v.data() + (static_cast<size_t>(t) * kPlanes + q) * VStride() + r;
+  }
+  // Forgets the ring (a new channel) and splats the weights.
+  void Reset(const double* wt) {
+    std::fill(ring_row.begin(), ring_row.end(), -1);
+    for (int k = 0; k <= 2 * r; ++k) std::fill_n(wv.begin() + k * kMaxBlock, kMaxBlock, wt[k]);
   }
 };
 
-// kN adjacent columns of the vertical pass (scipy filters axis 0 first): the window sums of
-// x, y, x², y², xy. Fixed-size blocks keep the accumulators in vector registers.
-template <int kR, int kN>
-MVTM_INLINE void VerticalBlock(const float* const* xr, const float* const* yr,
-                               const double* __restrict wt, int taps, int j,
-                               double* const* __restrict v) {
-  if (kR >= 0) taps = 2 * kR + 1;
-  double acc[5][kN] = {};
-  for (int k = 0; k < taps; ++k) {
-    const double wk = wt[k];
-    const float* __restrict x = xr[k] + j;
-    const float* __restrict y = yr[k] + j;
-    for (int l = 0; l < kN; ++l) {
-      const double a = x[l], b = y[l];
-      acc[0][l] += wk * a;
-      acc[1][l] += wk * b;
-      acc[2][l] += wk * (a * a);
-      acc[3][l] += wk * (b * b);
-      acc[4][l] += wk * (a * b);
+// The ring slot of source row q, filling it with the products of that row if needed.
+MVTM_INLINE const double* ProductRow(Scratch& sc, PlanePair p, int q) {
+  const int slot = q % sc.slots;
+  const size_t w = sc.w;
+  double* out = sc.ring.data() + static_cast<size_t>(slot) * kPlanes * w;
+  if (sc.ring_row[slot] != q) {
+    sc.ring_row[slot] = q;
+    const float* __restrict x = p.x + static_cast<size_t>(q) * w;
+    const float* __restrict y = p.y + static_cast<size_t>(q) * w;
+    double* __restrict ox = out + kX * w;
+    double* __restrict oy = out + kY * w;
+    double* __restrict oxy = out + kXY * w;
+    double* __restrict odd = out + kDD * w;
+    for (size_t j = 0; j < w; ++j) {
+      const double a = x[j], b = y[j], d = a - b;
+      ox[j] = a;
+      oy[j] = b;
+      oxy[j] = a * b;
+      odd[j] = d * d;
     }
   }
-  for (int q = 0; q < 5; ++q)
-    for (int l = 0; l < kN; ++l) v[q][j + l] = acc[q][l];
+  return out;
 }
 
-// kN adjacent columns of the horizontal pass fused with the SSIM formula (skimage's operation
-// order). h[q][j + k] is the vertical sum at column j - r + k.
-template <int kR, int kN>
-MVTM_INLINE void HorizontalBlock(const double* const* h, const double* __restrict wt, int taps,
-                                 double c1, double c2, int j, double* __restrict s) {
-  if (kR >= 0) taps = 2 * kR + 1;
-  double u[5][kN] = {};
-  for (int k = 0; k < taps; ++k) {
-    const double wk = wt[k];
-    for (int q = 0; q < 5; ++q) {
-      const double* __restrict hq = h[q] + j + k;
-      for (int l = 0; l < kN; ++l) u[q][l] += wk * hq[l];
-    }
-  }
-  for (int l = 0; l < kN; ++l) {
-    const double ux = u[0][l], uy = u[1][l];
-    const double var_x = u[2][l] - ux * ux;
-    const double var_y = u[3][l] - uy * uy;
-    const double cov = u[4][l] - ux * uy;
-    const double a1 = 2 * ux * uy + c1;
-    const double a2 = 2 * cov + c2;
-    const double b1 = ux * ux + uy * uy + c1;
-    const double b2 = var_x + var_y + c2;
-    s[j + l] = (a1 * a2) / (b1 * b2);
-  }
+// SSIM from the filtered means ux, uy, E[xy], E[d²] (doubles or vectors of doubles).
+template <typename T>
+MVTM_INLINE T SsimFormula(T ux, T uy, T exy, T edd, T c1, T c2) {
+  const T cov = exy - ux * uy;
+  const T du = ux - uy;
+  const T a1 = 2 * ux * uy + c1;
+  const T a2 = 2 * cov + c2;
+  const T b1 = du * du + a1;
+  const T b2 = a2 + (edd - du * du);
+  return (a1 * a2) / (b1 * b2);
 }
 
-constexpr int kBlock = 8;  // columns per block: one AVX-512 register of doubles
-
-// SSIM map of row i into sc.s[col_begin, col_end). kR >= 0 fixes the radius at compile time
-// (the tap loops unroll); kR < 0 takes job.r.
-template <int kR>
-MVTM_INLINE void SsimRow(const Job& job, PlanePair p, int i, int col_begin, int col_end,
-                         Scratch& sc) {
-  const int r = kR >= 0 ? kR : job.r;
+// Vertical pass (scipy filters axis 0 first) of output rows i .. i+kN-1, every column, into
+// sc.V(t, q), in blocks of kB columns. Each ring row loaded feeds the kN rows it belongs to,
+// which divides the traffic from L2 (the ring does not fit L1). kR >= 0 fixes the radius at
+// compile time (the tap loops unroll and the tap checks vanish); kR < 0 takes sc.r. The taps
+// of a row are added in the same order whatever kN is.
+template <int kR, int kB, int kN>
+MVTM_INLINE void VerticalRows(const Job& job, PlanePair p, int i, Scratch& sc) {
+  using V = typename VecOf<kB>::type;
+  const int r = kR >= 0 ? kR : sc.r;
   const int taps = 2 * r + 1;
+  const int span = taps + kN - 1;
   const int w = job.w;
-  for (int k = 0; k < taps; ++k) {
-    const size_t row = static_cast<size_t>(Reflect(i - r + k, job.h));
-    sc.xr[k] = p.x + row * w;
-    sc.yr[k] = p.y + row * w;
-  }
-  double* v[5];
-  for (int q = 0; q < 5; ++q) v[q] = sc.v[q].data() + r;
+  const size_t sw = w;
+  for (int k = 0; k < span; ++k) sc.rows[k] = ProductRow(sc, p, Reflect(i - r + k, job.h));
+  const double* const* rows = sc.rows.data();
+  const double* wv = sc.wv.data();
+  double* out[kN][kPlanes];
+  for (int t = 0; t < kN; ++t)
+    for (int q = 0; q < kPlanes; ++q) out[t][q] = sc.V(t, q);
   int j = 0;
-  for (; j + kBlock <= w; j += kBlock)
-    VerticalBlock<kR, kBlock>(sc.xr.data(), sc.yr.data(), job.wt, taps, j, v);
-  for (; j < w; ++j) VerticalBlock<kR, 1>(sc.xr.data(), sc.yr.data(), job.wt, taps, j, v);
-  if (col_begin < r || col_end > w - r) {  // the map needs the mirrored columns too
-    for (int q = 0; q < 5; ++q) {
-      for (int t = 1; t <= r; ++t) {
-        v[q][-t] = v[q][t - 1];
-        v[q][w - 1 + t] = v[q][w - t];
+  for (; j + kB <= w; j += kB) {
+    V acc[kN][kPlanes] = {};
+    for (int k = 0; k < span; ++k) {
+      const double* row = rows[k] + j;
+      V val[kPlanes];
+      for (int q = 0; q < kPlanes; ++q) val[q] = Load<V>(row + q * sw);
+      for (int t = 0; t < kN; ++t) {
+        const int tap = k - t;
+        if (tap < 0 || tap >= taps) continue;
+        const V wk = Load<V>(wv + tap * kMaxBlock);
+        for (int q = 0; q < kPlanes; ++q) acc[t][q] += wk * val[q];
+      }
+    }
+    for (int t = 0; t < kN; ++t)
+      for (int q = 0; q < kPlanes; ++q) Store(out[t][q] + j, acc[t][q]);
+  }
+  for (; j < w; ++j) {
+    for (int t = 0; t < kN; ++t) {
+      for (int q = 0; q < kPlanes; ++q) {
+        double acc = 0;
+        for (int k = 0; k < taps; ++k) acc += job.wt[k] * rows[t + k][q * sw + j];
+        out[t][q][j] = acc;
       }
     }
   }
-  const double* h[5];
-  for (int q = 0; q < 5; ++q) h[q] = v[q] - r;
-  double* s = sc.s.data();
-  j = col_begin;
-  for (; j + kBlock <= col_end; j += kBlock)
-    HorizontalBlock<kR, kBlock>(h, job.wt, taps, job.c1, job.c2, j, s);
-  for (; j < col_end; ++j) HorizontalBlock<kR, 1>(h, job.wt, taps, job.c1, job.c2, j, s);
+}
+
+// Horizontal pass of vertical-sum row t fused with the SSIM formula, into sc.s[0, w): the
+// whole row, also without a map, so that a pixel's value never depends on whether its column
+// falls in a vector block or in the scalar tail of a narrower range.
+template <int kR, int kB>
+MVTM_INLINE void HorizontalRow(const Job& job, int t, Scratch& sc) {
+  using V = typename VecOf<kB>::type;
+  const int r = kR >= 0 ? kR : sc.r;
+  const int taps = 2 * r + 1;
+  const int w = job.w;
+  const double* h[kPlanes];  // h[q] + j + k is column j - r + k
+  for (int q = 0; q < kPlanes; ++q) {
+    double* c = sc.V(t, q);
+    for (int d = 1; d <= r; ++d) {  // mirror the columns (scipy 'reflect')
+      c[-d] = c[d - 1];
+      c[w - 1 + d] = c[w - d];
+    }
+    h[q] = c - r;
+  }
+  const double* wv = sc.wv.data();
+  double* __restrict s = sc.s.data();
+  const double c1 = job.c1, c2 = job.c2;
+  const V vc1 = V{} + c1, vc2 = V{} + c2;
+  int j = 0;
+  for (; j + kB <= w; j += kB) {
+    V u[kPlanes] = {};
+    for (int k = 0; k < taps; ++k) {
+      const V wk = Load<V>(wv + k * kMaxBlock);
+      for (int q = 0; q < kPlanes; ++q) u[q] += wk * Load<V>(h[q] + j + k);
+    }
+    Store(s + j, SsimFormula(u[kX], u[kY], u[kXY], u[kDD], vc1, vc2));
+  }
+  for (; j < w; ++j) {
+    double u[kPlanes] = {};
+    for (int k = 0; k < taps; ++k)
+      for (int q = 0; q < kPlanes; ++q) u[q] += job.wt[k] * h[q][j + k];
+    s[j] = SsimFormula(u[kX], u[kY], u[kXY], u[kDD], c1, c2);
+  }
 }
 
 // Sum of s[begin, end) over mask pixels (all when mask is null), kLanes partial sums.
 MVTM_INLINE double MaskedRowSum(const double* __restrict s, const uint8_t* __restrict m, int begin,
-                           int end) {
+                                int end) {
   double lane[kLanes] = {};
   int j = begin;
   if (m) {
@@ -167,41 +263,44 @@ MVTM_INLINE double MaskedRowSum(const double* __restrict s, const uint8_t* __res
   return ((lane[0] + lane[1]) + (lane[2] + lane[3])) + tail;
 }
 
-// Rows [row_begin, row_end) of one channel: per-row sums of the SSIM map over the cropped
-// columns (row_sum[i], rows inside the cropped band only) and, with a map, the whole row.
-template <int kR>
-MVTM_INLINE void SsimRowsImpl(const Job& job, PlanePair p, int row_begin, int row_end, bool first,
-                         Scratch& sc, double* row_sum) {
+// Row i of the SSIM map from vertical-sum row t: its sum over the cropped columns (rows inside
+// the cropped band only) into row_sum[i] and, with a map, the whole row (written when `first`,
+// else added).
+template <int kR, int kB>
+MVTM_INLINE void FinishRow(const Job& job, int i, int t, bool first, Scratch& sc, double* row_sum) {
   const int r = kR >= 0 ? kR : job.r;
   const int w = job.w;
-  const int col_begin = job.map ? 0 : r;
-  const int col_end = job.map ? w : w - r;
-  for (int i = row_begin; i < row_end; ++i) {
-    SsimRow<kR>(job, p, i, col_begin, col_end, sc);
-    if (i >= r && i < job.h - r) {
-      const uint8_t* m = job.mask ? job.mask + static_cast<size_t>(i) * w : nullptr;
-      row_sum[i] = MaskedRowSum(sc.s.data(), m, r, w - r);
-    }
-    if (job.map) {
-      float* out = job.map + static_cast<size_t>(i) * w;
-      const double* s = sc.s.data();
-      if (first) {
-        for (int j = 0; j < w; ++j) out[j] = static_cast<float>(s[j]);
-      } else {
-        for (int j = 0; j < w; ++j) out[j] += static_cast<float>(s[j]);
-      }
+  HorizontalRow<kR, kB>(job, t, sc);
+  const double* s = sc.s.data();
+  if (i >= r && i < job.h - r) {
+    const uint8_t* m = job.mask ? job.mask + static_cast<size_t>(i) * w : nullptr;
+    row_sum[i] = MaskedRowSum(s, m, r, w - r);
+  }
+  if (job.map) {
+    float* out = job.map + static_cast<size_t>(i) * w;
+    if (first) {
+      for (int j = 0; j < w; ++j) out[j] = static_cast<float>(s[j]);
+    } else {
+      for (int j = 0; j < w; ++j) out[j] += static_cast<float>(s[j]);
     }
   }
 }
 
-MVTM_SIMD_CLONES void SsimRowsR5(const Job& job, PlanePair p, int row_begin, int row_end,
-                                 bool first, Scratch& sc, double* row_sum) {
-  SsimRowsImpl<5>(job, p, row_begin, row_end, first, sc, row_sum);
-}
-
-MVTM_SIMD_CLONES void SsimRowsAny(const Job& job, PlanePair p, int row_begin, int row_end,
-                                  bool first, Scratch& sc, double* row_sum) {
-  SsimRowsImpl<-1>(job, p, row_begin, row_end, first, sc, row_sum);
+// Rows [row_begin, row_end) of one channel, kN at a time.
+template <int kR, int kB, int kN>
+MVTM_INLINE void SsimRowsImpl(const Job& job, PlanePair p, int row_begin, int row_end, bool first,
+                              Scratch& sc, double* row_sum) {
+  static_assert(kN <= kMaxRows && kB <= kMaxBlock, "scratch sized for kMaxRows, kMaxBlock");
+  sc.Reset(job.wt);
+  int i = row_begin;
+  for (; i + kN <= row_end; i += kN) {
+    VerticalRows<kR, kB, kN>(job, p, i, sc);
+    for (int t = 0; t < kN; ++t) FinishRow<kR, kB>(job, i + t, t, first, sc, row_sum);
+  }
+  for (; i < row_end; ++i) {
+    VerticalRows<kR, kB, 1>(job, p, i, sc);
+    FinishRow<kR, kB>(job, i, 0, first, sc, row_sum);
+  }
 }
 
 // Per-row sums for NCC and PSNR of one channel, samples shifted by (x0, y0) so that flat
@@ -209,8 +308,8 @@ MVTM_SIMD_CLONES void SsimRowsAny(const Job& job, PlanePair p, int row_begin, in
 enum Moment { kSx, kSy, kSxx, kSyy, kSxy, kSdd, kMoments };
 using RowMoments = std::array<double, kMoments>;
 
-MVTM_SIMD_CLONES void MomentRows(const Job& job, PlanePair p, double x0, double y0,
-                                 int row_begin, int row_end, RowMoments* out) {
+MVTM_INLINE void MomentRowsImpl(const Job& job, PlanePair p, double x0, double y0, int row_begin,
+                                int row_end, RowMoments* out) {
   const int w = job.w;
   for (int i = row_begin; i < row_end; ++i) {
     const size_t o = static_cast<size_t>(i) * w;
@@ -247,6 +346,66 @@ MVTM_SIMD_CLONES void MomentRows(const Job& job, PlanePair p, double x0, double 
     for (int q = 0; q < kMoments; ++q)
       out[i][q] = ((lane[q][0] + lane[q][1]) + (lane[q][2] + lane[q][3])) + sum[q];
   }
+}
+
+// One entry point per instruction set. Block sizes: AVX-512 8 doubles × 4 rows (16 of 32
+// registers hold sums), AVX2 4 × 2 (8 of 16), baseline 2 × 2 (8 of 16).
+#define MVTM_SSIM_VARIANT(NAME, TARGET, KB, KN)                                               \
+  TARGET void NAME(const Job& job, PlanePair p, int row_begin, int row_end, bool first,       \
+                   Scratch& sc, double* row_sum) {                                            \
+    if (job.r == 5) {                                                                         \
+      SsimRowsImpl<5, KB, KN>(job, p, row_begin, row_end, first, sc, row_sum);                \
+    } else {                                                                                  \
+      SsimRowsImpl<-1, KB, KN>(job, p, row_begin, row_end, first, sc, row_sum);               \
+    }                                                                                         \
+  }                                                                                           \
+  TARGET void NAME##Moments(const Job& job, PlanePair p, double x0, double y0, int row_begin, \
+                            int row_end, RowMoments* out) {                                   \
+    MomentRowsImpl(job, p, x0, y0, row_begin, row_end, out);                                  \
+  }
+
+MVTM_SSIM_VARIANT(SsimRowsBaseline, , 2, 2)
+#if MVTM_X86_DISPATCH
+MVTM_SSIM_VARIANT(SsimRowsAvx2, MVTM_TARGET("arch=x86-64-v3"), 4, 2)
+MVTM_SSIM_VARIANT(SsimRowsAvx512, MVTM_TARGET("arch=x86-64-v4"), 8, 4)
+#endif
+#undef MVTM_SSIM_VARIANT
+
+using SsimRowsFn = void (*)(const Job&, PlanePair, int, int, bool, Scratch&, double*);
+using MomentRowsFn = void (*)(const Job&, PlanePair, double, double, int, int, RowMoments*);
+
+SimdLevel BestSimdLevel() {
+#if MVTM_X86_DISPATCH
+  static const SimdLevel best = [] {
+    __builtin_cpu_init();
+    if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
+        __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512vl") &&
+        __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"))
+      return SimdLevel::kAvx512;
+    if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) return SimdLevel::kAvx2;
+    return SimdLevel::kBaseline;
+  }();
+  return best;
+#else
+  return SimdLevel::kBaseline;
+#endif
+}
+
+// The kernels for the requested level, capped at what the CPU offers.
+void PickKernels(SimdLevel requested, SsimRowsFn* rows, MomentRowsFn* moments) {
+  SimdLevel level = BestSimdLevel();
+  if (requested != SimdLevel::kBest && requested < level) level = requested;
+  *rows = SsimRowsBaseline;
+  *moments = SsimRowsBaselineMoments;
+#if MVTM_X86_DISPATCH
+  if (level == SimdLevel::kAvx2) {
+    *rows = SsimRowsAvx2;
+    *moments = SsimRowsAvx2Moments;
+  } else if (level == SimdLevel::kAvx512) {
+    *rows = SsimRowsAvx512;
+    *moments = SsimRowsAvx512Moments;
+  }
+#endif
 }
 
 int ThreadCount(int requested, int rows) {
@@ -346,19 +505,17 @@ Similarity CompareImpl(const Image& a, const Image& b, const SsimOptions& option
   scratch.reserve(t);
   for (int k = 0; k < t; ++k) scratch.emplace_back(w, r);
 
+  SsimRowsFn ssim_rows;
+  MomentRowsFn moment_rows;
+  PickKernels(options.simd, &ssim_rows, &moment_rows);
   RunThreads(t, [&](int k, int n) {
     const int i0 = ssim_begin + (ssim_end - ssim_begin) * k / n;
     const int i1 = ssim_begin + (ssim_end - ssim_begin) * (k + 1) / n;
-    for (int c = 0; c < nc; ++c) {
-      if (r == 5) {
-        SsimRowsR5(job, pairs[c], i0, i1, c == 0, scratch[k], row_sum[c].data());
-      } else {
-        SsimRowsAny(job, pairs[c], i0, i1, c == 0, scratch[k], row_sum[c].data());
-      }
-    }
+    for (int c = 0; c < nc; ++c)
+      ssim_rows(job, pairs[c], i0, i1, c == 0, scratch[k], row_sum[c].data());
     if (with_moments) {
       for (int c = 0; c < nc; ++c)
-        MomentRows(job, pairs[c], x0[c], y0[c], h * k / n, h * (k + 1) / n, moments[c].data());
+        moment_rows(job, pairs[c], x0[c], y0[c], h * k / n, h * (k + 1) / n, moments[c].data());
     }
   });
 

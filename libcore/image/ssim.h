@@ -2,13 +2,16 @@
 //
 // Conventions (the contract the `ssim` tool and its man page repeat):
 //  * SSIM equals scikit-image 0.19 `structural_similarity(a, b, gaussian_weights=True,
-//    sigma=1.5, use_sample_covariance=False, data_range=R)` (to ~1e-12 in practice):
+//    sigma=1.5, use_sample_covariance=False, data_range=R)` (to ~1e-15 in practice):
 //      - window: a Gaussian of standard deviation `sigma`, radius r = int(truncate*sigma + 0.5)
 //        (truncate 3.5, so 11×11 taps for sigma 1.5), weights exp(-x²/2σ²) normalised to sum 1
 //        (scipy.ndimage._gaussian_kernel1d), applied separably, rows (axis 0) first;
 //      - borders: scipy.ndimage mode 'reflect' (half-sample symmetric: d c b a | a b c d);
 //      - population (co)variances σx² = E[x²] − E[x]², σxy = E[xy] − E[x]E[y];
-//      - C1 = (k1·R)², C2 = (k2·R)²; S = (2µxµy + C1)(2σxy + C2) / ((µx² + µy² + C1)(σx² + σy² + C2));
+//      - C1 = (k1·R)², C2 = (k2·R)²,
+//        S = (2µxµy + C1)(2σxy + C2) / ((µx² + µy² + C1)(σx² + σy² + C2)),
+//        evaluated from E[x], E[y], E[xy] and E[(x−y)²] (four filtered planes, so identical
+//        images give S = 1 exactly);
 //      - mean SSIM = mean of S over the image with r pixels cropped from every border
 //        (skimage `crop(S, pad)`); an image with a side smaller than 2r+1 is an Error.
 //  * Samples are in file scale (see image.h). R defaults to the bit depth of `a`: 255 (8-bit),
@@ -28,9 +31,10 @@
 //  * The SSIM map (optional) is one float channel over the whole image, border strip included:
 //    the per-channel maps averaged over colour channels; its mean over the evaluated pixels is
 //    the mean SSIM.
-//  * Arithmetic is double throughout (samples are converted exactly). Identical images give
-//    exactly 1. Rows are split over `threads` std::threads; results are bit-identical for any
-//    thread count (per-row partial sums are added in row order).
+//  * Arithmetic is double throughout (samples are converted exactly). Rows are split over
+//    `threads` std::threads; results are bit-identical for any thread count (per-row partial
+//    sums are added in row order). The kernels are vectorised for AVX-512, AVX2+FMA or baseline
+//    x86-64, chosen at run time; the levels agree to ~1e-15, not bit for bit.
 //
 // Thread safety: the functions are reentrant; they start and join their own threads.
 #pragma once
@@ -51,13 +55,19 @@ class SizeMismatchError : public Error {
   using Error::Error;
 };
 
+// Instruction sets of the SSIM kernels (x86-64; other CPUs have only the baseline).
+enum class SimdLevel { kBest, kBaseline, kAvx2, kAvx512 };
+
 struct SsimOptions {
-  double sigma = 1.5;      // Gaussian window standard deviation in pixels, > 0
-  double k1 = 0.01;        // luminance constant, C1 = (k1·R)², >= 0
-  double k2 = 0.03;        // contrast constant, C2 = (k2·R)², >= 0
-  double data_range = 0;   // R; 0 = from the bit depth of the first image (255, 65535, 1.0)
-  double truncate = 3.5;   // window radius in sigmas (skimage uses 3.5 for Gaussian SSIM)
-  int threads = 0;         // worker threads; 0 = std::thread::hardware_concurrency()
+  double sigma = 1.5;     // Gaussian window standard deviation in pixels, > 0
+  double k1 = 0.01;       // luminance constant, C1 = (k1·R)², >= 0
+  double k2 = 0.03;       // contrast constant, C2 = (k2·R)², >= 0
+  double data_range = 0;  // R; 0 = from the bit depth of the first image (255, 65535, 1.0)
+  double truncate = 3.5;  // window radius in sigmas (skimage uses 3.5 for Gaussian SSIM)
+  int threads = 0;        // worker threads; 0 = std::thread::hardware_concurrency()
+  // Highest instruction set the kernels may use (capped at what the CPU has). kBest for real
+  // work; the others exist for tests and benchmarks. Levels agree to ~1e-15.
+  SimdLevel simd = SimdLevel::kBest;
 
   // Throws UsageError naming the bad value and the allowed range.
   void Check() const;
@@ -68,12 +78,12 @@ struct SsimOptions {
 };
 
 struct Similarity {
-  double ssim = 0;              // mean SSIM (NaN when ssim_pixels == 0)
-  double ncc = 0;               // zero-mean NCC (NaN when undefined)
-  double psnr = 0;              // dB (+inf for identical images, NaN when pixels == 0)
-  size_t ssim_pixels = 0;       // pixels averaged for SSIM (cropped region ∩ mask)
-  size_t pixels = 0;            // pixels used for NCC and PSNR (mask, or all)
-  double data_range = 0;        // the R used
+  double ssim = 0;         // mean SSIM (NaN when ssim_pixels == 0)
+  double ncc = 0;          // zero-mean NCC (NaN when undefined)
+  double psnr = 0;         // dB (+inf for identical images, NaN when pixels == 0)
+  size_t ssim_pixels = 0;  // pixels averaged for SSIM (cropped region ∩ mask)
+  size_t pixels = 0;       // pixels used for NCC and PSNR (mask, or all)
+  double data_range = 0;   // the R used
 };
 
 // Compares `a` with `b` (same size, channel count and bit depth, else SizeMismatchError for

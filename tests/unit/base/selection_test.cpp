@@ -1,0 +1,43 @@
+// --frames / --shard: shards partition the items; ranges behave like Python slices.
+#include <gtest/gtest.h>
+
+#include <set>
+
+#include "base/error.h"
+#include "base/selection.h"
+
+namespace mvtm {
+namespace {
+
+TEST(Selection, ShardsPartition) {
+  for (size_t n : {0u, 1u, 7u, 100u}) {
+    for (int k : {1, 2, 3, 4, 9}) {
+      std::multiset<size_t> all;
+      for (int i = 0; i < k; ++i)
+        for (size_t x : Selection::Shard(std::to_string(i) + "/" + std::to_string(k)).Apply(n)) all.insert(x);
+      ASSERT_EQ(all.size(), n);
+      size_t expect = 0;
+      for (size_t x : all) EXPECT_EQ(x, expect++);
+    }
+  }
+}
+
+TEST(Selection, RangesLikeSlices) {
+  EXPECT_EQ(Selection::Frames("2:5").Apply(10), (std::vector<size_t>{2, 3, 4}));
+  EXPECT_EQ(Selection::Frames("8:").Apply(10), (std::vector<size_t>{8, 9}));
+  EXPECT_EQ(Selection::Frames(":2").Apply(10), (std::vector<size_t>{0, 1}));
+  EXPECT_EQ(Selection::Frames("-2:").Apply(10), (std::vector<size_t>{8, 9}));
+  EXPECT_EQ(Selection::Frames("3").Apply(10), (std::vector<size_t>{3}));
+  EXPECT_EQ(Selection::Frames("5:100").Apply(7), (std::vector<size_t>{5, 6}));
+  EXPECT_TRUE(Selection::Frames("5:2").Apply(10).empty());
+}
+
+TEST(Selection, BadSpecsAreUsageErrors) {
+  EXPECT_THROW(Selection::Shard("3/3"), UsageError);
+  EXPECT_THROW(Selection::Shard("1"), UsageError);
+  EXPECT_THROW(Selection::Shard("a/2"), UsageError);
+  EXPECT_THROW(Selection::Frames("x:3"), UsageError);
+}
+
+}  // namespace
+}  // namespace mvtm
