@@ -43,7 +43,7 @@ TrajectoryFormat DetectTrajectoryFormat(const std::string& path) {
     in.Fail("cannot tell the trajectory format: " + std::to_string(n) +
             " fields (TUM has 8, KITTI 12, COLMAP images.txt 10)");
   }
-  throw Error(path, 0, "trajectory file has no poses");
+  throw Error(path, 0, "cannot tell the trajectory format: the file has no poses");
 }
 
 Trajectory ReadTum(const std::string& path) {
