@@ -211,7 +211,8 @@ bool ExactlyUnit(const Eigen::Vector4d& v) {
 }
 
 Eigen::Vector4d NormalizedWxyz(const Eigen::Quaterniond& q) {
-  Eigen::Vector4d v(q.w(), q.x(), q.y(), q.z());
+  // "+ 0.0" turns −0 into +0 (conjugates and negations make −0s that would print as "-0").
+  Eigen::Vector4d v(q.w() + 0.0, q.x() + 0.0, q.y() + 0.0, q.z() + 0.0);
   double n = v.norm();
   if (!(n > 0)) return Eigen::Vector4d(1, 0, 0, 0);
   v /= n;
@@ -272,7 +273,7 @@ void WriteColmapText(const Reconstruction& r, const std::string& dir) {
       << "\n";
     for (const auto& [id, im] : r.images) {
       Eigen::Vector4d q = NormalizedWxyz(im.world_to_camera.q);
-      const auto& t = im.world_to_camera.t;
+      const Eigen::Vector3d t = im.world_to_camera.t.array() + 0.0;  // no "-0"
       f << id << ' ' << q[0] << ' ' << q[1] << ' ' << q[2] << ' ' << q[3] << ' ' << t.x() << ' '
         << t.y() << ' ' << t.z() << ' ' << im.camera_id << ' ' << im.name << '\n';
       bool first = true;

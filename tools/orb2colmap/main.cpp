@@ -24,11 +24,16 @@ int main(int argc, char** argv) {
   app.add_flag("--binary", o.binary, "Write cameras.bin, images.bin, points3D.bin");
   app.add_option("--database", o.database, "Create or fill a COLMAP database.db: cameras, images with pose priors");
   app.add_option("--outside", o.outside, "Frames outside the keyframe time span")->check(CLI::IsMember({"drop", "clamp"}))->capture_default_str();
+  app.add_flag("--force", o.force, "Rewrite the model even when it is newer than every input");
   app.add_flag("-q,--quiet", o.quiet, "No summary on stderr");
   cam->excludes(orb)->excludes(kc);
   orb->excludes(kc);
   return mvtm::RunMain(app, "orb2colmap", argc, argv, [&] {
     auto r = mvtm::RunOrb2Colmap(o);
+    if (r.up_to_date) {
+      if (!o.quiet) std::cerr << "orb2colmap: " << o.outdir << " is up to date (use --force to rewrite)\n";
+      return 0;
+    }
     if (!o.quiet) {
       std::cerr << "orb2colmap: " << r.written << " frames written from " << r.keyframes
                 << " poses";

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <set>
 
+#include "base/atomic_file.h"
 #include "base/error.h"
 #include "base/text.h"
 #include "image/image.h"
@@ -83,6 +84,19 @@ std::string Basename(const std::string& p) { return fs::path(p).filename().strin
 Orb2ColmapReport RunOrb2Colmap(const Orb2ColmapOptions& o) {
   o.Check();
   Orb2ColmapReport rep;
+  if (!o.force && o.database.empty()) {
+    const char* ext = o.binary ? ".bin" : ".txt";
+    std::vector<fs::path> inputs;
+    for (const std::string& in : {o.trajectory, o.trajectory_times, o.frames, o.orb_settings, o.kitti_calib, o.images})
+      if (!in.empty()) inputs.emplace_back(in);
+    bool fresh = true;
+    for (const char* f : {"cameras", "images", "points3D"})
+      fresh = fresh && IsUpToDate(fs::path(o.outdir) / (std::string(f) + ext), inputs);
+    if (fresh) {
+      rep.up_to_date = true;
+      return rep;
+    }
+  }
 
   Trajectory traj;
   TrajectoryFormat fmt = o.input_format == "tum"     ? TrajectoryFormat::kTum
@@ -115,9 +129,7 @@ Orb2ColmapReport RunOrb2Colmap(const Orb2ColmapOptions& o) {
     } else {
       char buf[64];
       for (size_t i = 0; i < frames.size(); ++i) {
-        if (fmt == TrajectoryFormat::kKitti && o.trajectory_times.empty() && o.frames.empty())
-          std::snprintf(buf, sizeof buf, "%06zu.png", i);
-        else if (fmt == TrajectoryFormat::kKitti)
+        if (fmt == TrajectoryFormat::kKitti)
           std::snprintf(buf, sizeof buf, "%06zu.png", i);
         else
           std::snprintf(buf, sizeof buf, "%.6f.png", frames[i].time);

@@ -23,6 +23,7 @@ struct Orb2ColmapOptions {
   bool binary = false;          // write .bin instead of .txt
   std::string database;         // create or fill a COLMAP database.db with pose priors
   std::string outside = "drop"; // drop | clamp frames outside the keyframe time span
+  bool force = false;            // rewrite an up-to-date model
   bool quiet = false;
 
   void Check() const;  // throws UsageError naming the bad value
@@ -30,6 +31,7 @@ struct Orb2ColmapOptions {
 
 struct Orb2ColmapReport {
   size_t keyframes = 0, frames = 0, written = 0, dropped = 0, clamped = 0, reordered = 0;
+  bool up_to_date = false;  // nothing done: the model is newer than every input
 };
 
 Orb2ColmapReport RunOrb2Colmap(const Orb2ColmapOptions& options);
