@@ -1,7 +1,8 @@
 // mvtm — atomic output files and up-to-date checks.
 //
 // Every output of every tool is written to a temporary name in the destination folder
-// (".NAME.tmp-PID.EXT", hidden, same extension so format-by-extension writers still work) and
+// (".STEM.tmp-PID-N.EXT": hidden, unique per process and file, same extension so
+// format-by-extension writers still work) and
 // renamed over the final name only once it is complete, so a crash or `kill -9` never leaves a
 // half-written output. A re-run skips outputs that exist and are newer than all their inputs
 // (unless the tool is given --force).
@@ -47,7 +48,7 @@ void WriteBinaryAtomic(const fs::path& path, const std::function<void(std::ostre
 // True when `output` exists and is at least as new as every existing input.
 bool IsUpToDate(const fs::path& output, const std::vector<fs::path>& inputs);
 
-// Removes stale temporary files ".NAME.tmp-PID.EXT" left in `dir` by processes that died.
+// Removes stale temporary files ".STEM.tmp-PID-N.EXT" left in `dir` by processes that died.
 void RemoveStaleTemporaries(const fs::path& dir);
 
 }  // namespace mvtm

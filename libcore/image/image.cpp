@@ -60,6 +60,9 @@ void WriteImage(const std::string& path, const Image& img) {
                                          : OIIO::TypeDesc::FLOAT;
   OIIO::ImageSpec spec(img.width, img.height, img.channels, type);
   if (img.bits == 32) spec.attribute("compression", "zip");
+  // OpenImageIO stamps the current time into EXR headers (capDate) unless DateTime is set; a
+  // fixed value keeps outputs byte-identical across runs and shards.
+  spec.attribute("DateTime", "1970:01:01 00:00:00");
   if (!o->open(out.temp_path().string(), spec))
     throw Error(path, 0, "cannot write image: " + o->geterror());
   bool ok;

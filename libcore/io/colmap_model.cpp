@@ -204,7 +204,7 @@ namespace {
 // division can move the last bit, so a model would not survive `colmap model_converter` bit for
 // bit. We write a unit quaternion whose norm rounds to exactly 1.0 under both summation orders
 // Eigen may use (scalar and SSE pairs): normalising it is then the identity. It is found by
-// stepping the two largest components by at most a few ulps (a rotation change of ~1e-16).
+// stepping two of the three largest components by at most 16 ulps (a rotation change of ~1e-16).
 bool ExactlyUnit(const Eigen::Vector4d& v) {
   double a = v[0] * v[0], b = v[1] * v[1], c = v[2] * v[2], d = v[3] * v[3];
   return std::sqrt(((a + b) + c) + d) == 1.0 && std::sqrt((a + c) + (b + d)) == 1.0;

@@ -116,7 +116,8 @@ Orb2ColmapReport RunOrb2Colmap(const Orb2ColmapOptions& o) {
   if (!o.frames.empty()) {
     frames = ReadTimestamps(o.frames);
   } else {
-    for (const auto& k : traj.poses) frames.push_back({k.time, "", k.line});
+    // Every pose is a frame, in time order; exact duplicates were merged by SortKeyframes.
+    for (const auto& k : keys) frames.push_back({k.time, "", k.line});
   }
   bool named = std::all_of(frames.begin(), frames.end(), [](const TimedName& f) { return !f.name.empty(); });
   if (!named) {
@@ -154,6 +155,27 @@ Orb2ColmapReport RunOrb2Colmap(const Orb2ColmapOptions& o) {
   Reconstruction model;
   Outside outside = o.outside == "clamp" ? Outside::kClamp : Outside::kDrop;
 
+  // Poses first, so that nothing is written (model or database) when the input is unusable.
+  struct Posed {
+    const TimedName* frame;
+    Rigid3d w2c;
+  };
+  std::vector<Posed> posed;
+  for (const auto& f : frames) {
+    bool inside = f.time >= keys.front().time && f.time <= keys.back().time;
+    auto c2w = InterpolateCameraToWorld(keys, f.time, outside);
+    if (!c2w) {
+      ++rep.dropped;
+      continue;
+    }
+    if (!inside) ++rep.clamped;
+    Rigid3d w2c = c2w->Inverse();
+    w2c.q.normalize();
+    posed.push_back({&f, w2c});
+  }
+  if (posed.empty())
+    throw Error(o.trajectory, 0, "no frame lies inside the pose time span (use --outside clamp?)");
+
   std::unique_ptr<ColmapDatabase> db;
   std::map<std::string, std::pair<uint32_t, uint32_t>> db_images;
   uint32_t next_id = 1;
@@ -162,8 +184,8 @@ Orb2ColmapReport RunOrb2Colmap(const Orb2ColmapOptions& o) {
     db_images = db->Images();
     for (const auto& [n, ids] : db_images) next_id = std::max(next_id, ids.first + 1);
     uint32_t cam_id = 0;
-    for (const auto& f : frames) {
-      auto it = db_images.find(f.name);
+    for (const auto& p : posed) {
+      auto it = db_images.find(p.frame->name);
       if (it != db_images.end()) {
         cam_id = it->second.second;
         break;
@@ -177,31 +199,21 @@ Orb2ColmapReport RunOrb2Colmap(const Orb2ColmapOptions& o) {
   model.cameras[cam.id] = cam;
 
   uint32_t fallback_id = 1;
-  for (const auto& f : frames) {
-    bool inside = f.time >= keys.front().time && f.time <= keys.back().time;
-    auto c2w = InterpolateCameraToWorld(keys, f.time, outside);
-    if (!c2w) {
-      ++rep.dropped;
-      continue;
-    }
-    if (!inside) ++rep.clamped;
+  for (const auto& p : posed) {
     ImageRecord im;
     im.camera_id = cam.id;
-    im.name = f.name;
-    im.world_to_camera = c2w->Inverse();
-    im.world_to_camera.q.normalize();
+    im.name = p.frame->name;
+    im.world_to_camera = p.w2c;
     if (db) {
-      auto it = db_images.find(f.name);
+      auto it = db_images.find(im.name);
       uint32_t want = it != db_images.end() ? it->second.first : next_id++;
-      im.id = db->UpsertImage(f.name, want, cam.id, im.world_to_camera);
+      im.id = db->UpsertImage(im.name, want, cam.id, im.world_to_camera);
     } else {
       im.id = fallback_id++;
     }
     model.images[im.id] = std::move(im);
   }
   if (db) db->Commit();
-  if (model.images.empty())
-    throw Error(o.trajectory, 0, "no frame lies inside the pose time span (use --outside clamp?)");
   if (o.binary) WriteColmapBinary(model, o.outdir);
   else WriteColmapText(model, o.outdir);
   rep.written = model.images.size();
