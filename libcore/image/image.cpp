@@ -28,7 +28,10 @@ ImageSpecInfo ReadImageSpec(const std::string& path) {
 }
 
 Image ReadImage(const std::string& path) {
-  auto in = OIIO::ImageInput::open(path);
+  // Keep colour values as stored: no premultiplication by alpha.
+  OIIO::ImageSpec config;
+  config.attribute("oiio:UnassociatedAlpha", 1);
+  auto in = OIIO::ImageInput::open(path, &config);
   if (!in) throw Error(path, 0, "cannot read image: " + OIIO::geterror());
   const OIIO::ImageSpec& spec = in->spec();
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)

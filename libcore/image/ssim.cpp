@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -56,6 +57,11 @@ struct VecOf<8> {
   typedef double type __attribute__((vector_size(64)));
 };
 
+template <int kB>
+struct FloatVecOf {
+  typedef float type __attribute__((vector_size(kB * sizeof(float))));
+};
+
 template <typename V>
 MVTM_INLINE V Load(const double* p) {
   V v;
@@ -66,11 +72,19 @@ template <typename V>
 MVTM_INLINE void Store(double* p, V v) {
   std::memcpy(p, &v, sizeof v);
 }
+// kB floats converted (exactly) to kB doubles.
+template <typename V, int kB>
+MVTM_INLINE V LoadFloats(const float* p) {
+  typename FloatVecOf<kB>::type f;
+  std::memcpy(&f, p, sizeof f);
+  return __builtin_convertvector(f, V);
+}
 
-// One colour channel of a pair, as contiguous float planes.
+// One channel of a pair of interleaved images: sample j of row q is x[(q*w + j) * stride].
 struct PlanePair {
   const float* x;
   const float* y;
+  int stride;  // channels per pixel
 };
 
 struct Job {
@@ -89,27 +103,32 @@ enum Plane { kX, kY, kXY, kDD, kPlanes };
 
 struct Scratch {
   int w, r, slots;
-  // Products of the source rows of the window, kPlanes×w doubles per slot; source row q lives
-  // in slot q % slots (the reflected windows of kMaxRows rows span at most `slots`
-  // consecutive source rows).
+  // The products xy and d² of the source rows of the window (x and y are read from the
+  // input), 2×w doubles per slot; source row q lives in slot q % slots (the reflected windows
+  // of kMaxRows rows span at most `slots` consecutive source rows).
   std::vector<double> ring;
-  std::vector<int> ring_row;  // source row held by each slot, -1 = none
+  std::vector<float> ring_xy;  // x and y of each slot's row, 2×w floats (colour images only)
+  std::vector<int> ring_row;   // source row held by each slot, -1 = none
   // Vertical sums of up to kMaxRows rows, each kPlanes planes of w + 2r doubles (r mirrored
   // columns each side).
   std::vector<double> v;
-  std::vector<double> s;            // one row of the SSIM map
-  std::vector<const double*> rows;  // the ring rows of the current window
-  std::vector<double> wv;           // the weights, each repeated kMaxBlock times
+  std::vector<double> s;                   // one row of the SSIM map
+  std::vector<const double*> rows;         // the ring rows of the current window
+  std::vector<const float*> xrows, yrows;  // the input rows of the current window
+  std::vector<double> wv;                  // the weights, each repeated kMaxBlock times
 
   Scratch(int width, int radius)
       : w(width),
         r(radius),
         slots(2 * radius + kMaxRows),
-        ring(static_cast<size_t>(slots) * kPlanes * width),
+        ring(static_cast<size_t>(slots) * 2 * width),
+        ring_xy(static_cast<size_t>(slots) * 2 * width),
         ring_row(slots, -1),
         v(static_cast<size_t>(kMaxRows) * kPlanes * VStride()),
         s(width),
         rows(slots),
+        xrows(slots),
+        yrows(slots),
         wv(static_cast<size_t>(2 * radius + 1) * kMaxBlock) {}
 
   size_t VStride() const { return static_cast<size_t>(w) + 2 * r; }
@@ -124,28 +143,46 @@ struct Scratch {
   }
 };
 
-// The ring slot of source row q, filling it with the products of that row if needed.
-MVTM_INLINE const double* ProductRow(Scratch& sc, PlanePair p, int q) {
+// Points window row k at source row q: its products in the ring slot q % slots (xy at +0, d²
+// at +w), computed if the slot holds another row, and its x and y samples (the input itself
+// for grey images, a de-interleaved copy in the slot for colour ones).
+MVTM_INLINE void WindowRow(Scratch& sc, PlanePair p, int k, int q) {
   const int slot = q % sc.slots;
   const size_t w = sc.w;
-  double* out = sc.ring.data() + static_cast<size_t>(slot) * kPlanes * w;
+  double* out = sc.ring.data() + static_cast<size_t>(slot) * 2 * w;
+  float* xy = sc.ring_xy.data() + static_cast<size_t>(slot) * 2 * w;
+  const size_t row = static_cast<size_t>(q) * w;
   if (sc.ring_row[slot] != q) {
     sc.ring_row[slot] = q;
-    const float* __restrict x = p.x + static_cast<size_t>(q) * w;
-    const float* __restrict y = p.y + static_cast<size_t>(q) * w;
-    double* __restrict ox = out + kX * w;
-    double* __restrict oy = out + kY * w;
-    double* __restrict oxy = out + kXY * w;
-    double* __restrict odd = out + kDD * w;
-    for (size_t j = 0; j < w; ++j) {
-      const double a = x[j], b = y[j], d = a - b;
-      ox[j] = a;
-      oy[j] = b;
-      oxy[j] = a * b;
-      odd[j] = d * d;
+    double* __restrict oxy = out;
+    double* __restrict odd = out + w;
+    if (p.stride == 1) {
+      const float* __restrict x = p.x + row;
+      const float* __restrict y = p.y + row;
+      for (size_t j = 0; j < w; ++j) {
+        const double a = x[j], b = y[j], d = a - b;
+        oxy[j] = a * b;
+        odd[j] = d * d;
+      }
+    } else {
+      const float* __restrict x = p.x + row * p.stride;
+      const float* __restrict y = p.y + row * p.stride;
+      float* __restrict cx = xy;
+      float* __restrict cy = xy + w;
+      const size_t stride = p.stride;
+      for (size_t j = 0; j < w; ++j) {
+        const float fa = x[j * stride], fb = y[j * stride];
+        cx[j] = fa;
+        cy[j] = fb;
+        const double a = fa, b = fb, d = a - b;
+        oxy[j] = a * b;
+        odd[j] = d * d;
+      }
     }
   }
-  return out;
+  sc.rows[k] = out;
+  sc.xrows[k] = p.stride == 1 ? p.x + row : xy;
+  sc.yrows[k] = p.stride == 1 ? p.y + row : xy + w;
 }
 
 // SSIM from the filtered means ux, uy, E[xy], E[d²] (doubles or vectors of doubles).
@@ -173,8 +210,10 @@ MVTM_INLINE void VerticalRows(const Job& job, PlanePair p, int i, Scratch& sc) {
   const int span = taps + kN - 1;
   const int w = job.w;
   const size_t sw = w;
-  for (int k = 0; k < span; ++k) sc.rows[k] = ProductRow(sc, p, Reflect(i - r + k, job.h));
+  for (int k = 0; k < span; ++k) WindowRow(sc, p, k, Reflect(i - r + k, job.h));
   const double* const* rows = sc.rows.data();
+  const float* const* xrows = sc.xrows.data();
+  const float* const* yrows = sc.yrows.data();
   const double* wv = sc.wv.data();
   double* out[kN][kPlanes];
   for (int t = 0; t < kN; ++t)
@@ -183,9 +222,11 @@ MVTM_INLINE void VerticalRows(const Job& job, PlanePair p, int i, Scratch& sc) {
   for (; j + kB <= w; j += kB) {
     V acc[kN][kPlanes] = {};
     for (int k = 0; k < span; ++k) {
-      const double* row = rows[k] + j;
       V val[kPlanes];
-      for (int q = 0; q < kPlanes; ++q) val[q] = Load<V>(row + q * sw);
+      val[kX] = LoadFloats<V, kB>(xrows[k] + j);
+      val[kY] = LoadFloats<V, kB>(yrows[k] + j);
+      val[kXY] = Load<V>(rows[k] + j);
+      val[kDD] = Load<V>(rows[k] + sw + j);
       for (int t = 0; t < kN; ++t) {
         const int tap = k - t;
         if (tap < 0 || tap >= taps) continue;
@@ -198,11 +239,15 @@ MVTM_INLINE void VerticalRows(const Job& job, PlanePair p, int i, Scratch& sc) {
   }
   for (; j < w; ++j) {
     for (int t = 0; t < kN; ++t) {
-      for (int q = 0; q < kPlanes; ++q) {
-        double acc = 0;
-        for (int k = 0; k < taps; ++k) acc += job.wt[k] * rows[t + k][q * sw + j];
-        out[t][q][j] = acc;
+      double acc[kPlanes] = {};
+      for (int k = 0; k < taps; ++k) {
+        const double wk = job.wt[k];
+        acc[kX] += wk * xrows[t + k][j];
+        acc[kY] += wk * yrows[t + k][j];
+        acc[kXY] += wk * rows[t + k][j];
+        acc[kDD] += wk * rows[t + k][sw + j];
       }
+      for (int q = 0; q < kPlanes; ++q) out[t][q][j] = acc[q];
     }
   }
 }
@@ -313,16 +358,17 @@ MVTM_INLINE void MomentRowsImpl(const Job& job, PlanePair p, double x0, double y
   const int w = job.w;
   for (int i = row_begin; i < row_end; ++i) {
     const size_t o = static_cast<size_t>(i) * w;
-    const float* __restrict x = p.x + o;
-    const float* __restrict y = p.y + o;
+    const size_t stride = p.stride;
+    const float* __restrict x = p.x + o * stride;
+    const float* __restrict y = p.y + o * stride;
     const uint8_t* __restrict m = job.mask ? job.mask + o : nullptr;
     double lane[kMoments][kLanes] = {};
     int j = 0;
     for (; j + kLanes <= w; j += kLanes) {
       for (int l = 0; l < kLanes; ++l) {
         const double f = (!m || m[j + l]) ? 1.0 : 0.0;
-        const double a = (x[j + l] - x0) * f, b = (y[j + l] - y0) * f;
-        const double d = (static_cast<double>(x[j + l]) - y[j + l]) * f;
+        const double a = (x[(j + l) * stride] - x0) * f, b = (y[(j + l) * stride] - y0) * f;
+        const double d = (static_cast<double>(x[(j + l) * stride]) - y[(j + l) * stride]) * f;
         lane[kSx][l] += a;
         lane[kSy][l] += b;
         lane[kSxx][l] += a * a;
@@ -334,8 +380,8 @@ MVTM_INLINE void MomentRowsImpl(const Job& job, PlanePair p, double x0, double y
     RowMoments sum{};
     for (; j < w; ++j) {
       const double f = (!m || m[j]) ? 1.0 : 0.0;
-      const double a = (x[j] - x0) * f, b = (y[j] - y0) * f;
-      const double d = (static_cast<double>(x[j]) - y[j]) * f;
+      const double a = (x[j * stride] - x0) * f, b = (y[j * stride] - y0) * f;
+      const double d = (static_cast<double>(x[j * stride]) - y[j * stride]) * f;
       sum[kSx] += a;
       sum[kSy] += b;
       sum[kSxx] += a * a;
@@ -377,12 +423,9 @@ using MomentRowsFn = void (*)(const Job&, PlanePair, double, double, int, int, R
 SimdLevel BestSimdLevel() {
 #if MVTM_X86_DISPATCH
   static const SimdLevel best = [] {
-    __builtin_cpu_init();
-    if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
-        __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512vl") &&
-        __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"))
-      return SimdLevel::kAvx512;
-    if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) return SimdLevel::kAvx2;
+    __builtin_cpu_init();  // the same feature levels the kernels are compiled for
+    if (__builtin_cpu_supports("x86-64-v4")) return SimdLevel::kAvx512;
+    if (__builtin_cpu_supports("x86-64-v3")) return SimdLevel::kAvx2;
     return SimdLevel::kBaseline;
   }();
   return best;
@@ -408,19 +451,34 @@ void PickKernels(SimdLevel requested, SsimRowsFn* rows, MomentRowsFn* moments) {
 #endif
 }
 
+// Rows are handed out in chunks from a shared counter, so a thread slowed down by other work
+// on its core does not hold up the rest. Every row's values are independent of the chunking
+// (the taps of a row are added in a fixed order), so results do not depend on the schedule.
+constexpr int kChunkRows = 32;
+
 int ThreadCount(int requested, int rows) {
   int t = requested > 0 ? requested : static_cast<int>(std::thread::hardware_concurrency());
-  return std::clamp(t, 1, std::max(1, rows / 16));  // a thread gets at least 16 rows
+  return std::clamp(t, 1, std::max(1, rows / kChunkRows));
 }
 
-// Runs fn(k, t) for k = 0..t-1, k = 0 on the calling thread.
+// Runs fn(k) for k = 0..t-1, k = 0 on the calling thread.
 template <typename Fn>
 void RunThreads(int t, Fn fn) {
   std::vector<std::thread> pool;
   pool.reserve(t - 1);
-  for (int k = 1; k < t; ++k) pool.emplace_back(fn, k, t);
-  fn(0, t);
+  for (int k = 1; k < t; ++k) pool.emplace_back(fn, k);
+  fn(0);
   for (auto& th : pool) th.join();
+}
+
+// Calls fn(begin, end) for chunks of [row_begin, row_end) taken from `next` until none is left.
+template <typename Fn>
+void ForEachChunk(std::atomic<int>& next, int row_begin, int row_end, Fn fn) {
+  for (;;) {
+    const int i0 = row_begin + next.fetch_add(1) * kChunkRows;
+    if (i0 >= row_end) return;
+    fn(i0, std::min(i0 + kChunkRows, row_end));
+  }
 }
 
 Similarity CompareImpl(const Image& a, const Image& b, const SsimOptions& options,
@@ -451,23 +509,9 @@ Similarity CompareImpl(const Image& a, const Image& b, const SsimOptions& option
   const int nc = (a.channels == 2 || a.channels == 4) ? a.channels - 1 : a.channels;
   const size_t npix = a.pixels();
 
-  // Contiguous float planes per colour channel (no copy for single-channel images).
-  std::vector<std::vector<float>> planes;
+  // The colour channels, read in place from the interleaved samples.
   std::vector<PlanePair> pairs(nc);
-  if (a.channels == 1) {
-    pairs[0] = {a.data.data(), b.data.data()};
-  } else {
-    planes.assign(2 * nc, std::vector<float>(npix));
-    for (int c = 0; c < nc; ++c) {
-      float* px = planes[2 * c].data();
-      float* py = planes[2 * c + 1].data();
-      for (size_t q = 0; q < npix; ++q) {
-        px[q] = a.data[q * a.channels + c];
-        py[q] = b.data[q * b.channels + c];
-      }
-      pairs[c] = {px, py};
-    }
-  }
+  for (int c = 0; c < nc; ++c) pairs[c] = {a.data.data() + c, b.data.data() + c, a.channels};
 
   std::vector<uint8_t> inside;
   if (mask) {
@@ -508,14 +552,17 @@ Similarity CompareImpl(const Image& a, const Image& b, const SsimOptions& option
   SsimRowsFn ssim_rows;
   MomentRowsFn moment_rows;
   PickKernels(options.simd, &ssim_rows, &moment_rows);
-  RunThreads(t, [&](int k, int n) {
-    const int i0 = ssim_begin + (ssim_end - ssim_begin) * k / n;
-    const int i1 = ssim_begin + (ssim_end - ssim_begin) * (k + 1) / n;
-    for (int c = 0; c < nc; ++c)
-      ssim_rows(job, pairs[c], i0, i1, c == 0, scratch[k], row_sum[c].data());
-    if (with_moments) {
+  std::atomic<int> next_ssim{0}, next_moments{0};
+  RunThreads(t, [&](int k) {
+    ForEachChunk(next_ssim, ssim_begin, ssim_end, [&](int i0, int i1) {
       for (int c = 0; c < nc; ++c)
-        moment_rows(job, pairs[c], x0[c], y0[c], h * k / n, h * (k + 1) / n, moments[c].data());
+        ssim_rows(job, pairs[c], i0, i1, c == 0, scratch[k], row_sum[c].data());
+    });
+    if (with_moments) {
+      ForEachChunk(next_moments, 0, h, [&](int i0, int i1) {
+        for (int c = 0; c < nc; ++c)
+          moment_rows(job, pairs[c], x0[c], y0[c], i0, i1, moments[c].data());
+      });
     }
   });
 

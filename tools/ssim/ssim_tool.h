@@ -1,0 +1,43 @@
+// ssim — photo-consistency of image pairs: mean SSIM, zero-mean NCC and PSNR (man/ssim.1).
+//
+// A and B are two images or two folders; in folder mode every image file of A is paired with
+// the file of the same name in B (files only in B are ignored), in file-name order. The metric
+// conventions (window, borders, data range, colour, masks) are those of libcore image/ssim.h.
+// Output: TSV (header, one row per pair, then mean/std/min rows in folder mode) or JSON.
+#pragma once
+
+#include <ostream>
+#include <string>
+
+#include "image/ssim.h"
+
+namespace mvtm {
+
+// How colour images are compared.
+enum class ChannelMode {
+  kMean,  // each colour channel on its own, results averaged (scikit-image channel_axis)
+  kGrey,  // both images first reduced to grey (mean of the colour channels)
+};
+
+// Exit status when A and B (or an image and its mask) differ in size; 0, 1 and 2 are the
+// common ones (success, data error, usage error).
+constexpr int kExitSizeMismatch = 3;
+
+struct SsimToolOptions {
+  std::string a;                              // first image or folder
+  std::string b;                              // second image or folder
+  std::string mask;                           // mask image or folder ("" = none); nonzero = in
+  std::string map;                            // SSIM map output: .exr/.png file, or a folder
+  bool json = false;                          // JSON instead of TSV
+  ChannelMode channels = ChannelMode::kMean;  // colour handling
+  SsimOptions ssim;                           // sigma, k1, k2, data_range (0 = bit depth)
+
+  // Throws UsageError naming the bad value.
+  void Check() const;
+};
+
+// Compares the pairs and writes the table to `out`. Returns the exit status (0). Throws
+// UsageError (bad combination of paths), SizeMismatchError, Error.
+int RunSsim(const SsimToolOptions& options, std::ostream& out);
+
+}  // namespace mvtm
