@@ -1,0 +1,104 @@
+#include "render/gl_program.h"
+
+#include <glad/gl.h>
+
+#include <map>
+#include <regex>
+#include <sstream>
+
+#include "base/error.h"
+
+namespace mvtm {
+
+const std::map<std::string, std::string>& EmbeddedShaders();  // generated (embed_shaders.cmake)
+
+const std::string& ShaderSource(const std::string& name) {
+  const auto& all = EmbeddedShaders();
+  auto it = all.find(name);
+  if (it == all.end()) throw Error("no embedded shader '" + name + "'");
+  return it->second;
+}
+
+namespace {
+
+std::string Variant(const std::vector<std::string>& defines) {
+  std::string v;
+  for (const auto& d : defines) v += (v.empty() ? "" : " ") + d;
+  return "[" + v + "]";
+}
+
+// Maps GLSL "S:L(C): msg" or "S(L) : msg" locations back to file names via the #line source
+// numbers we assigned (1 = first file, …).
+std::string Relocate(const std::string& log, const std::vector<std::string>& files,
+                     const std::string& variant) {
+  std::istringstream in(log);
+  std::string line, out;
+  std::regex mesa(R"(^(\d+):(\d+)\(\d+\):\s*(.*)$)");
+  std::smatch m;
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;
+    if (std::regex_match(line, m, mesa)) {
+      size_t src = std::stoul(m[1]);
+      std::string file = src >= 1 && src <= files.size() ? files[src - 1] : "?";
+      return "shaders/" + file + ":" + m[2].str() + " " + variant + ": " + m[3].str();
+    }
+    if (out.empty()) out = line;
+  }
+  return files.back() + " " + variant + ": " + (out.empty() ? "compile failed" : out);
+}
+
+unsigned Compile(GLenum type, const std::vector<std::string>& files, const std::vector<std::string>& defines) {
+  std::string src = "#version 330 core\n";
+  for (const auto& d : defines) src += "#define " + d + "\n";
+  for (size_t i = 0; i < files.size(); ++i)
+    src += "#line 1 " + std::to_string(i + 1) + "\n" + ShaderSource(files[i]) + "\n";
+  GLuint s = glCreateShader(type);
+  const char* p = src.c_str();
+  glShaderSource(s, 1, &p, nullptr);
+  glCompileShader(s);
+  GLint ok = 0;
+  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    GLint len = 0;
+    glGetShaderiv(s, GL_INFO_LOG_LENGTH, &len);
+    std::string log(static_cast<size_t>(std::max(len, 1)), '\0');
+    glGetShaderInfoLog(s, len, nullptr, log.data());
+    glDeleteShader(s);
+    throw Error(Relocate(log, files, Variant(defines)));
+  }
+  return s;
+}
+
+}  // namespace
+
+unsigned BuildProgram(const std::string& vertex, const std::string& fragment,
+                      const std::vector<std::string>& defines,
+                      const std::vector<std::string>& fragment_includes) {
+  GLuint vs = Compile(GL_VERTEX_SHADER, {vertex}, defines);
+  std::vector<std::string> ff = fragment_includes;
+  ff.push_back(fragment);
+  GLuint fs;
+  try {
+    fs = Compile(GL_FRAGMENT_SHADER, ff, defines);
+  } catch (...) {
+    glDeleteShader(vs);
+    throw;
+  }
+  GLuint prog = glCreateProgram();
+  glAttachShader(prog, vs);
+  glAttachShader(prog, fs);
+  glLinkProgram(prog);
+  glDeleteShader(vs);
+  glDeleteShader(fs);
+  GLint ok = 0;
+  glGetProgramiv(prog, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    char log[2048] = {0};
+    glGetProgramInfoLog(prog, sizeof log, nullptr, log);
+    glDeleteProgram(prog);
+    throw Error("shaders/" + vertex + " + " + fragment + " " + Variant(defines) + ": link failed: " + log);
+  }
+  return prog;
+}
+
+}  // namespace mvtm

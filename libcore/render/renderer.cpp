@@ -1,0 +1,457 @@
+#include "render/renderer.h"
+
+#include <glad/gl.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <unordered_map>
+
+#include "base/error.h"
+#include "render/gl_program.h"
+
+namespace mvtm {
+
+std::vector<std::string> EffectsPlan::Defines() const {
+  std::vector<std::string> d;
+  d.push_back("MVTM_MAX_PROJECTORS " + std::to_string(std::max(1, projectors)));
+  if (ptm) d.push_back("MVTM_PTM");
+  if (occlusion) d.push_back("MVTM_OCCLUSION");
+  if (masks) d.push_back("MVTM_MASKS");
+  if (skybox) d.push_back("MVTM_SKYBOX");
+  return d;
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double Ms(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+struct Chunk {
+  Eigen::Vector3d origin, lo, hi;  // world, double
+  GLint base_vertex = 0;
+  size_t first_index = 0, index_count = 0;
+};
+
+void CheckGlError(const char* where) {
+  GLenum e = glGetError();
+  if (e != GL_NO_ERROR) throw Error(std::string("OpenGL error ") + std::to_string(e) + " in " + where);
+}
+
+// Camera coordinates (x right, y down, z forward) → clip: the GL projection of K applied to
+// OpenGL eye coordinates (x, −y, −z). The one place the axis flip happens.
+Eigen::Matrix4f ClipFromCamera(const Camera& c, double n, double f) {
+  Eigen::Matrix4d flip = Eigen::Vector4d(1, -1, -1, 1).asDiagonal();
+  return (c.GlProjection(n, f) * flip).cast<float>();
+}
+
+struct Target {
+  GLuint fbo = 0, colour = 0, source = 0, depth_rb = 0, lin_depth = 0;
+  int w = 0, h = 0;
+  void Release() {
+    if (fbo) glDeleteFramebuffers(1, &fbo);
+    GLuint tex[3] = {colour, source, lin_depth};
+    glDeleteTextures(3, tex);
+    if (depth_rb) glDeleteRenderbuffers(1, &depth_rb);
+    *this = Target();
+  }
+};
+
+}  // namespace
+
+struct Renderer::Impl {
+  GLuint vao = 0, vbo = 0, ebo = 0;
+  std::vector<Chunk> chunks;
+  size_t triangles = 0;
+  Eigen::Vector3d lo, hi;
+  std::map<std::string, GLuint> programs;  // by defines + stage
+  Target colour_target, depth_target;
+  GLuint images = 0, depths = 0, masks = 0, sky_vao = 0;
+
+  ~Impl() {
+    for (auto& [k, p] : programs) glDeleteProgram(p);
+    colour_target.Release();
+    depth_target.Release();
+    GLuint tex[3] = {images, depths, masks};
+    glDeleteTextures(3, tex);
+    glDeleteBuffers(1, &vbo);
+    glDeleteBuffers(1, &ebo);
+    glDeleteVertexArrays(1, &vao);
+    glDeleteVertexArrays(1, &sky_vao);
+  }
+
+  GLuint Program(const std::string& vert, const std::string& frag, const std::vector<std::string>& defines,
+                 const std::vector<std::string>& includes) {
+    std::string key = vert + "|" + frag;
+    for (const auto& d : defines) key += "|" + d;
+    auto it = programs.find(key);
+    if (it != programs.end()) return it->second;
+    GLuint p = BuildProgram(vert, frag, defines, includes);
+    programs[key] = p;
+    return p;
+  }
+
+  // Colour (RGBA8) + source (R8UI) + depth, or linear depth (R32F) + depth.
+  void EnsureTarget(Target& t, int w, int h, bool depth_only) {
+    if (t.fbo && t.w == w && t.h == h) return;
+    t.Release();
+    t.w = w;
+    t.h = h;
+    glGenFramebuffers(1, &t.fbo);
+    glBindFramebuffer(GL_FRAMEBUFFER, t.fbo);
+    auto tex = [&](GLuint& id, GLenum internal, GLenum format, GLenum type, GLenum attach) {
+      glGenTextures(1, &id);
+      glBindTexture(GL_TEXTURE_2D, id);
+      glTexImage2D(GL_TEXTURE_2D, 0, static_cast<GLint>(internal), w, h, 0, format, type, nullptr);
+      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+      glFramebufferTexture2D(GL_FRAMEBUFFER, attach, GL_TEXTURE_2D, id, 0);
+    };
+    if (depth_only) {
+      tex(t.lin_depth, GL_R32F, GL_RED, GL_FLOAT, GL_COLOR_ATTACHMENT0);
+      GLenum bufs[1] = {GL_COLOR_ATTACHMENT0};
+      glDrawBuffers(1, bufs);
+    } else {
+      tex(t.colour, GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, GL_COLOR_ATTACHMENT0);
+      tex(t.source, GL_R8UI, GL_RED_INTEGER, GL_UNSIGNED_BYTE, GL_COLOR_ATTACHMENT1);
+      GLenum bufs[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+      glDrawBuffers(2, bufs);
+    }
+    glGenRenderbuffers(1, &t.depth_rb);
+    glBindRenderbuffer(GL_RENDERBUFFER, t.depth_rb);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, w, h);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, t.depth_rb);
+    if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+      throw Error("OpenGL: incomplete framebuffer " + std::to_string(w) + "x" + std::to_string(h));
+  }
+
+  // Near/far planes enclosing the mesh as seen from `c` (double).
+  void Planes(const Eigen::Vector3d& centre, double& n, double& f) const {
+    double far = 0;
+    for (int i = 0; i < 8; ++i) {
+      Eigen::Vector3d corner((i & 1) ? hi.x() : lo.x(), (i & 2) ? hi.y() : lo.y(), (i & 4) ? hi.z() : lo.z());
+      far = std::max(far, (corner - centre).norm());
+    }
+    f = std::max(1.0, far * 1.01);
+    n = std::clamp(f * 1e-5, 0.01, 0.1);
+  }
+
+  // Frustum culling: a chunk is skipped when all 8 corners of its box are outside one plane of
+  // the view frustum (camera coordinates, double).
+  bool Visible(const Chunk& ch, const View& v, double f) const {
+    const Camera& c = v.camera;
+    double W = double(c.width), H = double(c.height);
+    int out[5] = {0, 0, 0, 0, 0};
+    for (int i = 0; i < 8; ++i) {
+      Eigen::Vector3d corner((i & 1) ? ch.hi.x() : ch.lo.x(), (i & 2) ? ch.hi.y() : ch.lo.y(),
+                             (i & 4) ? ch.hi.z() : ch.lo.z());
+      Eigen::Vector3d x = v.world_to_camera * corner;
+      double z = x.z();
+      out[0] += x.x() < (0 - c.cx()) / c.fx() * z;
+      out[1] += x.x() > (W - c.cx()) / c.fx() * z;
+      out[2] += x.y() < (0 - c.cy()) / c.fy() * z;
+      out[3] += x.y() > (H - c.cy()) / c.fy() * z;
+      out[4] += z <= 0 || z > f;
+    }
+    for (int k : out)
+      if (k == 8) return false;
+    return true;
+  }
+
+  void Draw(GLuint prog, const View& v, RenderStats* stats) {
+    auto t0 = Clock::now();
+    double n, f;
+    Eigen::Vector3d C = v.world_to_camera.Centre();
+    Planes(C, n, f);
+    std::vector<const Chunk*> visible;
+    for (const auto& ch : chunks)
+      if (Visible(ch, v, f)) visible.push_back(&ch);
+    auto t1 = Clock::now();
+    glUseProgram(prog);
+    Eigen::Matrix3f R = v.world_to_camera.R().cast<float>();
+    Eigen::Matrix4f P = ClipFromCamera(v.camera, n, f);
+    glUniformMatrix3fv(glGetUniformLocation(prog, "u_R"), 1, GL_FALSE, R.data());
+    glUniformMatrix4fv(glGetUniformLocation(prog, "u_P"), 1, GL_FALSE, P.data());
+    GLint off = glGetUniformLocation(prog, "u_offset");
+    glBindVertexArray(vao);
+    size_t tris = 0;
+    for (const Chunk* ch : visible) {
+      Eigen::Vector3f o = (ch->origin - C).cast<float>();
+      glUniform3fv(off, 1, o.data());
+      glDrawElementsBaseVertex(GL_TRIANGLES, static_cast<GLsizei>(ch->index_count), GL_UNSIGNED_INT,
+                               reinterpret_cast<void*>(ch->first_index * sizeof(uint32_t)), ch->base_vertex);
+      tris += ch->index_count / 3;
+    }
+    glFinish();
+    auto t2 = Clock::now();
+    if (stats) {
+      stats->chunks_total = chunks.size();
+      stats->chunks_drawn = visible.size();
+      stats->triangles_drawn = tris;
+      stats->cull_ms += Ms(t0, t1);
+      stats->draw_ms += Ms(t1, t2);
+    }
+  }
+
+  // Uploads images of equal size as a texture array.
+  void UploadArray(GLuint& tex, const std::vector<const Image*>& imgs, int kind /*0 rgb,1 depth,2 mask*/) {
+    if (!tex) glGenTextures(1, &tex);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, tex);
+    int w = 1, h = 1;
+    for (const Image* im : imgs)
+      if (im) w = im->width, h = im->height;
+    for (const Image* im : imgs)
+      if (im && (im->width != w || im->height != h))
+        throw Error("projector " + std::string(kind == 0 ? "images" : kind == 1 ? "depth maps" : "masks") +
+                    " differ in size (" + std::to_string(w) + "x" + std::to_string(h) + " and " +
+                    std::to_string(im->width) + "x" + std::to_string(im->height) + ")");
+    int layers = std::max<int>(1, static_cast<int>(imgs.size()));
+    if (kind == 0) {
+      std::vector<uint8_t> buf(static_cast<size_t>(w) * h * 3 * layers, 0);
+      for (size_t l = 0; l < imgs.size(); ++l) {
+        const Image* im = imgs[l];
+        uint8_t* dst = buf.data() + l * size_t(w) * h * 3;
+        for (size_t p = 0; p < size_t(w) * h; ++p)
+          for (int c = 0; c < 3; ++c) {
+            int sc = im->channels >= 3 ? c : 0;
+            float val = im->data[p * im->channels + sc];
+            if (im->bits == 16) val /= 257.f;
+            dst[p * 3 + c] = static_cast<uint8_t>(std::clamp(std::lround(val), 0L, 255L));
+          }
+      }
+      glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_RGB8, w, h, layers, 0, GL_RGB, GL_UNSIGNED_BYTE, buf.data());
+      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    } else if (kind == 1) {
+      std::vector<float> buf(static_cast<size_t>(w) * h * layers, std::numeric_limits<float>::infinity());
+      for (size_t l = 0; l < imgs.size(); ++l)
+        if (imgs[l]) std::copy(imgs[l]->data.begin(), imgs[l]->data.end(), buf.begin() + l * size_t(w) * h);
+      glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_R32F, w, h, layers, 0, GL_RED, GL_FLOAT, buf.data());
+      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    } else {
+      std::vector<uint8_t> buf(static_cast<size_t>(w) * h * layers, 0);
+      for (size_t l = 0; l < imgs.size(); ++l)
+        if (imgs[l])
+          for (size_t p = 0; p < size_t(w) * h; ++p)
+            buf[l * size_t(w) * h + p] = imgs[l]->data[p * imgs[l]->channels] > 0 ? 255 : 0;
+      glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_R8, w, h, layers, 0, GL_RED, GL_UNSIGNED_BYTE, buf.data());
+      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    }
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  }
+
+  // Projector uniforms relative to the render camera centre, in double.
+  void SetProjectors(GLuint prog, const View& v, const std::vector<Projector>& ps, const EffectsPlan& plan) {
+    int n = std::min<int>(plan.projectors, static_cast<int>(ps.size()));
+    glUniform1i(glGetUniformLocation(prog, "u_num_projectors"), n);
+    Eigen::Vector3d C = v.world_to_camera.Centre();
+    for (int k = 0; k < n; ++k) {
+      const View& pv = ps[k].view;
+      Eigen::Matrix3d Rk = pv.world_to_camera.R();
+      Eigen::Matrix3f Rf = Rk.cast<float>();
+      Eigen::Vector3f t = (Rk * (C - pv.world_to_camera.Centre())).cast<float>();
+      Eigen::Vector4f K(float(pv.camera.fx()), float(pv.camera.fy()), float(pv.camera.cx()), float(pv.camera.cy()));
+      std::string i = "[" + std::to_string(k) + "]";
+      glUniformMatrix3fv(glGetUniformLocation(prog, ("u_proj_R" + i).c_str()), 1, GL_FALSE, Rf.data());
+      glUniform3fv(glGetUniformLocation(prog, ("u_proj_t" + i).c_str()), 1, t.data());
+      glUniform4fv(glGetUniformLocation(prog, ("u_proj_K" + i).c_str()), 1, K.data());
+    }
+    if (n > 0) {
+      glUniform2f(glGetUniformLocation(prog, "u_proj_size"), float(ps[0].image->width), float(ps[0].image->height));
+    }
+    glUniform1i(glGetUniformLocation(prog, "u_images"), 0);
+    glUniform1i(glGetUniformLocation(prog, "u_depths"), 1);
+    glUniform1i(glGetUniformLocation(prog, "u_masks"), 2);
+    glUniform1f(glGetUniformLocation(prog, "u_bias"), float(plan.bias));
+  }
+};
+
+Renderer::Renderer(const Mesh& mesh, double chunk_size) : impl_(std::make_unique<Impl>()) {
+  if (mesh.faces.empty() || mesh.vertices.empty()) throw Error("the mesh has no triangles");
+  Impl& m = *impl_;
+  mesh.Bounds(m.lo, m.hi);
+  // Bin triangles by centroid into cubes of chunk_size metres.
+  std::map<std::array<int64_t, 3>, std::vector<uint32_t>> bins;
+  for (uint32_t f = 0; f < mesh.faces.size(); ++f) {
+    Eigen::Vector3d c = (mesh.vertices[mesh.faces[f][0]] + mesh.vertices[mesh.faces[f][1]] + mesh.vertices[mesh.faces[f][2]]) / 3;
+    std::array<int64_t, 3> key;
+    for (int k = 0; k < 3; ++k) key[k] = static_cast<int64_t>(std::floor((c[k] - m.lo[k]) / chunk_size));
+    bins[key].push_back(f);
+  }
+  std::vector<float> verts;  // x y z r g b
+  std::vector<uint32_t> indices;
+  const bool colours = mesh.has_colors();
+  for (const auto& [key, faces] : bins) {
+    Chunk ch;
+    std::unordered_map<uint32_t, uint32_t> local;
+    std::vector<uint32_t> order;
+    ch.lo.setConstant(std::numeric_limits<double>::infinity());
+    ch.hi = -ch.lo;
+    for (uint32_t f : faces)
+      for (uint32_t vi : mesh.faces[f]) {
+        if (local.emplace(vi, static_cast<uint32_t>(order.size())).second) order.push_back(vi);
+        ch.lo = ch.lo.cwiseMin(mesh.vertices[vi]);
+        ch.hi = ch.hi.cwiseMax(mesh.vertices[vi]);
+      }
+    ch.origin = (ch.lo + ch.hi) / 2;
+    ch.base_vertex = static_cast<GLint>(verts.size() / 6);
+    for (uint32_t vi : order) {
+      Eigen::Vector3d p = mesh.vertices[vi] - ch.origin;
+      verts.insert(verts.end(), {float(p.x()), float(p.y()), float(p.z())});
+      if (colours)
+        verts.insert(verts.end(), {mesh.colors[vi][0] / 255.f, mesh.colors[vi][1] / 255.f, mesh.colors[vi][2] / 255.f});
+      else
+        verts.insert(verts.end(), {0.5f, 0.5f, 0.5f});
+    }
+    ch.first_index = indices.size();
+    for (uint32_t f : faces)
+      for (uint32_t vi : mesh.faces[f]) indices.push_back(local[vi]);
+    ch.index_count = indices.size() - ch.first_index;
+    m.chunks.push_back(ch);
+  }
+  m.triangles = mesh.faces.size();
+  glGenVertexArrays(1, &m.vao);
+  glBindVertexArray(m.vao);
+  glGenBuffers(1, &m.vbo);
+  glBindBuffer(GL_ARRAY_BUFFER, m.vbo);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(verts.size() * sizeof(float)), verts.data(), GL_STATIC_DRAW);
+  glGenBuffers(1, &m.ebo);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, m.ebo);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(uint32_t)), indices.data(), GL_STATIC_DRAW);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
+  glEnableVertexAttribArray(1);
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), reinterpret_cast<void*>(3 * sizeof(float)));
+  glBindVertexArray(0);
+  glGenVertexArrays(1, &m.sky_vao);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  CheckGlError("mesh upload");
+}
+
+Renderer::~Renderer() = default;
+size_t Renderer::triangles() const { return impl_->triangles; }
+size_t Renderer::chunks() const { return impl_->chunks.size(); }
+
+Image Renderer::RenderDepth(const View& view, RenderStats* stats) {
+  view.camera.RequireUndistorted();
+  Impl& m = *impl_;
+  int w = static_cast<int>(view.camera.width), h = static_cast<int>(view.camera.height);
+  m.EnsureTarget(m.depth_target, w, h, true);
+  glBindFramebuffer(GL_FRAMEBUFFER, m.depth_target.fbo);
+  glViewport(0, 0, w, h);
+  const float inf = std::numeric_limits<float>::infinity();
+  glClearBufferfv(GL_COLOR, 0, &inf);
+  glClear(GL_DEPTH_BUFFER_BIT);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDisable(GL_CULL_FACE);
+  GLuint prog = m.Program("mesh.vert", "depth.frag", {}, {});
+  m.Draw(prog, view, stats);
+  auto t0 = Clock::now();
+  Image out(w, h, 1, 32);
+  std::vector<float> buf(static_cast<size_t>(w) * h);
+  glReadPixels(0, 0, w, h, GL_RED, GL_FLOAT, buf.data());
+  for (int y = 0; y < h; ++y)  // GL rows are bottom-up
+    std::copy_n(buf.data() + size_t(h - 1 - y) * w, w, out.data.data() + size_t(y) * w);
+  if (stats) stats->readback_ms += Ms(t0, Clock::now());
+  CheckGlError("RenderDepth");
+  return out;
+}
+
+Renderer::Frame Renderer::Render(const View& view, const std::vector<Projector>& projectors,
+                                 const EffectsPlan& plan_in, RenderStats* stats) {
+  view.camera.RequireUndistorted();
+  Impl& m = *impl_;
+  EffectsPlan plan = plan_in;
+  if (projectors.empty()) plan.ptm = plan.skybox = false;
+  plan.projectors = std::max(1, std::min<int>(plan.projectors, static_cast<int>(projectors.size())));
+  const int w = static_cast<int>(view.camera.width), h = static_cast<int>(view.camera.height);
+  std::vector<const Image*> imgs, depths, masks;
+  if (plan.ptm || plan.skybox) {
+    for (int k = 0; k < plan.projectors; ++k) {
+      const Projector& p = projectors[k];
+      p.view.camera.RequireUndistorted();
+      if (!p.image) throw Error("projector " + std::to_string(k) + " has no image");
+      if (p.image->width != static_cast<int>(p.view.camera.width) || p.image->height != static_cast<int>(p.view.camera.height))
+        throw Error("projector image is " + std::to_string(p.image->width) + "x" + std::to_string(p.image->height) +
+                    " but its camera is " + std::to_string(p.view.camera.width) + "x" + std::to_string(p.view.camera.height));
+      imgs.push_back(p.image);
+      if (plan.occlusion && !p.depth) throw Error("projector " + std::to_string(k) + " has no depth map");
+      depths.push_back(p.depth);
+      masks.push_back(p.mask);
+    }
+    glActiveTexture(GL_TEXTURE0);
+    m.UploadArray(m.images, imgs, 0);
+    if (plan.occlusion) {
+      glActiveTexture(GL_TEXTURE1);
+      m.UploadArray(m.depths, depths, 1);
+    }
+    if (plan.masks) {
+      glActiveTexture(GL_TEXTURE2);
+      m.UploadArray(m.masks, masks, 2);
+    }
+  }
+  m.EnsureTarget(m.colour_target, w, h, false);
+  glBindFramebuffer(GL_FRAMEBUFFER, m.colour_target.fbo);
+  glViewport(0, 0, w, h);
+  glClear(GL_DEPTH_BUFFER_BIT);
+  auto defines = plan.Defines();
+  // Background first (depth test off, no depth write), then the mesh over it.
+  {
+    std::vector<std::string> inc;
+    if (plan.skybox) inc.push_back("ptm_common.glsl");
+    GLuint sky = m.Program("sky.vert", "sky.frag", defines, inc);
+    glUseProgram(sky);
+    glDisable(GL_DEPTH_TEST);
+    glDepthMask(GL_FALSE);
+    glUniform3f(glGetUniformLocation(sky, "u_background"), plan.background[0] / 255.f, plan.background[1] / 255.f,
+                plan.background[2] / 255.f);
+    Eigen::Matrix3f Rt = view.world_to_camera.R().transpose().cast<float>();
+    glUniformMatrix3fv(glGetUniformLocation(sky, "u_Rt"), 1, GL_FALSE, Rt.data());
+    glUniform4f(glGetUniformLocation(sky, "u_K"), float(view.camera.fx()), float(view.camera.fy()),
+                float(view.camera.cx()), float(view.camera.cy()));
+    glUniform2f(glGetUniformLocation(sky, "u_size"), float(w), float(h));
+    if (plan.skybox) m.SetProjectors(sky, view, projectors, plan);
+    glBindVertexArray(m.sky_vao);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glDepthMask(GL_TRUE);
+  }
+  std::vector<std::string> inc;
+  if (plan.ptm) inc.push_back("ptm_common.glsl");
+  GLuint prog = m.Program("mesh.vert", "ptm.frag", defines, inc);
+  glUseProgram(prog);
+  if (plan.ptm) m.SetProjectors(prog, view, projectors, plan);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  m.Draw(prog, view, stats);
+  auto t0 = Clock::now();
+  Frame out;
+  out.colour = Image(w, h, 3, 8);
+  out.source = Image(w, h, 1, 8);
+  std::vector<uint8_t> rgba(static_cast<size_t>(w) * h * 4), src(static_cast<size_t>(w) * h);
+  glReadBuffer(GL_COLOR_ATTACHMENT0);
+  glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+  glReadBuffer(GL_COLOR_ATTACHMENT1);
+  glReadPixels(0, 0, w, h, GL_RED_INTEGER, GL_UNSIGNED_BYTE, src.data());
+  for (int y = 0; y < h; ++y) {
+    size_t gy = size_t(h - 1 - y);
+    for (int x = 0; x < w; ++x) {
+      size_t g = gy * w + x, o = size_t(y) * w + x;
+      for (int c = 0; c < 3; ++c) out.colour.data[o * 3 + c] = rgba[g * 4 + c];
+      out.source.data[o] = src[g];
+    }
+  }
+  if (stats) stats->readback_ms += Ms(t0, Clock::now());
+  CheckGlError("Render");
+  return out;
+}
+
+}  // namespace mvtm

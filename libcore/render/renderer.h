@@ -1,0 +1,93 @@
+// mvtm — projective texture mapping and depth rendering of a mesh (libcore/render).
+//
+// Conventions:
+//  * Views are COLMAP cameras (PINHOLE / SIMPLE_PINHOLE only) with world-to-camera poses; the
+//    OpenGL axis flip happens here and nowhere else.
+//  * Precision: the mesh is split into spatial chunks, each stored as float offsets from its own
+//    double-precision origin; every frame is drawn camera-relative (chunk origin − camera centre
+//    is computed in double), so a road at UTM coordinates renders like one at the origin.
+//    Projector transforms are likewise built in double relative to the render camera.
+//  * Depth maps are linear camera-space z (float32 metres), +inf where there is no surface.
+//  * Images are float samples 0..255 (8-bit scale), row 0 at the top, like libcore/image.
+//  * Chunks outside the view frustum are not drawn (frustum culling in double on the CPU).
+//
+// Thread safety: a Renderer belongs to the thread holding the GL context.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "camera/camera.h"
+#include "geometry/rigid.h"
+#include "image/image.h"
+#include "io/mesh_io.h"
+
+namespace mvtm {
+
+struct View {
+  Camera camera;      // undistorted
+  Rigid3d world_to_camera;
+};
+
+struct Projector {
+  View view;
+  const Image* image = nullptr;  // 1 or 3 (or 4) channels, 8-bit scale, size = camera size
+  const Image* depth = nullptr;  // linear depth, any size (nearest lookup); nullptr = none
+  const Image* mask = nullptr;   // 8-bit, non-zero = do not use; nullptr = none
+};
+
+// The effects a frame is rendered with (one shader variant per distinct plan).
+struct EffectsPlan {
+  bool ptm = true;          // false: vertex colours only
+  int projectors = 1;       // projectors tried in rank order (≥ 1)
+  bool occlusion = false;   // test against projector depth maps
+  bool masks = false;       // skip masked projector texels
+  bool skybox = false;      // background from projectors at infinity (else constant colour)
+  double bias = 0.005;      // relative occlusion bias: occluded when z > d·(1 + bias)
+  std::array<float, 3> background{0, 0, 0};  // 0..255
+
+  std::vector<std::string> Defines() const;
+};
+
+struct RenderStats {
+  size_t chunks_drawn = 0, chunks_total = 0, triangles_drawn = 0;
+  double cull_ms = 0, draw_ms = 0, readback_ms = 0;
+};
+
+// What a frame's pixels came from: 0..K−1 projector rank, 254 vertex colour, 255 background.
+inline constexpr uint8_t kSourceVertex = 254, kSourceBackground = 255;
+
+class Renderer {
+ public:
+  // Uploads the mesh (chunks of about `chunk_size` metres). A GL context must be current.
+  // Throws Error for an empty mesh (no faces).
+  explicit Renderer(const Mesh& mesh, double chunk_size = 25.0);
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  // Linear camera-space depth of the mesh seen from `view` (1 channel, bits 32), +inf = none.
+  Image RenderDepth(const View& view, RenderStats* stats = nullptr);
+
+  struct Frame {
+    Image colour;  // 3 channels, 8-bit scale (rounded)
+    Image source;  // 1 channel: projector rank / kSourceVertex / kSourceBackground
+  };
+  // Renders `view` with the projectors (rank order) under `plan`. Projector images must all
+  // have the same size (Error otherwise); depth maps are needed when plan.occlusion, masks when
+  // plan.masks (a projector without one is treated as unmasked).
+  Frame Render(const View& view, const std::vector<Projector>& projectors, const EffectsPlan& plan,
+               RenderStats* stats = nullptr);
+
+  size_t triangles() const;
+  size_t chunks() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace mvtm

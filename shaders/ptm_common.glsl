@@ -1,0 +1,49 @@
+// Shared by ptm.frag and sky.frag: projectors and their images as texture arrays.
+// Compile-time switches (the effects plan, see ptmrender --explain):
+//   MVTM_MAX_PROJECTORS  N    projectors tried in rank order (1 = a single projector)
+//   MVTM_OCCLUSION            compare with the projector's depth map (Alg. 2)
+//   MVTM_MASKS                skip masked projector texels (the next projector is tried)
+uniform int u_num_projectors;
+uniform mat3 u_proj_R[MVTM_MAX_PROJECTORS];   // world → projector camera rotation
+uniform vec3 u_proj_t[MVTM_MAX_PROJECTORS];   // R_k (C_render − C_k), double on the CPU
+uniform vec4 u_proj_K[MVTM_MAX_PROJECTORS];   // fx fy cx cy (pixels)
+uniform vec2 u_proj_size;                     // projector image size (pixels)
+uniform sampler2DArray u_images;              // RGB, row 0 = top
+#ifdef MVTM_OCCLUSION
+uniform sampler2DArray u_depths;              // R32F linear depth, +inf = no surface
+uniform float u_bias;                         // relative: occluded when z > d·(1 + bias)
+#endif
+#ifdef MVTM_MASKS
+uniform sampler2DArray u_masks;               // R8, 1 = do not use this texel
+#endif
+
+// Projects camera-relative point (or direction, w = 0) into projector k. Returns false when
+// the point is behind the projector (reverse-projection rejection) or outside its image (clip
+// test). uv: pixel coordinates, COLMAP convention (top-left pixel centre at 0.5, 0.5).
+bool ProjectInto(int k, vec3 rel, float w, out vec2 uv, out float z) {
+  vec3 x = u_proj_R[k] * rel + w * u_proj_t[k];
+  z = x.z;
+  if (!(z > 1e-6 * max(1.0, length(x)))) return false;  // on or behind the projector plane
+  uv = u_proj_K[k].xy * (x.xy / z) + u_proj_K[k].zw;
+  return all(greaterThanEqual(uv, vec2(0.0))) && all(lessThan(uv, u_proj_size));
+}
+
+ivec3 Texel(int k, vec2 uv) {
+  return ivec3(clamp(ivec2(floor(uv)), ivec2(0), ivec2(u_proj_size) - 1), k);
+}
+
+bool Usable(int k, vec2 uv, float z, bool at_infinity) {
+#ifdef MVTM_MASKS
+  if (texelFetch(u_masks, Texel(k, uv), 0).r > 0.5) return false;
+#endif
+#ifdef MVTM_OCCLUSION
+  float d = texelFetch(u_depths, Texel(k, uv), 0).r;
+  if (at_infinity) return isinf(d) || d > 1e30;      // sky in the projector too
+  if (z > d * (1.0 + u_bias)) return false;           // something nearer hides this point
+#endif
+  return true;
+}
+
+vec3 Sample(int k, vec2 uv) {
+  return texture(u_images, vec3(uv / u_proj_size, float(k))).rgb;
+}

@@ -1,0 +1,79 @@
+#include "bakedepth.h"
+
+#include <chrono>
+#include <cmath>
+
+#include "base/atomic_file.h"
+#include "base/cli.h"
+#include "base/error.h"
+#include "image/image.h"
+#include "io/colmap_model.h"
+#include "io/mesh_io.h"
+#include "render/context.h"
+#include "render/renderer.h"
+#include "workspace/workspace.h"
+
+namespace mvtm {
+
+void BakeDepthOptions::Check() const {
+  if (!(scale > 0 && scale <= 4)) throw UsageError("--scale: must be in (0, 4]");
+  if (!frames.empty() && !shard.empty()) throw UsageError("give --frames or --shard, not both");
+  ParseGlBackend(gl);
+}
+
+BakeDepthReport RunBakeDepth(const BakeDepthOptions& o) {
+  o.Check();
+  Workspace ws(o.workspace);
+  ws.Require("bakedepth", {WsItem::kSparse, WsItem::kMesh});
+  Selection sel = !o.shard.empty() ? Selection::Shard(o.shard) : !o.frames.empty() ? Selection::Frames(o.frames) : Selection();
+  Reconstruction rec = ReadColmapModel(ws.SparseDir().string());
+  auto images = rec.ImagesByName();
+  auto chosen = sel.Apply(images.size());
+  BakeDepthReport rep;
+  rep.selected = chosen.size();
+  const fs::path mesh_path = ws.MeshPath();
+  std::vector<fs::path> inputs = {mesh_path};
+  for (const char* f : {"images", "cameras"})
+    for (const char* ext : {".txt", ".bin"})
+      if (fs::exists(ws.SparseDir() / (std::string(f) + ext))) inputs.push_back(ws.SparseDir() / (std::string(f) + ext));
+  std::vector<const ImageRecord*> todo;
+  for (size_t i : chosen) {
+    if (!o.force && IsUpToDate(ws.DepthPath(images[i]->name), inputs)) {
+      ++rep.skipped;
+      continue;
+    }
+    todo.push_back(images[i]);
+  }
+  if (!todo.empty()) {
+    Mesh mesh = ReadMesh(mesh_path.string());
+    if (mesh.faces.empty()) throw Error(mesh_path.string(), 0, "the mesh has no triangles");
+    auto ctx = GlContext::Create(ParseGlBackend(o.gl));
+    rep.gl = ctx->Describe();
+    Renderer renderer(mesh);
+    RemoveStaleTemporaries(ws.root() / "depth");
+    Progress bar("bakedepth", todo.size(), o.quiet);
+    for (const ImageRecord* im : todo) {
+      const Camera& cam = rec.cameras.at(im->camera_id);
+      cam.RequireUndistorted();
+      uint64_t w = std::max<uint64_t>(1, static_cast<uint64_t>(std::lround(double(cam.width) * o.scale)));
+      uint64_t h = std::max<uint64_t>(1, static_cast<uint64_t>(std::lround(double(cam.height) * o.scale)));
+      View v{o.scale == 1.0 ? cam : cam.Scaled(w, h), im->world_to_camera};
+      auto t0 = std::chrono::steady_clock::now();
+      Image depth = renderer.RenderDepth(v);
+      auto t1 = std::chrono::steady_clock::now();
+      WriteImage(ws.DepthPath(im->name).string(), depth);
+      auto t2 = std::chrono::steady_clock::now();
+      rep.render_ms += std::chrono::duration<double, std::milli>(t1 - t0).count();
+      rep.write_ms += std::chrono::duration<double, std::milli>(t2 - t1).count();
+      ++rep.written;
+      bar.Step();
+    }
+    nlohmann::json opts = {{"scale", o.scale}, {"frames", o.frames}, {"shard", o.shard}, {"gl", rep.gl}};
+    // Provenance is per run; with shards, each shard writes its own record.
+    ws.WriteProvenance(o.shard.empty() ? "bakedepth" : "bakedepth-shard-" + o.shard.substr(0, o.shard.find('/')),
+                       opts, inputs);
+  }
+  return rep;
+}
+
+}  // namespace mvtm

@@ -1,0 +1,31 @@
+// bakedepth — one linear float32 depth map per projector image, from the workspace mesh, so the
+// PTM occlusion test needs no extra render pass (thesis appendix D, "pre-baking depth maps").
+#pragma once
+
+#include <string>
+
+#include "base/selection.h"
+
+namespace mvtm {
+
+struct BakeDepthOptions {
+  std::string workspace;
+  double scale = 1.0;          // depth map size = image size × scale (0 < scale ≤ 4)
+  std::string frames;          // --frames A:B over the images sorted by name
+  std::string shard;           // --shard I/N
+  bool force = false;          // rebake up-to-date maps
+  std::string gl = "auto";     // auto | egl | osmesa
+  bool quiet = false;
+
+  void Check() const;
+};
+
+struct BakeDepthReport {
+  size_t selected = 0, written = 0, skipped = 0;
+  double render_ms = 0, write_ms = 0;
+  std::string gl;
+};
+
+BakeDepthReport RunBakeDepth(const BakeDepthOptions& options);
+
+}  // namespace mvtm

@@ -1,0 +1,33 @@
+// bakedepth — thin main: option table, then RunBakeDepth().
+#include <cstdio>
+#include <iostream>
+
+#include "bakedepth.h"
+#include "base/cli.h"
+
+int main(int argc, char** argv) {
+  mvtm::BakeDepthOptions o;
+  CLI::App app;
+  mvtm::ConfigureApp(app, "bakedepth",
+                     "Pre-bake one linear float32 depth map (depth/NAME.exr, +inf = no surface) per "
+                     "image of a workspace from its mesh, for the PTM occlusion test.");
+  app.add_option("WS", o.workspace, "Workspace folder (sparse/, mesh.ply)")->required();
+  app.add_option("--scale", o.scale, "Depth map size relative to the image (0 < F <= 4)")->capture_default_str();
+  auto* fr = app.add_option("--frames", o.frames, "Only images A:B (half-open, by name order)");
+  auto* sh = app.add_option("--shard", o.shard, "Only images i with i % N == I (I/N)");
+  fr->excludes(sh);
+  app.add_flag("--force", o.force, "Rebake maps that are newer than the mesh and model");
+  app.add_option("--gl", o.gl, "OpenGL backend")->check(CLI::IsMember({"auto", "egl", "osmesa"}))->capture_default_str();
+  app.add_flag("-q,--quiet", o.quiet, "No progress bar or summary");
+  return mvtm::RunMain(app, "bakedepth", argc, argv, [&] {
+    auto r = mvtm::RunBakeDepth(o);
+    if (!o.quiet) {
+      std::cerr << "bakedepth: " << r.written << " depth maps written, " << r.skipped << " up to date";
+      if (r.written)
+        std::fprintf(stderr, " (%.1f ms render, %.1f ms write per map; %s)", r.render_ms / r.written,
+                     r.write_ms / r.written, r.gl.c_str());
+      std::cerr << "\n";
+    }
+    return 0;
+  });
+}
