@@ -1,0 +1,45 @@
+// ptmrender — headless projective texture mapping of any trajectory (thesis Alg. 1–5).
+#pragma once
+
+#include <iosfwd>
+#include <string>
+
+#include "index/view_selection.h"
+#include "render/renderer.h"
+
+namespace mvtm {
+
+struct PtmRenderOptions {
+  std::string workspace, outdir;
+  std::string poses;             // trajectory file (COLMAP images.txt, TUM, KITTI); else --at-images
+  bool at_images = false;        // render at the workspace's own poses
+  bool exclude_self = false;     // never project an image onto its own pose
+  double lateral = 0;            // metres to the camera's left (+) or right (−): a lane change
+  double yaw = 0;                // degrees, turn left (+) or right (−) about the camera's up axis
+  std::string mode = "ptm";      // ptm | vertex
+  int projectors = 4;            // K: projectors tried per pixel, nearest first
+  double bias = 0.005;           // relative occlusion bias
+  bool no_occlusion = false, no_skybox = false, no_masks = false;
+  std::string size;              // WxH render size (default: the camera's)
+  std::string frames, shard;     // subsets of the render poses
+  bool explain = false;          // print the effects plan as JSON and render nothing
+  bool force = false;            // re-render existing frames
+  bool provenance = false;       // also write OUTDIR/provenance/NAME.png (source of each pixel)
+  bool exr = false;              // write float EXR instead of PNG
+  ViewSelectionOptions selection;
+  std::string gl = "auto";
+  bool quiet = false;
+
+  void Check() const;
+};
+
+struct PtmRenderReport {
+  size_t frames = 0, rendered = 0, skipped = 0;
+  double render_ms = 0, depth_ms = 0, load_ms = 0;
+  std::string gl;
+};
+
+// Renders (or with explain, prints the plan to `out`). Throws Error / UsageError.
+PtmRenderReport RunPtmRender(const PtmRenderOptions& options, std::ostream& out);
+
+}  // namespace mvtm
