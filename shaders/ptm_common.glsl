@@ -37,9 +37,21 @@ bool Usable(int k, vec2 uv, float z, bool at_infinity) {
   if (texelFetch(u_masks, Texel(k, uv), 0).r > 0.5) return false;
 #endif
 #ifdef MVTM_OCCLUSION
-  float d = texelFetch(u_depths, Texel(k, uv), 0).r;
-  if (at_infinity) return isinf(d) || d > 1e30;      // sky in the projector too
-  if (z > d * (1.0 + u_bias)) return false;           // something nearer hides this point
+  if (at_infinity) {
+    float d = texelFetch(u_depths, Texel(k, uv), 0).r;
+    return isinf(d) || d > 1e30;                      // sky in the projector too
+  }
+  // Occluded only when all four depth texels around uv (the bilinear footprint) are nearer:
+  // a surface seen at a grazing angle changes depth by metres per texel, and a single nearest
+  // texel would reject visible points on it.
+  ivec2 base = ivec2(floor(uv - 0.5));
+  float d = 0.0;
+  for (int j = 0; j < 2; ++j)
+    for (int i = 0; i < 2; ++i) {
+      ivec2 t = clamp(base + ivec2(i, j), ivec2(0), ivec2(u_proj_size) - 1);
+      d = max(d, texelFetch(u_depths, ivec3(t, k), 0).r);
+    }
+  if (!isinf(d) && z > d * (1.0 + u_bias)) return false;  // something nearer hides this point
 #endif
   return true;
 }

@@ -1,0 +1,343 @@
+// libcore/render against analytic truth on hand-built meshes: planes at known depths, exact
+// self-projection, and the hard cases of projective texturing (points on and behind the
+// projector plane, grazing triangles, a projector that sees nothing, bad inputs).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "base/error.h"
+#include "render/context.h"
+#include "render/renderer.h"
+
+namespace mvtm {
+namespace {
+
+class RenderTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { ctx_ = GlContext::Create().release(); }
+  static void TearDownTestSuite() {
+    delete ctx_;
+    ctx_ = nullptr;
+  }
+  static GlContext* ctx_;
+};
+GlContext* RenderTest::ctx_ = nullptr;
+
+Camera Cam(int w = 64, int h = 48, double f = 50) {
+  return ParseCameraSpec("PINHOLE " + std::to_string(w) + " " + std::to_string(h) + " " + std::to_string(f) + " " +
+                         std::to_string(f) + " " + std::to_string(w / 2.0) + " " + std::to_string(h / 2.0));
+}
+
+// A square [−s, s]² in the plane z = depth of world coordinates, offset by `o`, as a grid of
+// n×n quads with vertex colour (r, g, b).
+Mesh Plane(double s, double depth, const Eigen::Vector3d& o = Eigen::Vector3d::Zero(), int n = 4,
+           std::array<uint8_t, 3> rgb = {10, 200, 30}) {
+  Mesh m;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      m.vertices.push_back(o + Eigen::Vector3d(-s + 2 * s * i / n, -s + 2 * s * j / n, depth));
+      m.colors.push_back(rgb);
+    }
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+      m.faces.push_back({a, b, d});
+      m.faces.push_back({a, d, c});
+    }
+  return m;
+}
+
+// A test pattern with a distinct value per pixel (colour), so a wrong texel shows.
+Image Pattern(int w, int h) {
+  Image im(w, h, 3, 8);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      im.at(x, y, 0) = float((x * 37 + y * 11) % 256);
+      im.at(x, y, 1) = float((y * 53 + x * 3) % 256);
+      im.at(x, y, 2) = float((x * y) % 256);
+    }
+  return im;
+}
+
+// A camera at `c` looking at `target`, image "down" as close to world +y as possible.
+Rigid3d LookAt(const Eigen::Vector3d& c, const Eigen::Vector3d& target) {
+  Eigen::Vector3d z = (target - c).normalized();
+  Eigen::Vector3d x = Eigen::Vector3d::UnitY().cross(z).normalized();
+  Eigen::Vector3d y = z.cross(x);
+  Eigen::Matrix3d R;  // world → camera: rows are the camera axes
+  R.row(0) = x;
+  R.row(1) = y;
+  R.row(2) = z;
+  return Rigid3d(Eigen::Quaterniond(R), -(R * c));
+}
+
+Rigid3d LookingDownZ(const Eigen::Vector3d& centre) {  // identity rotation: camera z = world z
+  return Rigid3d(Eigen::Quaterniond::Identity(), -centre);
+}
+
+TEST_F(RenderTest, DepthOfAPlaneIsItsDistance) {
+  Renderer r(Plane(5, 10));
+  View v{Cam(), LookingDownZ({0, 0, 0})};
+  Image d = r.RenderDepth(v);
+  // The plane spans ±5 m at 10 m: pixels with |x−cx| < 25 px see it, the rest see nothing.
+  EXPECT_NEAR(d.at(32, 24), 10.0, 1e-5);
+  EXPECT_NEAR(d.at(10, 5), 10.0, 1e-5);
+  EXPECT_TRUE(std::isinf(d.at(0, 0)));
+  EXPECT_TRUE(std::isinf(d.at(63, 47)));
+}
+
+TEST_F(RenderTest, UtmCoordinatesRenderLikeTheOrigin) {
+  const Eigen::Vector3d utm(451000.25, 5410000.75, 120.5);
+  Renderer local(Plane(5, 10, Eigen::Vector3d::Zero(), 8));
+  Renderer far(Plane(5, 10, utm, 8));
+  // A slanted view so depth varies across the image.
+  Rigid3d pose(Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY())), Eigen::Vector3d::Zero());
+  Rigid3d at_local = pose * LookingDownZ({1, -0.5, 0});
+  Rigid3d at_far = pose * LookingDownZ(Eigen::Vector3d(1, -0.5, 0) + utm);
+  Image a = local.RenderDepth({Cam(), at_local}), b = far.RenderDepth({Cam(), at_far});
+  double worst = 0;
+  for (size_t i = 0; i < a.data.size(); ++i) {
+    ASSERT_EQ(std::isinf(a.data[i]), std::isinf(b.data[i])) << i;
+    if (!std::isinf(a.data[i])) worst = std::max(worst, std::abs(a.data[i] - b.data[i]) / double(a.data[i]));
+  }
+  EXPECT_LT(worst, 1e-6);  // a float32 mesh at UTM without re-centring would be off by decimetres
+}
+
+TEST_F(RenderTest, SelfProjectionReproducesTheImage) {
+  // Rendering a projector's own pose with its own image gives the image back exactly: pixel
+  // centres project onto texel centres, where bilinear sampling returns the texel.
+  Renderer r(Plane(50, 10, Eigen::Vector3d::Zero(), 8));
+  Camera c = Cam();
+  Image img = Pattern(64, 48);
+  View v{c, LookingDownZ({0.3, 0.2, 0})};
+  Projector p{v, &img, nullptr, nullptr};
+  EffectsPlan plan;
+  Renderer::Frame f = r.Render(v, {p}, plan);
+  EXPECT_EQ(f.colour.data, img.data);
+  for (float s : f.source.data) ASSERT_EQ(s, 0.f);
+}
+
+TEST_F(RenderTest, GeometryBehindTheProjectorIsNotTextured) {
+  // The render camera at z = 0 looks at a plane at z = 10 (+z); the projector at z = 20 looks
+  // along +z too, so the plane is *behind* it (z_proj = −10).
+  // Without reverse-projection rejection the image would appear mirrored on the plane.
+  Renderer r(Plane(50, 10, Eigen::Vector3d::Zero(), 8));
+  Image img = Pattern(64, 48);
+  Projector p{View{Cam(), LookingDownZ({0, 0, 20})}, &img, nullptr, nullptr};
+  Renderer::Frame f = r.Render(View{Cam(), LookingDownZ({0, 0, 0})}, {p}, EffectsPlan());
+  for (size_t i = 0; i < f.source.data.size(); ++i) {
+    ASSERT_EQ(f.source.data[i], kSourceVertex) << i;
+    ASSERT_EQ(f.colour.data[i * 3 + 1], 200.f);  // the vertex colour (10, 200, 30)
+  }
+}
+
+TEST_F(RenderTest, VertexExactlyOnTheProjectorPlane) {
+  // A plane z ∈ [−10, 10] seen from the side: it crosses the projector plane z = 0, with grid
+  // vertices exactly on it (w = 0). Pixels whose point is in front of the projector take its
+  // texture; those on or behind the plane fall back; nothing is NaN or mirrored.
+  Mesh m;
+  int n = 10;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      m.vertices.push_back(Eigen::Vector3d(-10 + 20.0 * i / n, 3, -10 + 20.0 * j / n));  // y = 3: a floor
+      m.colors.push_back({1, 2, 3});
+    }
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+      m.faces.push_back({a, b, d});
+      m.faces.push_back({a, d, c});
+    }
+  Renderer r(m);
+  Image img = Pattern(64, 48);
+  View proj{Cam(64, 48, 20), LookingDownZ({0, 0, 0})};
+  // The render camera above and behind, looking down at the floor across the projector plane.
+  View view{Cam(64, 48, 30), LookAt({0, -2, -12}, {0, 3, 2})};
+  Image depth = r.RenderDepth(view);
+  Renderer::Frame f = r.Render(view, {Projector{proj, &img, nullptr, nullptr}}, EffectsPlan());
+  size_t textured = 0, fallback = 0;
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 64; ++x) {
+      float z = depth.at(x, y);
+      if (std::isinf(z)) continue;
+      // The surface point of this pixel, independently, in double.
+      Eigen::Vector3d X = view.world_to_camera.Inverse() * view.camera.Unproject({x + 0.5, y + 0.5}, z);
+      Eigen::Vector3d xp = proj.world_to_camera * X;
+      uint8_t src = static_cast<uint8_t>(f.source.at(x, y));
+      for (int c = 0; c < 3; ++c) ASSERT_TRUE(std::isfinite(f.colour.at(x, y, c)));
+      if (src == 0) {
+        ++textured;
+        EXPECT_GT(xp.z(), -1e-3) << x << "," << y;  // never from behind the plane
+      } else {
+        ++fallback;
+        EXPECT_EQ(src, kSourceVertex);
+        Eigen::Vector2d uv = proj.camera.Project(xp);
+        bool inside = xp.z() > 0.05 && uv.x() > 1 && uv.y() > 1 && uv.x() < 63 && uv.y() < 47;
+        EXPECT_FALSE(inside) << "fell back although the projector sees " << x << "," << y;
+      }
+    }
+  EXPECT_GT(textured, 50u);
+  EXPECT_GT(fallback, 50u);
+}
+
+TEST_F(RenderTest, GrazingTrianglesStayFiniteAndCorrect) {
+  // A plane almost parallel to the projector's rays (89.5° from its normal).
+  Mesh m = Plane(20, 0, Eigen::Vector3d::Zero(), 16);
+  Eigen::Matrix3d tilt = Eigen::AngleAxisd(M_PI / 2 - 0.5 * M_PI / 180, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  for (auto& v : m.vertices) v = tilt * v + Eigen::Vector3d(0, 0, 30);
+  Renderer r(m);
+  Image img = Pattern(64, 48);
+  View proj{Cam(), LookingDownZ({0, 0, 0})};
+  View view{Cam(), LookAt({0, -8, 10}, {0, 0, 30})};
+  Image depth = r.RenderDepth(view);
+  Renderer::Frame f = r.Render(view, {Projector{proj, &img, nullptr, nullptr}}, EffectsPlan());
+  size_t checked = 0;
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 64; ++x) {
+      if (std::isinf(depth.at(x, y)) || f.source.at(x, y) != 0) continue;
+      Eigen::Vector3d X = view.world_to_camera.Inverse() * view.camera.Unproject({x + 0.5, y + 0.5}, depth.at(x, y));
+      Eigen::Vector2d uv = proj.camera.Project(proj.world_to_camera * X);
+      // Where the texture lookup is well inside the image the colour is within the range of the
+      // 2×2 texels around it (bilinear), however thin the triangle is in the projector.
+      if (uv.x() < 2 || uv.y() < 2 || uv.x() > 62 || uv.y() > 46) continue;
+      int u0 = int(std::floor(uv.x() - 0.5)), v0 = int(std::floor(uv.y() - 0.5));
+      for (int c = 0; c < 3; ++c) {
+        float lo = 255, hi = 0;
+        for (int dy = -1; dy <= 2; ++dy)
+          for (int dx = -1; dx <= 2; ++dx) {
+            float t = img.at(std::clamp(u0 + dx, 0, 63), std::clamp(v0 + dy, 0, 47), c);
+            lo = std::min(lo, t), hi = std::max(hi, t);
+          }
+        EXPECT_GE(f.colour.at(x, y, c), lo - 1) << x << "," << y;
+        EXPECT_LE(f.colour.at(x, y, c), hi + 1) << x << "," << y;
+      }
+      ++checked;
+    }
+  EXPECT_GT(checked, 20u);
+}
+
+TEST_F(RenderTest, ProjectorThatSeesNoGeometry) {
+  // The projector looks away from the mesh: its depth map is all +inf and it colours nothing.
+  Renderer r(Plane(50, 10));
+  Image img = Pattern(64, 48);
+  View away{Cam(), Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitY())), Eigen::Vector3d::Zero())};
+  Image d = r.RenderDepth(away);
+  for (float z : d.data) ASSERT_TRUE(std::isinf(z));
+  EffectsPlan plan;
+  plan.occlusion = true;
+  plan.skybox = true;
+  Renderer::Frame f = r.Render(View{Cam(), LookingDownZ({0, 0, 0})}, {Projector{away, &img, &d, nullptr}}, plan);
+  for (float s : f.source.data) ASSERT_EQ(s, kSourceVertex);
+}
+
+TEST_F(RenderTest, OcclusionUsesTheProjectorsDepth) {
+  // A small occluder (z = 5) between the projector and a wall (z = 10): the wall pixels behind
+  // the occluder, seen from a side camera, must not take the occluder's texture.
+  Mesh wall = Plane(50, 10, Eigen::Vector3d::Zero(), 8, {0, 0, 0});
+  Mesh box = Plane(1, 5, Eigen::Vector3d::Zero(), 1, {0, 0, 0});
+  uint32_t base = static_cast<uint32_t>(wall.vertices.size());
+  for (size_t i = 0; i < box.vertices.size(); ++i) {
+    wall.vertices.push_back(box.vertices[i]);
+    wall.colors.push_back(box.colors[i]);
+  }
+  for (auto f : box.faces) wall.faces.push_back({f[0] + base, f[1] + base, f[2] + base});
+  Renderer r(wall);
+  Image img = Pattern(64, 48);
+  View proj{Cam(), LookingDownZ({0, 0, 0})};
+  Image pd = r.RenderDepth(proj);
+  View side{Cam(), LookingDownZ({3, 0, 0})};
+  EffectsPlan with;
+  with.occlusion = true;
+  EffectsPlan without;
+  Renderer::Frame a = r.Render(side, {Projector{proj, &img, &pd, nullptr}}, with);
+  Renderer::Frame b = r.Render(side, {Projector{proj, &img, nullptr, nullptr}}, without);
+  Image sd = r.RenderDepth(side);
+  size_t shadowed = 0;
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 64; ++x) {
+      float z = sd.at(x, y);
+      if (std::isinf(z)) continue;
+      Eigen::Vector3d X = side.world_to_camera.Inverse() * side.camera.Unproject({x + 0.5, y + 0.5}, z);
+      bool on_wall = X.z() > 9;
+      bool hidden = on_wall && std::abs(X.x() * 5 / 10) < 0.95 && std::abs(X.y() * 5 / 10) < 0.95;
+      if (!hidden) continue;
+      ++shadowed;
+      EXPECT_EQ(a.source.at(x, y), kSourceVertex) << x << "," << y;  // occluded: fallback
+      EXPECT_EQ(b.source.at(x, y), 0.f);                             // no test: wrongly textured
+    }
+  EXPECT_GT(shadowed, 10u);
+}
+
+TEST_F(RenderTest, UnneededEffectsChangeNoPixel) {
+  // The plan turns effects off when the scene does not call for them; forcing them on must give
+  // the same pixels: a plane filling the view (no holes: skybox unneeded), empty masks, and a
+  // first projector that covers every pixel (more projectors unneeded).
+  Renderer r(Plane(200, 10, Eigen::Vector3d::Zero(), 8));
+  Image img = Pattern(64, 48), img2 = Pattern(64, 48);
+  for (float& v : img2.data) v = 255 - v;
+  Image empty_mask(64, 48, 1, 8, 0.f);
+  View proj{Cam(64, 48, 40), LookingDownZ({0.2, 0.1, -1})};  // wider view, behind: covers all
+  View proj2{Cam(), LookingDownZ({1, 0, 0})};
+  View view{Cam(), LookingDownZ({0, 0, 0})};
+  Image d1 = r.RenderDepth(proj), d2 = r.RenderDepth(proj2);
+  std::vector<Projector> ps = {{proj, &img, &d1, &empty_mask}, {proj2, &img2, &d2, &empty_mask}};
+  EffectsPlan base;
+  base.occlusion = true;
+  Renderer::Frame ref = r.Render(view, ps, base);
+  for (float s : ref.source.data) ASSERT_EQ(s, 0.f);  // the first projector covers everything
+  EffectsPlan sky = base, masks = base, several = base;
+  sky.skybox = true;
+  masks.masks = true;
+  several.projectors = 2;
+  EXPECT_EQ(r.Render(view, ps, sky).colour.data, ref.colour.data);
+  EXPECT_EQ(r.Render(view, ps, masks).colour.data, ref.colour.data);
+  EXPECT_EQ(r.Render(view, ps, several).colour.data, ref.colour.data);
+  // And a needed effect does change pixels: a mask on the first projector hands them over.
+  Image half = empty_mask;
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 32; ++x) half.at(x, y) = 255;
+  std::vector<Projector> masked = {{proj, &img, &d1, &half}, {proj2, &img2, &d2, &empty_mask}};
+  masks.projectors = 2;
+  EXPECT_NE(r.Render(view, masked, masks).colour.data, ref.colour.data);
+}
+
+TEST_F(RenderTest, BadInputsAreClearErrors) {
+  EXPECT_THROW({ Renderer r{Mesh()}; }, Error);
+  Renderer r(Plane(5, 10));
+  Image a = Pattern(64, 48), b = Pattern(32, 24);
+  View v{Cam(), LookingDownZ({0, 0, 0})};
+  Projector pa{v, &a, nullptr, nullptr}, pb{View{Cam(32, 24, 25), v.world_to_camera}, &b, nullptr, nullptr};
+  EffectsPlan plan;
+  plan.projectors = 2;
+  try {
+    r.Render(v, {pa, pb}, plan);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("differ in size"), std::string::npos) << e.what();
+  }
+  Projector wrong{v, &b, nullptr, nullptr};  // image size ≠ camera size
+  EXPECT_THROW(r.Render(v, {wrong}, EffectsPlan()), Error);
+  View distorted{ParseCameraSpec("OPENCV 64 48 50 50 32 24 0.1 0 0 0"), v.world_to_camera};
+  EXPECT_THROW(r.RenderDepth(distorted), Error);
+}
+
+TEST_F(RenderTest, ContextCanBeRecreated) {
+  // Several contexts in sequence in one process (the suite's own context is released first).
+  delete ctx_;
+  ctx_ = nullptr;
+  for (int i = 0; i < 3; ++i) {
+    auto c = GlContext::Create();
+    Renderer r(Plane(5, 10));
+    EXPECT_NEAR(r.RenderDepth({Cam(), LookingDownZ({0, 0, 0})}).at(32, 24), 10.0, 1e-5);
+  }
+  auto os = GlContext::Create(GlBackend::kOsMesa);
+  EXPECT_NE(os->Describe().find("OSMesa"), std::string::npos);
+  Renderer r(Plane(5, 10));
+  EXPECT_NEAR(r.RenderDepth({Cam(), LookingDownZ({0, 0, 0})}).at(32, 24), 10.0, 1e-5);
+  os.reset();
+  ctx_ = GlContext::Create().release();
+}
+
+}  // namespace
+}  // namespace mvtm
