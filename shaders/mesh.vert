@@ -11,6 +11,7 @@ uniform mat4 u_P;        // camera coordinates → clip (libcore/render builds i
 out vec3 v_rel;          // world position − render camera centre
 out vec3 v_colour;
 out float v_depth;       // camera-space z of the render camera (metres)
+invariant gl_Position;   // the depth pre-pass and the shading pass must agree exactly
 
 void main() {
   v_rel = a_position + u_offset;

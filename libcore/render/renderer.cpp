@@ -3,6 +3,7 @@
 #include <glad/gl.h>
 
 #include <algorithm>
+#include <numeric>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -71,6 +72,8 @@ struct Renderer::Impl {
   std::map<std::string, GLuint> programs;  // by defines + stage
   Target colour_target, depth_target;
   GLuint images = 0, depths = 0, masks = 0, sky_vao = 0;
+  std::vector<int64_t> uploaded_keys;  // projector keys of the textures on the GPU
+  bool uploaded_depth = false, uploaded_masks = false;
 
   ~Impl() {
     for (auto& [k, p] : programs) glDeleteProgram(p);
@@ -388,29 +391,54 @@ Renderer::Frame Renderer::Render(const View& view, const std::vector<Projector>&
       depths.push_back(p.depth);
       masks.push_back(p.mask);
     }
+    std::vector<int64_t> keys;
+    for (int k = 0; k < plan.projectors; ++k) keys.push_back(projectors[k].key);
+    bool keyed = std::all_of(keys.begin(), keys.end(), [](int64_t x) { return x >= 0; });
+    bool same = keyed && keys == m.uploaded_keys && (!plan.occlusion || m.uploaded_depth) && (!plan.masks || m.uploaded_masks);
+    if (!same) {
+      glActiveTexture(GL_TEXTURE0);
+      m.UploadArray(m.images, imgs, 0);
+      if (plan.occlusion) {
+        glActiveTexture(GL_TEXTURE1);
+        m.UploadArray(m.depths, depths, 1);
+      }
+      if (plan.masks) {
+        glActiveTexture(GL_TEXTURE2);
+        m.UploadArray(m.masks, masks, 2);
+      }
+      m.uploaded_keys = keyed ? keys : std::vector<int64_t>();
+      m.uploaded_depth = plan.occlusion;
+      m.uploaded_masks = plan.masks;
+    }
     glActiveTexture(GL_TEXTURE0);
-    m.UploadArray(m.images, imgs, 0);
-    if (plan.occlusion) {
-      glActiveTexture(GL_TEXTURE1);
-      m.UploadArray(m.depths, depths, 1);
-    }
-    if (plan.masks) {
-      glActiveTexture(GL_TEXTURE2);
-      m.UploadArray(m.masks, masks, 2);
-    }
+    glBindTexture(GL_TEXTURE_2D_ARRAY, m.images);
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, m.depths);
+    glActiveTexture(GL_TEXTURE2);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, m.masks);
   }
   m.EnsureTarget(m.colour_target, w, h, false);
   glBindFramebuffer(GL_FRAMEBUFFER, m.colour_target.fbo);
   glViewport(0, 0, w, h);
   glClear(GL_DEPTH_BUFFER_BIT);
   auto defines = plan.Defines();
-  // Background first (depth test off, no depth write), then the mesh over it.
+  // The mesh first, then the background behind it: the full-screen sky triangle lies on the far
+  // plane and passes the depth test only where no surface was drawn, so its shader runs only on
+  // the holes.
+  std::vector<std::string> inc;
+  if (plan.ptm) inc.push_back("ptm_common.glsl");
+  GLuint prog = m.Program("mesh.vert", "ptm.frag", defines, inc);
+  glUseProgram(prog);
+  if (plan.ptm) m.SetProjectors(prog, view, projectors, plan);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  m.Draw(prog, view, stats);
   {
-    std::vector<std::string> inc;
-    if (plan.skybox) inc.push_back("ptm_common.glsl");
-    GLuint sky = m.Program("sky.vert", "sky.frag", defines, inc);
+    std::vector<std::string> sky_inc;
+    if (plan.skybox) sky_inc.push_back("ptm_common.glsl");
+    GLuint sky = m.Program("sky.vert", "sky.frag", defines, sky_inc);
     glUseProgram(sky);
-    glDisable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LEQUAL);
     glDepthMask(GL_FALSE);
     glUniform3f(glGetUniformLocation(sky, "u_background"), plan.background[0] / 255.f, plan.background[1] / 255.f,
                 plan.background[2] / 255.f);
@@ -423,15 +451,8 @@ Renderer::Frame Renderer::Render(const View& view, const std::vector<Projector>&
     glBindVertexArray(m.sky_vao);
     glDrawArrays(GL_TRIANGLES, 0, 3);
     glDepthMask(GL_TRUE);
+    glDepthFunc(GL_LESS);
   }
-  std::vector<std::string> inc;
-  if (plan.ptm) inc.push_back("ptm_common.glsl");
-  GLuint prog = m.Program("mesh.vert", "ptm.frag", defines, inc);
-  glUseProgram(prog);
-  if (plan.ptm) m.SetProjectors(prog, view, projectors, plan);
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LESS);
-  m.Draw(prog, view, stats);
   auto t0 = Clock::now();
   Frame out;
   out.colour = Image(w, h, 3, 8);

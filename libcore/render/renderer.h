@@ -37,6 +37,10 @@ struct Projector {
   const Image* image = nullptr;  // 1 or 3 (or 4) channels, 8-bit scale, size = camera size
   const Image* depth = nullptr;  // linear depth, any size (nearest lookup); nullptr = none
   const Image* mask = nullptr;   // 8-bit, non-zero = do not use; nullptr = none
+  // Identity of the (image, depth, mask) triple, e.g. the image's index in the workspace; when
+  // every projector of a frame has a key ≥ 0 and the keys equal the previous frame's, the
+  // textures already on the GPU are reused instead of uploaded again.
+  int64_t key = -1;
 };
 
 // The effects a frame is rendered with (one shader variant per distinct plan).
@@ -64,7 +68,7 @@ class Renderer {
  public:
   // Uploads the mesh (chunks of about `chunk_size` metres). A GL context must be current.
   // Throws Error for an empty mesh (no faces).
-  explicit Renderer(const Mesh& mesh, double chunk_size = 25.0);
+  explicit Renderer(const Mesh& mesh, double chunk_size = 12.0);
   ~Renderer();
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;

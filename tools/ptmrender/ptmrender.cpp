@@ -367,6 +367,7 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
       const auto* im = images[c.index];
       p.view = View{rec.cameras.at(im->camera_id), im->world_to_camera};
       p.image = &image_of(c.index);
+      p.key = static_cast<int64_t>(c.index);
       if (plan.occlusion) {
         auto td = Clock::now();
         p.depth = &depth_of(c.index);

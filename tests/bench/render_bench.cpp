@@ -1,0 +1,130 @@
+// ptmrender's renderer at 1241×376 on this machine's GL (llvmpipe here): frames/s per
+// configuration and where the time goes (cull, draw, readback, PNG encode), for the mkroad road
+// mesh at the --full density (~255k triangles) and at ~1M triangles.
+//
+// Every figure is also given as a ratio to a baseline measured in the same run: a plain depth
+// render of the same frames (one rasterisation of the mesh, no texturing), so the table holds on
+// a noisy shared machine. Projector images are synthetic (speed does not depend on content).
+// usage: bench_render [--frames N] [--short]
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <functional>
+#include <string>
+
+#include <unistd.h>
+
+#include "image/image.h"
+#include "mkroad/mkroad.h"
+#include "mkroad/road_scene.h"
+#include "render/context.h"
+#include "render/renderer.h"
+
+using namespace mvtm;
+using Clock = std::chrono::steady_clock;
+namespace fs = std::filesystem;
+
+static double Ms(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
+
+int main(int argc, char** argv) {
+  int frames = 20;
+  bool quick = false;
+  for (int i = 1; i < argc; ++i) {
+    std::string a = argv[i];
+    if (a == "--frames" && i + 1 < argc) frames = std::stoi(argv[++i]);
+    if (a == "--short") quick = true, frames = 2;
+  }
+  const int W = quick ? 320 : fixture::kKittiWidth, H = quick ? 96 : fixture::kKittiHeight;
+  Camera cam = ParseCameraSpec("PINHOLE 1241 376 718.856 718.856 607.1928 185.2157").Scaled(W, H);
+  auto ctx = GlContext::Create();
+  std::printf("render benchmark, %dx%d, %d frames per row, %s\n", W, H, frames, ctx->Describe().c_str());
+  std::vector<double> cells = quick ? std::vector<double>{0.75} : std::vector<double>{0.28, 0.14};
+  for (double cell : cells) {
+    fixture::RoadScene scene = fixture::BuildRoadScene(1, cell);
+    Mesh mesh;
+    mesh.vertices = scene.mesh.vertices;
+    mesh.faces = scene.mesh.faces;
+    for (const auto& a : scene.VertexAlbedo())
+      mesh.colors.push_back({uint8_t(255 * a.x()), uint8_t(255 * a.y()), uint8_t(255 * a.z())});
+    Renderer r(mesh);
+    // Render poses along pass A; projectors: the nearest recorded poses of pass B.
+    auto pa = fixture::PassFrames('A', frames, 1), pb = fixture::PassFrames('B', frames + 4, 1);
+    Image img(W, H, 3, 8);
+    for (size_t i = 0; i < img.data.size(); ++i) img.data[i] = float((i * 2654435761u) % 251);
+    std::vector<Image> depth(pb.size());
+    std::vector<View> pviews;
+    for (size_t k = 0; k < pb.size(); ++k) pviews.push_back(View{cam, pb[k].pose.WorldToCamera()});
+    auto t_bake = Clock::now();
+    for (size_t k = 0; k < pb.size(); ++k) depth[k] = r.RenderDepth(pviews[k]);
+    double bake_ms = Ms(t_bake, Clock::now()) / double(pb.size());
+
+    std::printf("\nmesh: %zu triangles in %zu chunks (cell %.2f m); baking one depth map: %.1f ms\n",
+                r.triangles(), r.chunks(), cell, bake_ms);
+    std::printf("%-30s %8s %8s %8s %8s %8s %8s %9s\n", "configuration", "cull", "draw", "readback", "depth", "total", "fps",
+                "x depth");
+    double base_ms = 0;
+    struct Cfg {
+      const char* name;
+      bool ptm;
+      int k;
+      bool occlusion, baked;
+    };
+    std::vector<Cfg> cfgs = {{"depth only (baseline)", false, 0, false, false},
+                             {"vertex colours", false, 0, false, false},
+                             {"PTM 1 projector", true, 1, false, false},
+                             {"PTM 1 proj + occlusion, baked", true, 1, true, true},
+                             {"PTM 4 proj + occlusion, baked", true, 4, true, true},
+                             {"PTM 4 proj + occl., on the fly", true, 4, true, false}};
+    double encode_ms = 0;
+    for (size_t c = 0; c < cfgs.size(); ++c) {
+      const Cfg& cfg = cfgs[c];
+      RenderStats st;
+      double depth_ms = 0;
+      auto t0 = Clock::now();
+      for (int f = 0; f < frames; ++f) {
+        View v{cam, pa[f].pose.WorldToCamera()};
+        if (c == 0) {
+          r.RenderDepth(v, &st);
+          continue;
+        }
+        std::vector<Projector> ps;
+        for (int k = 0; k < cfg.k; ++k) {
+          size_t idx = std::min(pb.size() - 1, size_t(f + k));
+          Projector p{pviews[idx], &img, nullptr, nullptr, cfg.baked ? int64_t(idx) : -1};
+          if (cfg.occlusion) {
+            if (cfg.baked) {
+              p.depth = &depth[idx];
+            } else {
+              auto td = Clock::now();
+              depth[idx] = r.RenderDepth(pviews[idx]);
+              depth_ms += Ms(td, Clock::now());
+              p.depth = &depth[idx];
+            }
+          }
+          ps.push_back(p);
+        }
+        EffectsPlan plan;
+        plan.ptm = cfg.ptm;
+        plan.projectors = std::max(1, cfg.k);
+        plan.occlusion = cfg.occlusion;
+        plan.skybox = cfg.ptm;
+        Renderer::Frame fr = r.Render(v, ps, plan, &st);
+        if (c == cfgs.size() - 1 && f < 3) {  // PNG encoding, measured on a few frames
+          fs::path p = fs::temp_directory_path() / ("mvtm-bench-" + std::to_string(getpid()) + ".png");
+          auto te = Clock::now();
+          WriteImage(p.string(), fr.colour);
+          encode_ms += Ms(te, Clock::now()) / 3;
+          fs::remove(p);
+        }
+      }
+      double total = Ms(t0, Clock::now()) / frames;
+      if (c == 0) base_ms = total;
+      std::printf("%-30s %8.2f %8.2f %8.2f %8.2f %8.2f %8.1f %8.2fx\n", cfg.name, st.cull_ms / frames,
+                  st.draw_ms / frames, st.readback_ms / frames, depth_ms / frames, total, 1000 / total, total / base_ms);
+    }
+    std::printf("PNG encoding of one %dx%d frame: %.1f ms (overlapped with rendering by ptmrender's writer thread)\n",
+                W, H, encode_ms);
+  }
+  return 0;
+}
