@@ -3,14 +3,17 @@
 //   MVTM_MAX_PROJECTORS  N    projectors tried in rank order (1 = a single projector)
 //   MVTM_OCCLUSION            compare with the projector's depth map (Alg. 2)
 //   MVTM_MASKS                skip masked projector texels (the next projector is tried)
+//   MVTM_SKYBOX               (sky.frag) sky only where the projector's depth map is +inf
 uniform int u_num_projectors;
 uniform mat3 u_proj_R[MVTM_MAX_PROJECTORS];   // world → projector camera rotation
 uniform vec3 u_proj_t[MVTM_MAX_PROJECTORS];   // R_k (C_render − C_k), double on the CPU
 uniform vec4 u_proj_K[MVTM_MAX_PROJECTORS];   // fx fy cx cy (pixels)
 uniform vec2 u_proj_size;                     // projector image size (pixels)
 uniform sampler2DArray u_images;              // RGB, row 0 = top
-#ifdef MVTM_OCCLUSION
+#if defined(MVTM_OCCLUSION) || defined(MVTM_SKYBOX)
 uniform sampler2DArray u_depths;              // R32F linear depth, +inf = no surface
+#endif
+#ifdef MVTM_OCCLUSION
 uniform float u_bias;                         // relative: occluded when z > d·(1 + bias)
 #endif
 #ifdef MVTM_MASKS
@@ -36,11 +39,13 @@ bool Usable(int k, vec2 uv, float z, bool at_infinity) {
 #ifdef MVTM_MASKS
   if (texelFetch(u_masks, Texel(k, uv), 0).r > 0.5) return false;
 #endif
-#ifdef MVTM_OCCLUSION
+#ifdef MVTM_SKYBOX
   if (at_infinity) {
     float d = texelFetch(u_depths, Texel(k, uv), 0).r;
     return isinf(d) || d > 1e30;                      // sky in the projector too
   }
+#endif
+#ifdef MVTM_OCCLUSION
   // Occluded only when all four depth texels around uv (the bilinear footprint) are nearer:
   // a surface seen at a grazing angle changes depth by metres per texel, and a single nearest
   // texel would reject visible points on it.

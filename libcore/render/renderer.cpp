@@ -387,18 +387,19 @@ Renderer::Frame Renderer::Render(const View& view, const std::vector<Projector>&
         throw Error("projector image is " + std::to_string(p.image->width) + "x" + std::to_string(p.image->height) +
                     " but its camera is " + std::to_string(p.view.camera.width) + "x" + std::to_string(p.view.camera.height));
       imgs.push_back(p.image);
-      if (plan.occlusion && !p.depth) throw Error("projector " + std::to_string(k) + " has no depth map");
+      if ((plan.occlusion || plan.skybox) && !p.depth) throw Error("projector " + std::to_string(k) + " has no depth map");
       depths.push_back(p.depth);
       masks.push_back(p.mask);
     }
     std::vector<int64_t> keys;
     for (int k = 0; k < plan.projectors; ++k) keys.push_back(projectors[k].key);
     bool keyed = std::all_of(keys.begin(), keys.end(), [](int64_t x) { return x >= 0; });
-    bool same = keyed && keys == m.uploaded_keys && (!plan.occlusion || m.uploaded_depth) && (!plan.masks || m.uploaded_masks);
+    const bool need_depth = plan.occlusion || plan.skybox;
+    bool same = keyed && keys == m.uploaded_keys && (!need_depth || m.uploaded_depth) && (!plan.masks || m.uploaded_masks);
     if (!same) {
       glActiveTexture(GL_TEXTURE0);
       m.UploadArray(m.images, imgs, 0);
-      if (plan.occlusion) {
+      if (need_depth) {
         glActiveTexture(GL_TEXTURE1);
         m.UploadArray(m.depths, depths, 1);
       }
@@ -407,7 +408,7 @@ Renderer::Frame Renderer::Render(const View& view, const std::vector<Projector>&
         m.UploadArray(m.masks, masks, 2);
       }
       m.uploaded_keys = keyed ? keys : std::vector<int64_t>();
-      m.uploaded_depth = plan.occlusion;
+      m.uploaded_depth = need_depth;
       m.uploaded_masks = plan.masks;
     }
     glActiveTexture(GL_TEXTURE0);

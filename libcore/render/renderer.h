@@ -81,7 +81,8 @@ class Renderer {
     Image source;  // 1 channel: projector rank / kSourceVertex / kSourceBackground
   };
   // Renders `view` with the projectors (rank order) under `plan`. Projector images must all
-  // have the same size (Error otherwise); depth maps are needed when plan.occlusion, masks when
+  // have the same size (Error otherwise); depth maps are needed when plan.occlusion or
+  // plan.skybox (sky is taken only where a projector sees no surface), masks when
   // plan.masks (a projector without one is treated as unmasked).
   Frame Render(const View& view, const std::vector<Projector>& projectors, const EffectsPlan& plan,
                RenderStats* stats = nullptr);

@@ -108,7 +108,7 @@ int main(int argc, char** argv) {
         plan.ptm = cfg.ptm;
         plan.projectors = std::max(1, cfg.k);
         plan.occlusion = cfg.occlusion;
-        plan.skybox = cfg.ptm;
+        plan.skybox = cfg.ptm && cfg.occlusion;  // the skybox needs the projectors' depth maps
         Renderer::Frame fr = r.Render(v, ps, plan, &st);
         if (c == cfgs.size() - 1 && f < 3) {  // PNG encoding, measured on a few frames
           fs::path p = fs::temp_directory_path() / ("mvtm-bench-" + std::to_string(getpid()) + ".png");

@@ -33,6 +33,8 @@ void PtmRenderOptions::Check() const {
   if (!(bias >= 0 && bias < 1)) throw UsageError("--bias: must be in [0, 1)");
   if (!std::isfinite(lateral) || !std::isfinite(yaw)) throw UsageError("--lateral/--yaw must be finite");
   if (!frames.empty() && !shard.empty()) throw UsageError("give --frames or --shard, not both");
+  if (!(selection.ahead_weight >= 0 && std::isfinite(selection.ahead_weight)))
+    throw UsageError("--ahead-weight: must be a finite number >= 0");
   if (!(selection.max_heading_deg > 0 && selection.max_heading_deg <= 180))
     throw UsageError("--max-heading: must be in (0, 180]");
   ParseGlBackend(gl);
@@ -255,8 +257,9 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
     size_t holes = 0, surf = 0, covered = 0;
     const Eigen::Matrix3d Rt = v.world_to_camera.R().transpose();
     const Eigen::Vector3d C = v.world_to_camera.Centre();
-    for (int y = 0; y < d.height; y += 2)
-      for (int x = 0; x < d.width; x += 2) {
+    // Every pixel: a frame with a single hole pixel must get the same plan in every split.
+    for (int y = 0; y < d.height; ++y)
+      for (int x = 0; x < d.width; ++x) {
         float z = d.at(x, y);
         if (!std::isfinite(z)) {
           ++holes;
@@ -349,12 +352,10 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
     }
     return it->second.empty() ? nullptr : &it->second;
   };
-  if (ptm) {
-    for (size_t i : todo)
-      for (const auto& c : picks[i]) grey_sources = grey_sources && ReadImageSpec(ws.SourceImagePath(images[c.index]->name).string()).channels == 1;
-  } else {
-    grey_sources = ReadImageSpec(ws.SourceImagePath(images[0]->name).string()).channels == 1;
-  }
+  // Grey output when the source images are grey: decided over every image any pose may use
+  // (else the workspace's first image), so every split of the work decides alike.
+  for (size_t k : used) grey_sources = grey_sources && ReadImageSpec(ws.SourceImagePath(images[k]->name).string()).channels == 1;
+  if (used.empty()) grey_sources = ReadImageSpec(ws.SourceImagePath(images[0]->name).string()).channels == 1;
   RemoveStaleTemporaries(outdir);
   if (o.provenance) RemoveStaleTemporaries(outdir / "provenance");
   AsyncWriter writer;
@@ -368,7 +369,7 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
       p.view = View{rec.cameras.at(im->camera_id), im->world_to_camera};
       p.image = &image_of(c.index);
       p.key = static_cast<int64_t>(c.index);
-      if (plan.occlusion) {
+      if (plan.occlusion || plan.skybox) {
         auto td = Clock::now();
         p.depth = &depth_of(c.index);
         rep.depth_ms += Ms(td, Clock::now());
@@ -398,6 +399,11 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
     bar.Step();
   }
   writer.Finish();
+  nlohmann::json opts = {{"poses", o.poses.empty() ? "workspace images" : o.poses}, {"exclude_self", o.exclude_self},
+                         {"lateral", o.lateral}, {"yaw", o.yaw}, {"mode", o.mode}, {"projectors", o.projectors},
+                         {"bias", o.bias}, {"frames", o.frames}, {"shard", o.shard}, {"outdir", o.outdir},
+                         {"plan", j["effects"]}, {"gl", rep.gl}};
+  ws.WriteProvenance(o.shard.empty() ? "ptmrender" : "ptmrender-shard-" + o.shard.substr(0, o.shard.find('/')), opts, inputs);
   return rep;
 }
 
