@@ -327,14 +327,12 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
   auto image_of = [&](size_t k) -> const Image& {
     auto it = img_cache.find(k);
     if (it != img_cache.end()) return it->second;
-    if (img_cache.size() > 32) img_cache.clear();
     Image im = ReadImage(ws.SourceImagePath(images[k]->name).string());
     return img_cache.emplace(k, std::move(im)).first->second;
   };
   auto depth_of = [&](size_t k) -> const Image& {
     auto it = depth_cache.find(k);
     if (it != depth_cache.end()) return it->second;
-    if (depth_cache.size() > 32) depth_cache.clear();
     const auto* im = images[k];
     const Camera& pc = rec.cameras.at(im->camera_id);
     fs::path dp = ws.DepthPath(im->name);
@@ -346,8 +344,7 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
   auto mask_of = [&](size_t k) -> const Image* {
     auto it = mask_cache.find(k);
     if (it == mask_cache.end()) {
-      if (mask_cache.size() > 32) mask_cache.clear();
-      fs::path mp = ws.MaskPath(images[k]->name);
+        fs::path mp = ws.MaskPath(images[k]->name);
       it = mask_cache.emplace(k, fs::exists(mp) ? ReadImage(mp.string()) : Image()).first;
     }
     return it->second.empty() ? nullptr : &it->second;
@@ -362,6 +359,9 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
   Progress bar("ptmrender", todo.size(), o.quiet);
   for (size_t i : todo) {
     auto t0 = Clock::now();
+    // Caches are trimmed between frames only: a frame's projectors hold references into them.
+    for (auto* cache : {&img_cache, &depth_cache, &mask_cache})
+      if (cache->size() > 32) cache->clear();
     std::vector<Projector> ps;
     for (const auto& c : picks[i]) {
       Projector p;
