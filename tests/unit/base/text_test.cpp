@@ -7,13 +7,15 @@
 
 #include "base/error.h"
 #include "base/text.h"
+#include "../io/comma_locale.h"
 
 namespace mvtm {
 namespace {
 
 TEST(Text, ParsesWithClassicRulesUnderCommaLocale) {
   // A comma-decimal global locale must not change how "1.5" reads or how doubles print.
-  const char* loc = std::setlocale(LC_ALL, "de_DE.UTF-8");
+  test::ScopedCommaLocale comma;
+  ASSERT_EQ(test::ScopedCommaLocale::Probe(), "1.234,5");
   std::istringstream in("# comment\n\n  1.5 2e3\t-0.25  \n");
   LineReader r(in, "x.txt");
   std::string line;
@@ -26,7 +28,6 @@ TEST(Text, ParsesWithClassicRulesUnderCommaLocale) {
   EXPECT_EQ(ParseDouble(tok[2], r, "c"), -0.25);
   EXPECT_EQ(FormatDouble(0.1), "0.10000000000000001");  // %.17g, with a point
   EXPECT_FALSE(r.Next(line));
-  if (loc) std::setlocale(LC_ALL, "C");
 }
 
 TEST(Text, ErrorsNameFileLineAndField) {

@@ -8,6 +8,7 @@
 
 #include "base/error.h"
 #include "io/colmap_model.h"
+#include "comma_locale.h"
 #include "test_util.h"
 
 namespace mvtm {
@@ -81,11 +82,8 @@ void ExpectSame(const Reconstruction& a, const Reconstruction& b) {
 }
 
 TEST(ColmapModel, TextRoundTripIsExactUnderCommaLocale) {
-  const char* loc = std::setlocale(LC_ALL, "de_DE.UTF-8");
-  try {
-    std::locale::global(std::locale("de_DE.UTF-8"));
-  } catch (...) {
-  }
+  test::ScopedCommaLocale comma;
+  ASSERT_EQ(test::ScopedCommaLocale::Probe(), "1.234,5");  // the locale is really in effect
   auto d = test::FreshDir("colmap-text");
   Reconstruction r = RandomModel(6, 20, 1);
   WriteColmapText(r, d.string());
@@ -98,8 +96,6 @@ TEST(ColmapModel, TextRoundTripIsExactUnderCommaLocale) {
   // Under the comma locale, numbers are still written with a point.
   std::string cams = test::ReadFile(d / "cameras.txt");
   EXPECT_NE(cams.find("3 PINHOLE 1241 376 718.85599999999999 718.85599999999999 607.19280000000003 185.2157\n"), std::string::npos) << cams;
-  std::locale::global(std::locale::classic());
-  if (loc) std::setlocale(LC_ALL, "C");
 }
 
 TEST(ColmapModel, BinaryRoundTripIsExact) {

@@ -4,6 +4,7 @@
 
 #include "base/error.h"
 #include "io/trajectory.h"
+#include "comma_locale.h"
 #include "test_util.h"
 
 namespace mvtm {
@@ -19,6 +20,31 @@ TEST(Trajectory, TumConvertsAndNormalises) {
   EXPECT_EQ(t.poses[0].pose.q.w(), 1.0);  // normalised from (0,0,0,2)
   EXPECT_EQ(t.poses[1].pose.t, Eigen::Vector3d(4, 5, 6));
   EXPECT_EQ(t.poses[1].line, 3);
+}
+
+TEST(Trajectory, TumAndKittiRoundTripUnderCommaLocale) {
+  test::ScopedCommaLocale comma;
+  ASSERT_EQ(test::ScopedCommaLocale::Probe(), "1.234,5");
+  auto d = test::FreshDir("tum-rt");
+  std::vector<StampedPose> poses;
+  for (int i = 0; i < 5; ++i) {
+    Eigen::Quaterniond q(Eigen::AngleAxisd(0.1 * i + 0.05, Eigen::Vector3d(1, 2, 3).normalized()));
+    poses.push_back({1305031102.175304 + 0.1 * i, Rigid3d(q, Eigen::Vector3d(451000.125 + i, 5410000.5, 120.0 / 7)), 0});
+  }
+  WriteTum((d / "t.txt").string(), poses);
+  Trajectory t = ReadTum((d / "t.txt").string());
+  ASSERT_EQ(t.poses.size(), 5u);
+  for (int i = 0; i < 5; ++i) {
+    EXPECT_EQ(t.poses[i].time, poses[i].time);
+    EXPECT_EQ(t.poses[i].pose.t, poses[i].pose.t);
+    EXPECT_LT(RotationAngle(t.poses[i].pose.q, poses[i].pose.q), 1e-15);
+  }
+  WriteKittiPoses((d / "k.txt").string(), poses);
+  Trajectory k = ReadKittiPoses((d / "k.txt").string());
+  for (int i = 0; i < 5; ++i) {
+    EXPECT_EQ(k.poses[i].pose.t, poses[i].pose.t);
+    EXPECT_LT(RotationAngle(k.poses[i].pose.q, poses[i].pose.q), 1e-15);
+  }
 }
 
 TEST(Trajectory, ErrorsNameTheLine) {
