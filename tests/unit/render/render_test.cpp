@@ -8,6 +8,7 @@
 
 #include "base/error.h"
 #include "render/context.h"
+#include "render/gl_program.h"
 #include "render/renderer.h"
 
 namespace mvtm {
@@ -320,6 +321,21 @@ TEST_F(RenderTest, BadInputsAreClearErrors) {
   EXPECT_THROW(r.Render(v, {wrong}, EffectsPlan()), Error);
   View distorted{ParseCameraSpec("OPENCV 64 48 50 50 32 24 0.1 0 0 0"), v.world_to_camera};
   EXPECT_THROW(r.RenderDepth(distorted), Error);
+}
+
+TEST_F(RenderTest, ShaderErrorsNameFileVariantAndLine) {
+  // A zero-sized projector array is a compile error in ptm_common.glsl; the message must point
+  // at that file and line (found here independently, by searching the file) and the variant.
+  const std::string& src = ShaderSource("ptm_common.glsl");
+  int line = 1;
+  for (size_t i = 0; i < src.find("uniform mat3 u_proj_R[MVTM_MAX_PROJECTORS]"); ++i) line += src[i] == '\n';
+  try {
+    BuildProgram("mesh.vert", "ptm.frag", {"MVTM_MAX_PROJECTORS 0", "MVTM_PTM"}, {"ptm_common.glsl"});
+    FAIL() << "no compile error";
+  } catch (const Error& e) {
+    std::string want = "shaders/ptm_common.glsl:" + std::to_string(line) + " [MVTM_MAX_PROJECTORS 0 MVTM_PTM]: ";
+    EXPECT_EQ(std::string(e.what()).substr(0, want.size()), want) << e.what();
+  }
 }
 
 TEST_F(RenderTest, ContextCanBeRecreated) {
