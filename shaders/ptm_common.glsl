@@ -8,6 +8,7 @@ uniform int u_num_projectors;
 uniform mat3 u_proj_R[MVTM_MAX_PROJECTORS];   // world → projector camera rotation
 uniform vec3 u_proj_t[MVTM_MAX_PROJECTORS];   // R_k (C_render − C_k), double on the CPU
 uniform vec4 u_proj_K[MVTM_MAX_PROJECTORS];   // fx fy cx cy (pixels)
+uniform int u_proj_layer[MVTM_MAX_PROJECTORS]; // texture-array layer holding projector k
 uniform vec2 u_proj_size;                     // projector image size (pixels)
 uniform sampler2DArray u_images;              // RGB, row 0 = top
 #if defined(MVTM_OCCLUSION) || defined(MVTM_SKYBOX)
@@ -32,7 +33,7 @@ bool ProjectInto(int k, vec3 rel, float w, out vec2 uv, out float z) {
 }
 
 ivec3 Texel(int k, vec2 uv) {
-  return ivec3(clamp(ivec2(floor(uv)), ivec2(0), ivec2(u_proj_size) - 1), k);
+  return ivec3(clamp(ivec2(floor(uv)), ivec2(0), ivec2(u_proj_size) - 1), u_proj_layer[k]);
 }
 
 bool Usable(int k, vec2 uv, float z, bool at_infinity) {
@@ -54,7 +55,7 @@ bool Usable(int k, vec2 uv, float z, bool at_infinity) {
   for (int j = 0; j < 2; ++j)
     for (int i = 0; i < 2; ++i) {
       ivec2 t = clamp(base + ivec2(i, j), ivec2(0), ivec2(u_proj_size) - 1);
-      d = max(d, texelFetch(u_depths, ivec3(t, k), 0).r);
+      d = max(d, texelFetch(u_depths, ivec3(t, u_proj_layer[k]), 0).r);
     }
   if (!isinf(d) && z > d * (1.0 + u_bias)) return false;  // something nearer hides this point
 #endif
@@ -62,5 +63,5 @@ bool Usable(int k, vec2 uv, float z, bool at_infinity) {
 }
 
 vec3 Sample(int k, vec2 uv) {
-  return texture(u_images, vec3(uv / u_proj_size, float(k))).rgb;
+  return texture(u_images, vec3(uv / u_proj_size, float(u_proj_layer[k]))).rgb;
 }

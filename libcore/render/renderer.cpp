@@ -72,8 +72,16 @@ struct Renderer::Impl {
   std::map<std::string, GLuint> programs;  // by defines + stage
   Target colour_target, depth_target;
   GLuint images = 0, depths = 0, masks = 0, sky_vao = 0;
-  std::vector<int64_t> uploaded_keys;  // projector keys of the textures on the GPU
-  bool uploaded_depth = false, uploaded_masks = false;
+  // Projector textures live in layers of three texture arrays (colour, depth, mask) that are
+  // reused across frames: a projector whose key is already in a layer is not uploaded again.
+  int layer_w = 0, layer_h = 0, layer_count = 0;
+  struct Layer {
+    int64_t key = -1;
+    bool depth = false, mask = false;  // whether this layer's depth / mask slices are valid
+    uint64_t last_used = 0;
+  };
+  std::vector<Layer> layers;
+  uint64_t tick = 0;
 
   ~Impl() {
     for (auto& [k, p] : programs) glDeleteProgram(p);
@@ -205,58 +213,109 @@ struct Renderer::Impl {
     }
   }
 
-  // Uploads images of equal size as a texture array.
-  void UploadArray(GLuint& tex, const std::vector<const Image*>& imgs, int kind /*0 rgb,1 depth,2 mask*/) {
-    if (!tex) glGenTextures(1, &tex);
-    glBindTexture(GL_TEXTURE_2D_ARRAY, tex);
-    int w = 1, h = 1;
-    for (const Image* im : imgs)
-      if (im) w = im->width, h = im->height;
-    for (const Image* im : imgs)
-      if (im && (im->width != w || im->height != h))
-        throw Error("projector " + std::string(kind == 0 ? "images" : kind == 1 ? "depth maps" : "masks") +
-                    " differ in size (" + std::to_string(w) + "x" + std::to_string(h) + " and " +
-                    std::to_string(im->width) + "x" + std::to_string(im->height) + ")");
-    int layers = std::max<int>(1, static_cast<int>(imgs.size()));
-    if (kind == 0) {
-      std::vector<uint8_t> buf(static_cast<size_t>(w) * h * 3 * layers, 0);
-      for (size_t l = 0; l < imgs.size(); ++l) {
-        const Image* im = imgs[l];
-        uint8_t* dst = buf.data() + l * size_t(w) * h * 3;
-        for (size_t p = 0; p < size_t(w) * h; ++p)
-          for (int c = 0; c < 3; ++c) {
-            int sc = im->channels >= 3 ? c : 0;
-            float val = im->data[p * im->channels + sc];
-            if (im->bits == 16) val /= 257.f;
-            dst[p * 3 + c] = static_cast<uint8_t>(std::clamp(std::lround(val), 0L, 255L));
-          }
+  // (Re)allocates the three texture arrays for `count` layers of w×h texels; forgets all layers.
+  void AllocateLayers(int w, int h, int count) {
+    auto alloc = [&](GLuint& tex, GLenum unit, GLint internal, GLenum format, GLenum type, GLint filter) {
+      if (!tex) glGenTextures(1, &tex);
+      glActiveTexture(unit);
+      glBindTexture(GL_TEXTURE_2D_ARRAY, tex);
+      glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, internal, w, h, count, 0, format, type, nullptr);
+      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, filter);
+      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, filter);
+      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    };
+    alloc(images, GL_TEXTURE0, GL_RGB8, GL_RGB, GL_UNSIGNED_BYTE, GL_LINEAR);
+    alloc(depths, GL_TEXTURE1, GL_R32F, GL_RED, GL_FLOAT, GL_NEAREST);
+    alloc(masks, GL_TEXTURE2, GL_R8, GL_RED, GL_UNSIGNED_BYTE, GL_NEAREST);
+    layer_w = w, layer_h = h, layer_count = count;
+    layers.assign(static_cast<size_t>(count), Layer());
+  }
+
+  void UploadColour(int layer, const Image& im) {
+    std::vector<uint8_t> buf(static_cast<size_t>(layer_w) * layer_h * 3);
+    for (size_t p = 0; p < im.pixels(); ++p)
+      for (int c = 0; c < 3; ++c) {
+        int sc = im.channels >= 3 ? c : 0;
+        float val = im.data[p * im.channels + sc];
+        if (im.bits == 16) val /= 257.f;
+        buf[p * 3 + c] = static_cast<uint8_t>(std::clamp(std::lround(val), 0L, 255L));
       }
-      glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_RGB8, w, h, layers, 0, GL_RGB, GL_UNSIGNED_BYTE, buf.data());
-      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    } else if (kind == 1) {
-      std::vector<float> buf(static_cast<size_t>(w) * h * layers, std::numeric_limits<float>::infinity());
-      for (size_t l = 0; l < imgs.size(); ++l)
-        if (imgs[l]) std::copy(imgs[l]->data.begin(), imgs[l]->data.end(), buf.begin() + l * size_t(w) * h);
-      glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_R32F, w, h, layers, 0, GL_RED, GL_FLOAT, buf.data());
-      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    } else {
-      std::vector<uint8_t> buf(static_cast<size_t>(w) * h * layers, 0);
-      for (size_t l = 0; l < imgs.size(); ++l)
-        if (imgs[l])
-          for (size_t p = 0; p < size_t(w) * h; ++p)
-            buf[l * size_t(w) * h + p] = imgs[l]->data[p * imgs[l]->channels] > 0 ? 255 : 0;
-      glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_R8, w, h, layers, 0, GL_RED, GL_UNSIGNED_BYTE, buf.data());
-      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-      glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, images);
+    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, layer_w, layer_h, 1, GL_RGB, GL_UNSIGNED_BYTE, buf.data());
+  }
+
+  void UploadDepth(int layer, const Image& d) {
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, depths);
+    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, layer_w, layer_h, 1, GL_RED, GL_FLOAT, d.data.data());
+  }
+
+  void UploadMask(int layer, const Image* m) {
+    std::vector<uint8_t> buf(static_cast<size_t>(layer_w) * layer_h, 0);
+    if (m)
+      for (size_t p = 0; p < buf.size(); ++p) buf[p] = m->data[p * m->channels] > 0 ? 255 : 0;
+    glActiveTexture(GL_TEXTURE2);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, masks);
+    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, layer_w, layer_h, 1, GL_RED, GL_UNSIGNED_BYTE, buf.data());
+  }
+
+  // Puts the frame's projectors into layers (reusing those whose key is already resident) and
+  // returns the layer of each, in rank order.
+  std::vector<int> PlaceProjectors(const std::vector<Projector>& ps, int n, bool need_depth, bool need_mask) {
+    int w = ps[0].image->width, h = ps[0].image->height;
+    for (int k = 0; k < n; ++k) {
+      const Image* im = ps[k].image;
+      if (im->width != w || im->height != h)
+        throw Error("projector images differ in size (" + std::to_string(w) + "x" + std::to_string(h) + " and " +
+                    std::to_string(im->width) + "x" + std::to_string(im->height) + ")");
+      for (const Image* other : {ps[k].depth, ps[k].mask})
+        if (other && (other->width != w || other->height != h))
+          throw Error("projector depth maps and masks must match the image size (" + std::to_string(w) + "x" +
+                      std::to_string(h) + ", got " + std::to_string(other->width) + "x" + std::to_string(other->height) + ")");
     }
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    if (w != layer_w || h != layer_h || layer_count < 2 * n) AllocateLayers(w, h, std::max(8, 2 * n));
+    ++tick;
+    std::vector<int> out(static_cast<size_t>(n), -1);
+    std::vector<bool> taken(layers.size(), false);
+    for (int k = 0; k < n; ++k) {  // resident first, so they are not evicted by this frame
+      if (ps[k].key < 0) continue;
+      for (size_t l = 0; l < layers.size(); ++l)
+        if (!taken[l] && layers[l].key == ps[k].key) {
+          out[k] = static_cast<int>(l);
+          taken[l] = true;
+          break;
+        }
+    }
+    for (int k = 0; k < n; ++k) {
+      if (out[k] < 0) {  // least recently used free layer
+        size_t best = layers.size();
+        for (size_t l = 0; l < layers.size(); ++l)
+          if (!taken[l] && (best == layers.size() || layers[l].last_used < layers[best].last_used)) best = l;
+        taken[best] = true;
+        out[k] = static_cast<int>(best);
+        layers[best] = Layer();
+        layers[best].key = ps[k].key;
+        UploadColour(out[k], *ps[k].image);
+      }
+      Layer& L = layers[static_cast<size_t>(out[k])];
+      if (need_depth && !L.depth) {
+        UploadDepth(out[k], *ps[k].depth);
+        L.depth = ps[k].key >= 0;
+      }
+      if (need_mask && !L.mask) {
+        UploadMask(out[k], ps[k].mask);
+        L.mask = ps[k].key >= 0;
+      }
+      L.last_used = tick;
+    }
+    return out;
   }
 
   // Projector uniforms relative to the render camera centre, in double.
-  void SetProjectors(GLuint prog, const View& v, const std::vector<Projector>& ps, const EffectsPlan& plan) {
+  void SetProjectors(GLuint prog, const View& v, const std::vector<Projector>& ps, const EffectsPlan& plan,
+                     const std::vector<int>& layer_of) {
     int n = std::min<int>(plan.projectors, static_cast<int>(ps.size()));
     glUniform1i(glGetUniformLocation(prog, "u_num_projectors"), n);
     Eigen::Vector3d C = v.world_to_camera.Centre();
@@ -270,6 +329,7 @@ struct Renderer::Impl {
       glUniformMatrix3fv(glGetUniformLocation(prog, ("u_proj_R" + i).c_str()), 1, GL_FALSE, Rf.data());
       glUniform3fv(glGetUniformLocation(prog, ("u_proj_t" + i).c_str()), 1, t.data());
       glUniform4fv(glGetUniformLocation(prog, ("u_proj_K" + i).c_str()), 1, K.data());
+      glUniform1i(glGetUniformLocation(prog, ("u_proj_layer" + i).c_str()), layer_of[static_cast<size_t>(k)]);
     }
     if (n > 0) {
       glUniform2f(glGetUniformLocation(prog, "u_proj_size"), float(ps[0].image->width), float(ps[0].image->height));
@@ -383,6 +443,7 @@ Renderer::Frame Renderer::Render(const View& view, const std::vector<Projector>&
   plan.projectors = std::max(1, std::min<int>(plan.projectors, static_cast<int>(projectors.size())));
   const int w = static_cast<int>(view.camera.width), h = static_cast<int>(view.camera.height);
   std::vector<const Image*> imgs, depths, masks;
+  std::vector<int> layer_of;
   if (plan.ptm || plan.skybox) {
     for (int k = 0; k < plan.projectors; ++k) {
       const Projector& p = projectors[k];
@@ -396,26 +457,7 @@ Renderer::Frame Renderer::Render(const View& view, const std::vector<Projector>&
       depths.push_back(p.depth);
       masks.push_back(p.mask);
     }
-    std::vector<int64_t> keys;
-    for (int k = 0; k < plan.projectors; ++k) keys.push_back(projectors[k].key);
-    bool keyed = std::all_of(keys.begin(), keys.end(), [](int64_t x) { return x >= 0; });
-    const bool need_depth = plan.occlusion || plan.skybox;
-    bool same = keyed && keys == m.uploaded_keys && (!need_depth || m.uploaded_depth) && (!plan.masks || m.uploaded_masks);
-    if (!same) {
-      glActiveTexture(GL_TEXTURE0);
-      m.UploadArray(m.images, imgs, 0);
-      if (need_depth) {
-        glActiveTexture(GL_TEXTURE1);
-        m.UploadArray(m.depths, depths, 1);
-      }
-      if (plan.masks) {
-        glActiveTexture(GL_TEXTURE2);
-        m.UploadArray(m.masks, masks, 2);
-      }
-      m.uploaded_keys = keyed ? keys : std::vector<int64_t>();
-      m.uploaded_depth = need_depth;
-      m.uploaded_masks = plan.masks;
-    }
+    layer_of = m.PlaceProjectors(projectors, plan.projectors, plan.occlusion || plan.skybox, plan.masks);
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D_ARRAY, m.images);
     glActiveTexture(GL_TEXTURE1);
@@ -435,7 +477,7 @@ Renderer::Frame Renderer::Render(const View& view, const std::vector<Projector>&
   if (plan.ptm) inc.push_back("ptm_common.glsl");
   GLuint prog = m.Program("mesh.vert", "ptm.frag", defines, inc);
   glUseProgram(prog);
-  if (plan.ptm) m.SetProjectors(prog, view, projectors, plan);
+  if (plan.ptm) m.SetProjectors(prog, view, projectors, plan, layer_of);
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
   m.Draw(prog, view, stats);
@@ -453,7 +495,7 @@ Renderer::Frame Renderer::Render(const View& view, const std::vector<Projector>&
     glUniform4f(glGetUniformLocation(sky, "u_K"), float(view.camera.fx()), float(view.camera.fy()),
                 float(view.camera.cx()), float(view.camera.cy()));
     glUniform2f(glGetUniformLocation(sky, "u_size"), float(w), float(h));
-    if (plan.skybox) m.SetProjectors(sky, view, projectors, plan);
+    if (plan.skybox) m.SetProjectors(sky, view, projectors, plan, layer_of);
     glBindVertexArray(m.sky_vao);
     glDrawArrays(GL_TRIANGLES, 0, 3);
     glDepthMask(GL_TRUE);
