@@ -8,6 +8,8 @@
 //   read text     our images.txt reader                      (same model_converter baseline)
 // usage: bench_orb2colmap [--frames N] [--repeat R] [--short]
 #include <chrono>
+
+#include "bench_util.h"
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -24,15 +26,7 @@
 using namespace mvtm;
 namespace fs = std::filesystem;
 
-static double BestOf(int repeat, const std::function<void()>& f) {
-  double best = 1e300;
-  for (int i = 0; i < repeat; ++i) {
-    auto t0 = std::chrono::steady_clock::now();
-    f();
-    best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-  }
-  return best;
-}
+using bench::BestOf;
 
 int main(int argc, char** argv) {
   size_t frames = 100000;

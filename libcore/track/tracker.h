@@ -1,0 +1,118 @@
+// mvtm — vehicle tracking over a sequence of vehicle masks (thesis §D.1).
+//
+// The algorithm (stated precisely in segtrack(1), section "Tracking"):
+//  1. Blobs: the 8-connected components of each frame's vehicle mask (track/blobs.h).
+//  2. Association, frame by frame, greedy nearest: every live track predicts its centroid at
+//     frame t by constant velocity from its last two detections (its last centroid when it has
+//     one); all (track, blob) pairs with |prediction - blob centroid| <= max_jump are taken in
+//     increasing distance (ties: lower track id, then lower blob index), each track and blob at
+//     most once. Unmatched blobs start new tracks (ids 1, 2, ... in order of creation). A track
+//     that has gone max_missed consecutive frames without a blob ends.
+//  3. Smoothing: at each detection, centroid (cx, cy) and box size (w, h) are replaced by a
+//     Gaussian-weighted local linear fit over the track's detections (sigma in frames, window
+//     +-3 sigma), which leaves motion at constant speed unchanged, also at the ends of a track.
+//  4. Gaps of at most max_gap frames between two detections are filled: centroid and size are
+//     interpolated linearly between the smoothed values, and the last detected blob's pixels
+//     are scaled (nearest neighbour) by the size ratio and moved so their centroid lands there.
+//  5. Rejection: a track whose span (first to last detection, in frames) is shorter than
+//     min_life, or whose detected/span ratio is below min_ratio, is a false positive.
+//
+// Memory: every detection's pixels are kept until Finish() (the rejection needs a whole track).
+// Thread safety: a Tracker is used from one thread; a finished TrackResult is read-only.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "track/blobs.h"
+
+namespace mvtm {
+
+struct TrackOptions {
+  double max_jump = 50;  // pixels: largest distance between a track's prediction and its blob
+  int max_missed = 50;   // frames: a track ends after this many consecutive frames without a blob
+  int max_gap = 10;      // frames: longest run of missed frames that is filled by interpolation
+  double smooth = 1.0;   // frames: Gaussian sigma for centroid and size (0: no smoothing)
+  int min_life = 3;      // frames: tracks spanning fewer frames are rejected
+  double min_ratio = 0.5;  // tracks with detected/span below this are rejected
+  int dilate = 0;        // pixels: radius of the disk the output masks are dilated by
+
+  void Check() const;  // throws UsageError naming the bad value and the allowed range
+};
+
+enum class RowState { kDetected, kInterpolated, kRejected };
+const char* RowStateName(RowState s);  // "detected", "interpolated", "rejected"
+
+// One blob of one track in one frame: a row of tracks.tsv.
+struct TrackRow {
+  int frame = 0;  // 0-based frame index
+  int track = 0;  // track id, 1-based
+  RowState state = RowState::kDetected;
+  // The pixels drawn (detected, rejected: the blob as found; interpolated: the moved blob,
+  // clipped to the image): bounding box, centroid, pixel count. An interpolated blob that falls
+  // entirely outside the image has area 0 and an empty box at its unclipped position.
+  int x = 0, y = 0, w = 0, h = 0;
+  double cx = 0, cy = 0;
+  int area = 0;
+  // The track's smoothed centroid and box size at this frame.
+  double scx = 0, scy = 0, sw = 0, sh = 0;
+  // The pixels: `result.blobs[blob]` drawn with its box at (draw_x, draw_y).
+  size_t blob = 0;
+  int draw_x = 0, draw_y = 0;
+};
+
+struct TrackSummary {
+  int frames = 0, tracks = 0, kept = 0, rejected = 0;
+  size_t detected = 0, interpolated = 0, rejected_blobs = 0, unfilled_gaps = 0;
+};
+
+struct TrackResult {
+  int width = 0, height = 0;
+  std::vector<TrackRow> rows;  // sorted by frame, then track id
+  std::vector<Blob> blobs;     // pixels referenced by rows
+  TrackSummary summary;
+
+  // Rows of frame f: [begin, end) indices into rows.
+  std::pair<size_t, size_t> FrameRows(int frame) const;
+  // The output mask of `frame`: width*height bytes, 255 under the detected and interpolated blobs
+  // of kept tracks, 0 elsewhere; then dilated by a disk of radius `dilate` (0: not dilated).
+  void RenderMask(int frame, int dilate, std::vector<uint8_t>& out) const;
+
+ private:
+  friend class Tracker;
+  std::vector<size_t> frame_begin_;  // frames+1 offsets into rows
+};
+
+class Tracker {
+ public:
+  Tracker(int width, int height, const TrackOptions& options);
+
+  // The next frame's vehicle mask (width*height bytes, non-zero = vehicle).
+  void AddFrame(const uint8_t* vehicle);
+  // The next frame given as blobs (as found by BlobFinder, or made by hand in tests).
+  void AddBlobs(std::vector<Blob> blobs);
+  int frames() const { return frames_; }
+
+  // Smoothing, gap filling and rejection over everything added; the tracker is left empty.
+  TrackResult Finish();
+
+ private:
+  struct Det {
+    int frame;
+    size_t blob;  // index into blobs_
+  };
+  struct Track {
+    int id;
+    std::vector<Det> dets;
+  };
+  int width_, height_;
+  TrackOptions o_;
+  int frames_ = 0;
+  BlobFinder finder_;
+  std::vector<Blob> blobs_;
+  std::vector<Track> tracks_;
+  std::vector<size_t> live_;  // indices into tracks_ of tracks that have not ended
+};
+
+}  // namespace mvtm

@@ -1,0 +1,238 @@
+// Tracking cases whose answers are derived by hand: the frames are drawn from known boxes, so the
+// expected boxes, states and track ids come from the drawing, not from the tracker.
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "base/error.h"
+#include "track/blobs.h"
+#include "track/tracker.h"
+
+using namespace mvtm;
+
+namespace {
+
+constexpr int kW = 120, kH = 80;
+
+struct Box {
+  int x, y, w, h;
+};
+
+std::vector<uint8_t> Draw(const std::vector<Box>& boxes) {
+  std::vector<uint8_t> m(kW * kH, 0);
+  for (const Box& b : boxes)
+    for (int y = std::max(0, b.y); y < std::min(kH, b.y + b.h); ++y)
+      for (int x = std::max(0, b.x); x < std::min(kW, b.x + b.w); ++x) m[y * kW + x] = 1;
+  return m;
+}
+
+std::vector<const TrackRow*> RowsOf(const TrackResult& r, int frame) {
+  std::vector<const TrackRow*> out;
+  auto [b, e] = r.FrameRows(frame);
+  for (size_t i = b; i < e; ++i) out.push_back(&r.rows[i]);
+  return out;
+}
+
+}  // namespace
+
+TEST(BlobFinder, BoxesAndCentroids) {
+  BlobFinder f;
+  auto m = Draw({{10, 5, 4, 3}, {50, 2, 1, 1}});
+  m[20 * kW + 30] = 1, m[21 * kW + 31] = 1;  // diagonal neighbours: one 8-connected blob
+  auto blobs = f.Find(m.data(), kW, kH);
+  ASSERT_EQ(blobs.size(), 3u);
+  // Raster order of the first pixel: (50,2), (10,5), (30,20).
+  EXPECT_EQ(blobs[0].x, 50);
+  EXPECT_EQ(blobs[0].area, 1);
+  EXPECT_EQ(blobs[1].x, 10);
+  EXPECT_EQ(blobs[1].w, 4);
+  EXPECT_EQ(blobs[1].h, 3);
+  EXPECT_EQ(blobs[1].area, 12);
+  EXPECT_DOUBLE_EQ(blobs[1].cx, 11.5);
+  EXPECT_DOUBLE_EQ(blobs[1].cy, 6.0);
+  EXPECT_EQ(blobs[2].area, 2);
+  EXPECT_DOUBLE_EQ(blobs[2].cx, 30.5);
+}
+
+// A 10x8 box moving at (7, 3) px/frame over 9 frames; frame 4 has no blob. The interpolated
+// blob must be the true box of frame 4 exactly, with and without smoothing.
+TEST(Tracker, DroppedFrameIsInterpolatedExactly) {
+  for (double sigma : {0.0, 1.0, 2.5}) {
+    TrackOptions o;
+    o.smooth = sigma;
+    Tracker t(kW, kH, o);
+    for (int f = 0; f < 9; ++f) {
+      Box b{5 + 7 * f, 10 + 3 * f, 10, 8};
+      auto m = Draw(f == 4 ? std::vector<Box>{} : std::vector<Box>{b});
+      t.AddFrame(m.data());
+    }
+    TrackResult r = t.Finish();
+    EXPECT_EQ(r.summary.tracks, 1);
+    EXPECT_EQ(r.summary.kept, 1);
+    EXPECT_EQ(r.summary.interpolated, 1u);
+    auto rows = RowsOf(r, 4);
+    ASSERT_EQ(rows.size(), 1u) << "sigma " << sigma;
+    EXPECT_EQ(rows[0]->state, RowState::kInterpolated);
+    EXPECT_EQ(rows[0]->x, 5 + 28);
+    EXPECT_EQ(rows[0]->y, 10 + 12);
+    EXPECT_EQ(rows[0]->w, 10);
+    EXPECT_EQ(rows[0]->h, 8);
+    EXPECT_EQ(rows[0]->area, 80);
+    EXPECT_NEAR(rows[0]->scx, 5 + 28 + 4.5, 1e-9);
+    // The rendered mask equals the drawn truth of frame 4.
+    std::vector<uint8_t> mask;
+    r.RenderMask(4, 0, mask);
+    auto truth = Draw({{5 + 28, 10 + 12, 10, 8}});
+    for (size_t i = 0; i < mask.size(); ++i) ASSERT_EQ(mask[i] != 0, truth[i] != 0) << "pixel " << i;
+  }
+}
+
+// A box that grows by 2 px per frame in each direction: the gap is filled with the scaled blob.
+TEST(Tracker, GrowingBoxIsScaled) {
+  TrackOptions o;
+  o.smooth = 0;
+  Tracker t(kW, kH, o);
+  for (int f = 0; f < 5; ++f) {
+    auto m = Draw(f == 2 ? std::vector<Box>{} : std::vector<Box>{{40 - f, 30 - f, 10 + 2 * f, 6 + 2 * f}});
+    t.AddFrame(m.data());
+  }
+  TrackResult r = t.Finish();
+  auto rows = RowsOf(r, 2);
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0]->state, RowState::kInterpolated);
+  EXPECT_EQ(rows[0]->x, 38);
+  EXPECT_EQ(rows[0]->y, 28);
+  EXPECT_EQ(rows[0]->w, 14);
+  EXPECT_EQ(rows[0]->h, 10);
+  EXPECT_EQ(rows[0]->area, 140);
+}
+
+// A blob seen in one frame only is a false positive: rejected, not in the mask.
+TEST(Tracker, OneFrameSpuriousBlobIsRejected) {
+  Tracker t(kW, kH, TrackOptions{});
+  for (int f = 0; f < 6; ++f) {
+    std::vector<Box> boxes{{10 + 2 * f, 40, 8, 8}};
+    if (f == 3) boxes.push_back({90, 5, 5, 5});  // far from the car: a track of its own
+    auto m = Draw(boxes);
+    t.AddFrame(m.data());
+  }
+  TrackResult r = t.Finish();
+  EXPECT_EQ(r.summary.tracks, 2);
+  EXPECT_EQ(r.summary.kept, 1);
+  EXPECT_EQ(r.summary.rejected, 1);
+  EXPECT_EQ(r.summary.rejected_blobs, 1u);
+  auto rows = RowsOf(r, 3);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0]->track, 1);
+  EXPECT_EQ(rows[0]->state, RowState::kDetected);
+  EXPECT_EQ(rows[1]->track, 2);
+  EXPECT_EQ(rows[1]->state, RowState::kRejected);
+  std::vector<uint8_t> mask;
+  r.RenderMask(3, 0, mask);
+  EXPECT_EQ(mask[7 * kW + 92], 0);
+  EXPECT_EQ(mask[44 * kW + 20], 255);
+}
+
+// Rejection by the detected/span ratio: seen in frames 0, 4, 8 (3 of a span of 9 < 0.5).
+TEST(Tracker, LowRatioTrackIsRejected) {
+  TrackOptions o;
+  o.max_gap = 3;
+  Tracker t(kW, kH, o);
+  for (int f = 0; f < 9; ++f) {
+    auto m = Draw(f % 4 == 0 ? std::vector<Box>{{50, 50, 6, 6}} : std::vector<Box>{});
+    t.AddFrame(m.data());
+  }
+  TrackResult r = t.Finish();
+  EXPECT_EQ(r.summary.tracks, 1);
+  EXPECT_EQ(r.summary.rejected, 1);
+  EXPECT_EQ(r.summary.interpolated, 0u);
+  o.min_ratio = 0.3;  // 3/9 passes
+  Tracker t2(kW, kH, o);
+  for (int f = 0; f < 9; ++f) {
+    auto m = Draw(f % 4 == 0 ? std::vector<Box>{{50, 50, 6, 6}} : std::vector<Box>{});
+    t2.AddFrame(m.data());
+  }
+  TrackResult r2 = t2.Finish();
+  EXPECT_EQ(r2.summary.kept, 1);
+  EXPECT_EQ(r2.summary.interpolated, 6u);
+}
+
+// Two 8x8 boxes cross: A moves right along row 46..53, B down along column 56..63; at frame 5
+// both are at (56, 46) and merge into one blob. Identities must survive the crossing, and the
+// track that lost the merged blob is interpolated at its true position.
+TEST(Tracker, CrossingTracksKeepTheirIds) {
+  TrackOptions o;
+  o.smooth = 0;
+  Tracker t(kW, kH, o);
+  auto a = [](int f) { return Box{6 + 10 * f, 46, 8, 8}; };
+  auto b = [](int f) { return Box{56, -4 + 10 * f, 8, 8}; };
+  for (int f = 1; f < 8; ++f) {
+    auto m = Draw({a(f), b(f)});
+    t.AddFrame(m.data());
+  }
+  TrackResult r = t.Finish();
+  EXPECT_EQ(r.summary.tracks, 2);
+  EXPECT_EQ(r.summary.kept, 2);
+  for (int fi = 0; fi < 7; ++fi) {
+    const int f = fi + 1;
+    auto rows = RowsOf(r, fi);
+    ASSERT_EQ(rows.size(), 2u) << "frame " << f;
+    for (const TrackRow* row : rows) {
+      const Box want = row->track == 1 ? b(f) : a(f);  // B's first pixel comes first in raster order
+      EXPECT_EQ(row->x, want.x) << "frame " << f << " track " << row->track;
+      EXPECT_EQ(row->y, std::max(0, want.y)) << "frame " << f << " track " << row->track;
+    }
+  }
+  // Frame 5 (index 4): one detected (the merged blob), one interpolated.
+  auto rows = RowsOf(r, 4);
+  EXPECT_NE(rows[0]->state, rows[1]->state);
+}
+
+TEST(Tracker, TrackEndsAfterMaxMissed) {
+  TrackOptions o;
+  o.max_missed = 2;
+  o.min_life = 1;
+  Tracker t(kW, kH, o);
+  for (int f = 0; f < 8; ++f) {
+    // Seen at 0, 1, then 3 (1 missed: same track), then 6 (2 missed: a new track).
+    bool seen = f == 0 || f == 1 || f == 3 || f == 6;
+    auto m = Draw(seen ? std::vector<Box>{{20, 20, 5, 5}} : std::vector<Box>{});
+    t.AddFrame(m.data());
+  }
+  TrackResult r = t.Finish();
+  EXPECT_EQ(r.summary.tracks, 2);
+  ASSERT_EQ(RowsOf(r, 6).size(), 1u);
+  EXPECT_EQ(RowsOf(r, 6)[0]->track, 2);
+  ASSERT_EQ(RowsOf(r, 2).size(), 1u);
+  EXPECT_EQ(RowsOf(r, 2)[0]->state, RowState::kInterpolated);
+}
+
+TEST(Tracker, DilateGrowsTheMaskByADisk) {
+  Tracker t(kW, kH, TrackOptions{});
+  for (int f = 0; f < 3; ++f) {
+    auto m = Draw({{60, 40, 1, 1}});
+    t.AddFrame(m.data());
+  }
+  TrackResult r = t.Finish();
+  std::vector<uint8_t> mask;
+  r.RenderMask(1, 2, mask);
+  int n = 0;
+  for (uint8_t v : mask) n += v == 255;
+  EXPECT_EQ(n, 13);  // the pixels within distance 2: 1 + 3 + 5 + 3 + 1
+  EXPECT_EQ(mask[40 * kW + 62], 255);
+  EXPECT_EQ(mask[42 * kW + 62], 0);
+}
+
+TEST(TrackOptions, CheckNamesTheBadValue) {
+  TrackOptions o;
+  o.max_jump = 0;
+  EXPECT_THROW(o.Check(), UsageError);
+  o = TrackOptions{};
+  o.min_ratio = 1.5;
+  try {
+    o.Check();
+    FAIL();
+  } catch (const UsageError& e) {
+    EXPECT_STREQ(e.what(), "min-ratio must be in 0..1, got 1.5");
+  }
+}
