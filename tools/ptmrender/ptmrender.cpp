@@ -21,6 +21,7 @@
 #include "io/colmap_model.h"
 #include "io/trajectory.h"
 #include "render/context.h"
+#include "render/projector_sources.h"
 #include "workspace/workspace.h"
 
 namespace mvtm {
@@ -75,16 +76,6 @@ void ParseSize(const std::string& s, uint64_t& w, uint64_t& h) {
   if (a <= 0 || b <= 0 || a > 16384 || b > 16384) throw UsageError("--size: '" + s + "' must be 1..16384");
   w = static_cast<uint64_t>(a);
   h = static_cast<uint64_t>(b);
-}
-
-// Nearest-neighbour resize of a depth map to the projector image size (baked maps may be scaled).
-Image ResizeNearest(const Image& d, int w, int h) {
-  if (d.width == w && d.height == h) return d;
-  Image r(w, h, 1, 32);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x)
-      r.at(x, y) = d.at(std::min(d.width - 1, int((x + 0.5) * d.width / w)), std::min(d.height - 1, int((y + 0.5) * d.height / h)));
-  return r;
 }
 
 std::string ShortDouble(double v) {
@@ -322,33 +313,8 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
   }
 
   // Render.
-  std::map<size_t, Image> img_cache, depth_cache, mask_cache;
+  ProjectorSources sources(ws, rec, images, &renderer, /*prefer_textures=*/true);
   bool grey_sources = true;
-  auto image_of = [&](size_t k) -> const Image& {
-    auto it = img_cache.find(k);
-    if (it != img_cache.end()) return it->second;
-    Image im = ReadImage(ws.SourceImagePath(images[k]->name).string());
-    return img_cache.emplace(k, std::move(im)).first->second;
-  };
-  auto depth_of = [&](size_t k) -> const Image& {
-    auto it = depth_cache.find(k);
-    if (it != depth_cache.end()) return it->second;
-    const auto* im = images[k];
-    const Camera& pc = rec.cameras.at(im->camera_id);
-    fs::path dp = ws.DepthPath(im->name);
-    Image d;
-    if (fs::exists(dp)) d = ResizeNearest(ReadImage(dp.string()), int(pc.width), int(pc.height));
-    else d = renderer.RenderDepth(View{pc, im->world_to_camera});
-    return depth_cache.emplace(k, std::move(d)).first->second;
-  };
-  auto mask_of = [&](size_t k) -> const Image* {
-    auto it = mask_cache.find(k);
-    if (it == mask_cache.end()) {
-        fs::path mp = ws.MaskPath(images[k]->name);
-      it = mask_cache.emplace(k, fs::exists(mp) ? ReadImage(mp.string()) : Image()).first;
-    }
-    return it->second.empty() ? nullptr : &it->second;
-  };
   // Grey output when the source images are grey: decided over every image any pose may use
   // (else the workspace's first image), so every split of the work decides alike.
   for (size_t k : used) grey_sources = grey_sources && ReadImageSpec(ws.SourceImagePath(images[k]->name).string()).channels == 1;
@@ -359,22 +325,19 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
   Progress bar("ptmrender", todo.size(), o.quiet);
   for (size_t i : todo) {
     auto t0 = Clock::now();
-    // Caches are trimmed between frames only: a frame's projectors hold references into them.
-    for (auto* cache : {&img_cache, &depth_cache, &mask_cache})
-      if (cache->size() > 32) cache->clear();
+    sources.Trim();  // between frames only: a frame's projectors hold references into it
     std::vector<Projector> ps;
     for (const auto& c : picks[i]) {
       Projector p;
-      const auto* im = images[c.index];
-      p.view = View{rec.cameras.at(im->camera_id), im->world_to_camera};
-      p.image = &image_of(c.index);
+      p.view = sources.ViewOf(c.index);
+      p.image = &sources.ImageOf(c.index);
       p.key = static_cast<int64_t>(c.index);
       if (plan.occlusion || plan.skybox) {
         auto td = Clock::now();
-        p.depth = &depth_of(c.index);
+        p.depth = &sources.DepthOf(c.index);
         rep.depth_ms += Ms(td, Clock::now());
       }
-      if (plan.masks) p.mask = mask_of(c.index);
+      if (plan.masks) p.mask = sources.MaskOf(c.index);
       ps.push_back(p);
     }
     auto t1 = Clock::now();

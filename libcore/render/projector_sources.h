@@ -1,0 +1,46 @@
+// mvtm — loading a workspace's images as projectors: colour image, depth map, mask.
+//
+// Shared by ptmrender and inpaint3d. Images are looked up by their index in a list of the
+// model's images (ImagesByName order). Depth maps come from the workspace's baked depth/ (resized
+// to the image size, nearest neighbour, when baked at another --scale) or, when not baked, are
+// rendered with the Renderer given (Error when there is none). Everything is cached; Trim() empties the caches when they
+// hold more than `capacity` items and must only be called between frames, since the returned
+// references point into the caches.
+#pragma once
+
+#include <map>
+#include <vector>
+
+#include "io/colmap_model.h"
+#include "render/renderer.h"
+#include "workspace/workspace.h"
+
+namespace mvtm {
+
+class ProjectorSources {
+ public:
+  // prefer_textures: read textures/NAME (vehicles removed) when it exists, else images/NAME.
+  ProjectorSources(const Workspace& ws, const Reconstruction& rec, std::vector<const ImageRecord*> images,
+                   Renderer* renderer, bool prefer_textures, size_t capacity = 32);
+  void SetRenderer(Renderer* renderer) { renderer_ = renderer; }
+
+  const Image& ImageOf(size_t k);
+  const Image& DepthOf(size_t k);
+  const Image* MaskOf(size_t k);  // nullptr when the image has no mask file
+  View ViewOf(size_t k) const;
+  void Trim();
+
+ private:
+  const Workspace& ws_;
+  const Reconstruction& rec_;
+  std::vector<const ImageRecord*> images_;
+  Renderer* renderer_;
+  bool prefer_textures_;
+  size_t capacity_;
+  std::map<size_t, Image> image_, depth_, mask_;
+};
+
+// Nearest-neighbour resize (for depth maps baked at another scale).
+Image ResizeNearest(const Image& d, int w, int h);
+
+}  // namespace mvtm

@@ -1,0 +1,68 @@
+// inpaint3d — removes masked (moving) objects from a workspace's images (thesis §5.3, Eq. 5.3,
+// Alg. 4–5), with the 2-D baselines of §5.2 for comparison.
+//
+// For every image whose mask (masks/NAME.png) has a non-zero pixel, the pixels under the mask
+// (dilated by `dilate` pixels) are replaced; every other pixel keeps its bytes:
+//   3d       the mesh rendered from the image's own pose, textured by its partner images
+//            (partners.tsv, pickview --partners) with their own masks respected and the
+//            occlusion test on; where no partner reaches, vertex colours; where the mesh has no
+//            surface, the skybox (sky projected from the partners), else a constant background.
+//   telea    OpenCV cv::inpaint, INPAINT_TELEA, radius `radius`.
+//   ns       OpenCV cv::inpaint, INPAINT_NS (Navier–Stokes), radius `radius`.
+//   patch2d  thesis §5.2: for each blob (8-connected component of the mask) four templates
+//            (strips left of, right of, above and below its bounding box) are matched in each
+//            partner image by squared difference (cv::matchTemplate TM_SQDIFF); the best match
+//            per pixel of template gives an offset and the pixels under the blob are copied
+//            from that partner at that offset. No partner: Telea.
+// Inputs are always the recorded images (images/NAME), never textures/. Outputs, each written
+// atomically and skipped when newer than its inputs unless `force`:
+//   textures/NAME                          the image, same format, channel count and bit depth;
+//                                          an image with no mask (or an empty one) is copied
+//                                          byte for byte
+//   textures/provenance/STEM.png           8-bit, where each pixel came from (kProvenance*)
+// Images are processed in name order; --frames/--shard select among them (base/selection.h).
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace mvtm {
+
+// Provenance image values.
+inline constexpr uint8_t kProvenanceOriginal = 0;  // outside the (dilated) mask: the recorded pixel
+// 1..16: partner of rank r projected onto the mesh (3d) or copied (patch2d)
+inline constexpr uint8_t kProvenanceSkyOffset = 100;   // 101..116: sky from partner of rank r (3d)
+inline constexpr uint8_t kProvenance2d = 253;          // telea / ns (and patch2d without a partner)
+inline constexpr uint8_t kProvenanceVertex = 254;      // vertex colour (3d)
+inline constexpr uint8_t kProvenanceBackground = 255;  // constant background (3d)
+
+struct Inpaint3dOptions {
+  std::string workspace;      // WS
+  std::string method = "3d";  // 3d | telea | ns | patch2d
+  int partners = 4;           // partners used per image (ranks 1..N of partners.tsv), 1..16
+  int dilate = 1;             // pixels the mask is dilated by before inpainting, 0..64
+  double radius = 3;          // telea/ns: inpainting radius in pixels, > 0
+  double bias = 0.005;        // 3d: relative occlusion bias, [0, 1)
+  std::string frames, shard;  // subsets of the images (name order)
+  bool force = false;         // rewrite up-to-date outputs
+  std::string gl = "auto";    // 3d: OpenGL backend
+  bool quiet = false;
+
+  void Check() const;  // throws UsageError naming the bad value
+};
+
+struct Inpaint3dReport {
+  size_t images = 0;     // selected
+  size_t inpainted = 0;  // masked images written
+  size_t copied = 0;     // unmasked images copied
+  size_t skipped = 0;    // up to date
+  size_t masked_pixels = 0, from_partners = 0, from_sky = 0, from_vertex = 0, from_background = 0,
+         from_2d = 0;
+  double ms = 0;  // total processing time of written images
+  std::string gl;
+};
+
+// Runs the tool. Throws Error (data) / UsageError (options).
+Inpaint3dReport RunInpaint3d(const Inpaint3dOptions& options);
+
+}  // namespace mvtm

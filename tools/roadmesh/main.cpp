@@ -1,0 +1,47 @@
+// roadmesh — thin main: option table, then RunRoadMesh().
+#include <cstdio>
+
+#include "base/cli.h"
+#include "roadmesh.h"
+
+int main(int argc, char** argv) {
+  mvtm::RoadMeshOptions o;
+  CLI::App app;
+  mvtm::ConfigureApp(
+      app, "roadmesh",
+      "Build WS/mesh.ply from the workspace's sparse COLMAP model when there is no dense "
+      "mesh: a corridor along the camera path (ground strip, side walls fitted to the "
+      "sparse points, open sky) with normals and Lambertian vertex colours.");
+  app.add_option("WS", o.workspace, "Workspace folder (sparse/, images/)")->required();
+  app.add_option("--width", o.width,
+                 "Road width in metres (0 < M <= 50): ground points within M/4 (else M/2) of the path; walls "
+                 "at least M/2 + 1 away")
+      ->capture_default_str();
+  app.add_option("--wall-height", o.wall_height,
+                 "Wall height above the ground in metres (0 < M <= 200)")
+      ->capture_default_str();
+  app.add_option("--resolution", o.resolution,
+                 "Grid spacing along and across in metres (0.05 <= M <= 5)")
+      ->capture_default_str();
+  app.add_flag("--no-colours", o.no_colours,
+               "Write no vertex colours (no images, no OpenGL needed)");
+  app.add_flag("--force", o.force, "Replace an existing mesh");
+  app.add_option("--gl", o.gl, "OpenGL backend")
+      ->check(CLI::IsMember({"auto", "egl", "osmesa"}))
+      ->capture_default_str();
+  app.add_flag("-q,--quiet", o.quiet, "No progress bar or summary");
+  return mvtm::RunMain(app, "roadmesh", argc, argv, [&] {
+    auto r = mvtm::RunRoadMesh(o);
+    if (!o.quiet)
+      std::fprintf(
+          stderr,
+          "roadmesh: %s: %zu vertices, %zu triangles; path %.1f m, camera height %.2f m (%s), "
+          "walls %.1f m left / %.1f m right; %zu ground vertices refined; %zu of %zu vertices "
+          "coloured%s%s\n",
+          r.mesh_path.c_str(), r.vertices, r.faces, r.path_length, r.camera_height,
+          r.ground_points ? (std::to_string(r.ground_points) + " points").c_str() : "default",
+          r.left_wall, r.right_wall, r.refined_vertices, r.coloured, r.vertices,
+          r.gl.empty() ? "" : "; ", r.gl.c_str());
+    return 0;
+  });
+}
