@@ -1,0 +1,94 @@
+#!/usr/bin/env bash
+# The whole road build as one shell script: photos + poses + intrinsics → a rendered, scored
+# mvtm workspace. Each step skips when its output exists (delete it, or the workspace, to redo).
+#
+# usage: examples/road-build.sh IMAGES POSES OUT -- INTRINSICS...
+#   IMAGES      folder of the frames (sorted by name = frame order)
+#   POSES       ORB-SLAM2 KeyFrameTrajectory / TUM or KITTI poses (camera-to-world)
+#   OUT         working folder; the workspace is OUT/ws
+#   INTRINSICS  orb2colmap's intrinsics options, e.g. --kitti-calib calib.txt, or
+#               --camera "PINHOLE W H fx fy cx cy", or --orb-settings TUM1.yaml [--frames rgb.txt]
+# environment: MVTM_BIN (default build/bin), HOLDOUT (every Nth frame scored, default 5),
+#              LATERAL (lane change in metres for the final render, default 1.5),
+#              MATCH_OVERLAP (COLMAP sequential matching overlap, default 5)
+#
+# Steps: orb2colmap (poses as priors) → COLMAP feature_extractor / sequential_matcher /
+# point_triangulator / bundle_adjuster / image_undistorter (CPU) → mesh (COLMAP dense MVS +
+# poisson_mesher when COLMAP has CUDA, else roadmesh) → segtrack (when OUT/ws/labels exists) →
+# pickview --partners (when the names carry several passes, A_0000.png …) → bakedepth →
+# inpaint3d (when there are masks) → ptmrender (held-out poses and a lane change) → ssim.
+set -euo pipefail
+top=$(cd "$(dirname "$0")/.." && pwd)
+bin=${MVTM_BIN:-$top/build/bin}
+[ $# -ge 4 ] && [ "$4" = "--" ] || { echo "usage: $0 IMAGES POSES OUT -- INTRINSICS..." >&2; exit 2; }
+images=$(cd "$1" && pwd); poses=$2; out=$3; shift 4
+mkdir -p "$out"; out=$(cd "$out" && pwd); ws=$out/ws
+holdout=${HOLDOUT:-5}; lateral=${LATERAL:-1.5}
+log() { echo "== $*" >&2; }
+colmap_log() { "$@" > "$out/colmap.log" 2>&1 || { tail -20 "$out/colmap.log" >&2; exit 1; }; }
+
+log "1. orb2colmap: poses -> COLMAP model of every frame + database with pose priors"
+[ -f "$out/prior/images.txt" ] || "$bin/orb2colmap" --images "$images" --database "$out/db.db" "$@" "$poses" "$out/prior"
+
+log "2. COLMAP (CPU): SIFT, sequential matching, triangulation with the poses, bundle adjustment"
+if [ ! -f "$out/ba/images.bin" ]; then
+  colmap_log colmap feature_extractor --database_path "$out/db.db" --image_path "$images" \
+    --SiftExtraction.use_gpu 0 --ImageReader.single_camera 1
+  colmap_log colmap sequential_matcher --database_path "$out/db.db" --SiftMatching.use_gpu 0 \
+    --SequentialMatching.overlap "${MATCH_OVERLAP:-5}"
+  mkdir -p "$out/tri" "$out/ba"
+  colmap_log colmap point_triangulator --database_path "$out/db.db" --image_path "$images" \
+    --input_path "$out/prior" --output_path "$out/tri"
+  # The poses are the poses of record (SLAM or ground truth, metric): bundle adjustment refines
+  # the points only. Left free, COLMAP's gauge lets the whole trajectory drift and rescale.
+  colmap_log colmap bundle_adjuster --input_path "$out/tri" --output_path "$out/ba" \
+    --BundleAdjustment.refine_extrinsics 0 --BundleAdjustment.refine_focal_length 0 \
+    --BundleAdjustment.refine_principal_point 0 --BundleAdjustment.refine_extra_params 0
+fi
+if [ ! -d "$ws/sparse" ]; then
+  colmap_log colmap image_undistorter --image_path "$images" --input_path "$out/ba" \
+    --output_path "$ws" --output_type COLMAP
+fi
+colmap model_analyzer --path "$ws/sparse" 2>&1 | grep -E "Registered images|Points:|Mean reprojection" >&2 || true
+
+log "3. mesh"
+if [ ! -f "$ws/mesh.ply" ] && [ ! -f "$ws/meshed-poisson.ply" ]; then
+  if colmap -h 2>&1 | grep -q "with CUDA"; then
+    colmap_log colmap patch_match_stereo --workspace_path "$ws"
+    colmap_log colmap stereo_fusion --workspace_path "$ws" --output_path "$ws/fused.ply"
+    colmap_log colmap poisson_mesher --input_path "$ws/fused.ply" --output_path "$ws/meshed-poisson.ply"
+    # poisson_mesher can write an empty mesh and still exit 0.
+    grep -aq "element face [1-9]" "$ws/meshed-poisson.ply" || { rm -f "$ws/meshed-poisson.ply"; "$bin/roadmesh" "$ws"; }
+  else
+    "$bin/roadmesh" "$ws"
+  fi
+fi
+
+log "4. vehicle masks and partners"
+if [ -d "$ws/labels" ] && [ ! -f "$ws/tracks.tsv" ]; then "$bin/segtrack" "$ws/labels" "$ws"; fi
+passes=$(ls "$ws/images" | sed -n 's/^\([^_]*\)_.*/\1/p' | sort -u | wc -l)
+if [ "$passes" -ge 2 ] && [ ! -f "$ws/partners.tsv" ]; then "$bin/pickview" --partners "$ws" > /dev/null; fi
+
+log "5. bakedepth, inpaint3d"
+"$bin/bakedepth" "$ws"
+if [ -d "$ws/masks" ] && [ -f "$ws/partners.tsv" ]; then "$bin/inpaint3d" "$ws"; fi
+
+log "6. ptmrender: every ${holdout}th pose held out (vertex colours, PTM), and a ${lateral} m lane change"
+n=$(ls "$ws/images" | wc -l)
+mkdir -p "$out/heldout_truth"
+sel=()
+for i in $(seq 0 "$holdout" $((n - 1))); do sel+=("$i"); done
+for i in "${sel[@]}"; do
+  name=$(ls "$ws/images" | sed -n "$((i + 1))p")
+  ln -sf "$ws/images/$name" "$out/heldout_truth/${name%.*}.png"
+  "$bin/ptmrender" -q --mode vertex --frames "$i" "$ws" "$out/heldout_vertex"
+  "$bin/ptmrender" -q --at-images --exclude-self --projectors 1 --no-occlusion --frames "$i" "$ws" "$out/heldout_ptm1"
+  "$bin/ptmrender" -q --at-images --exclude-self --frames "$i" "$ws" "$out/heldout_ptm"
+done
+"$bin/ptmrender" -q --lateral "$lateral" --provenance "$ws" "$out/lane"
+
+log "7. ssim: held-out renders against the real photographs"
+for r in vertex ptm1 ptm; do "$bin/ssim" "$out/heldout_$r" "$out/heldout_truth" > "$out/ssim_$r.tsv"; done
+paste "$out/ssim_vertex.tsv" "$out/ssim_ptm1.tsv" "$out/ssim_ptm.tsv" |
+  awk -F'\t' 'NR == 1 { printf "%-12s %10s %10s %14s\n", "frame", "vertex", "PTM 1 proj", "PTM all effects"; next }
+              { printf "%-12s %10s %10s %14s\n", $1, $2, $6, $10 }'
