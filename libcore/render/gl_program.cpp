@@ -3,7 +3,6 @@
 #include <glad/gl.h>
 
 #include <map>
-#include <regex>
 #include <sstream>
 
 #include "base/error.h"
@@ -33,14 +32,21 @@ std::string Relocate(const std::string& log, const std::vector<std::string>& fil
                      const std::string& variant) {
   std::istringstream in(log);
   std::string line, out;
-  std::regex mesa(R"(^(\d+):(\d+)\(\d+\):\s*(.*)$)");
-  std::smatch m;
   while (std::getline(in, line)) {
     if (line.empty()) continue;
-    if (std::regex_match(line, m, mesa)) {
-      size_t src = std::stoul(m[1]);
+    // Mesa: "SOURCE:LINE(COLUMN): message"
+    size_t colon = line.find(':'), paren = line.find('('), close = line.find("):");
+    bool mesa = colon != std::string::npos && paren != std::string::npos && close != std::string::npos &&
+                colon > 0 && colon < paren && paren < close &&
+                line.find_first_not_of("0123456789") == colon &&
+                line.find_first_not_of("0123456789", colon + 1) == paren;
+    if (mesa) {
+      size_t src = std::stoul(line.substr(0, colon));
       std::string file = src >= 1 && src <= files.size() ? files[src - 1] : "?";
-      return "shaders/" + file + ":" + m[2].str() + " " + variant + ": " + m[3].str();
+      std::string msg = line.substr(close + 2);
+      size_t b = msg.find_first_not_of(' ');
+      return "shaders/" + file + ":" + line.substr(colon + 1, paren - colon - 1) + " " + variant + ": " +
+             (b == std::string::npos ? "" : msg.substr(b));
     }
     if (out.empty()) out = line;
   }
