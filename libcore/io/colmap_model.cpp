@@ -15,34 +15,33 @@ namespace mvtm {
 
 namespace fs = std::filesystem;
 
-const ImageRecord* Reconstruction::FindImage(const std::string& name) const {
-  for (const auto& [id, im] : images)
-    if (im.name == name) return &im;
-  return nullptr;
-}
-
-std::vector<const ImageRecord*> Reconstruction::ImagesByName() const {
-  std::vector<const ImageRecord*> v;
-  for (const auto& [id, im] : images) v.push_back(&im);
-  std::sort(v.begin(), v.end(),
-            [](const ImageRecord* a, const ImageRecord* b) { return a->name < b->name; });
-  return v;
+std::vector<std::string> ColmapModelFileNames(bool binary) {
+  const char* ext = binary ? ".bin" : ".txt";
+  std::vector<std::string> names;
+  for (const char* f : {"cameras", "images", "points3D"}) names.push_back(std::string(f) + ext);
+  return names;
 }
 
 bool HasColmapModel(const std::string& dir) {
-  for (const char* ext : {".txt", ".bin"}) {
+  for (bool binary : {false, true}) {
     bool all = true;
-    for (const char* f : {"cameras", "images", "points3D"})
-      all = all && fs::exists(fs::path(dir) / (std::string(f) + ext));
+    for (const auto& f : ColmapModelFileNames(binary)) all = all && fs::exists(fs::path(dir) / f);
     if (all) return true;
   }
   return false;
 }
 
+std::vector<std::string> ColmapModelFiles(const std::string& dir) {
+  std::vector<std::string> files;
+  for (bool binary : {false, true})
+    for (const auto& f : ColmapModelFileNames(binary))
+      if (fs::exists(fs::path(dir) / f)) files.push_back((fs::path(dir) / f).string());
+  return files;
+}
+
 Reconstruction ReadColmapModel(const std::string& dir) {
   bool bin = true;
-  for (const char* f : {"cameras.bin", "images.bin", "points3D.bin"})
-    bin = bin && fs::exists(fs::path(dir) / f);
+  for (const auto& f : ColmapModelFileNames(true)) bin = bin && fs::exists(fs::path(dir) / f);
   if (bin) return ReadColmapBinary(dir);
   if (!fs::exists(fs::path(dir) / "images.txt"))
     throw Error(dir, 0, "no COLMAP model here (need cameras, images, points3D as .txt or .bin)");

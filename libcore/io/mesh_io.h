@@ -12,29 +12,10 @@
 //    than failing; a tool that needs an attribute throws with that list.
 #pragma once
 
-#include <array>
-#include <cstdint>
 #include <string>
-#include <vector>
-
-#include <Eigen/Core>
+#include "scene/mesh.h"
 
 namespace mvtm {
-
-struct Mesh {
-  std::vector<Eigen::Vector3d> vertices;
-  std::vector<Eigen::Vector3f> normals;             // empty or one per vertex
-  std::vector<std::array<uint8_t, 3>> colors;       // empty or one per vertex
-  std::vector<std::array<uint32_t, 3>> faces;
-  std::vector<std::string> missing;                 // filled by ReadMesh: "normals", "colours", "faces"
-
-  bool has_normals() const { return !normals.empty() && normals.size() == vertices.size(); }
-  bool has_colors() const { return !colors.empty() && colors.size() == vertices.size(); }
-  // Area-weighted vertex normals from the faces.
-  void ComputeNormals();
-  // Axis-aligned bounds; (+inf, -inf) for an empty mesh.
-  void Bounds(Eigen::Vector3d& lo, Eigen::Vector3d& hi) const;
-};
 
 // Throws Error("PATH: ...") when unreadable or when a face index is out of range.
 Mesh ReadMesh(const std::string& path);

@@ -10,11 +10,16 @@
 
 namespace mvtm {
 
+const std::vector<std::string>& GlBackendNames() {
+  static const std::vector<std::string> names = {"auto", "egl", "osmesa"};
+  return names;
+}
+
 GlBackend ParseGlBackend(const std::string& s) {
-  if (s == "auto") return GlBackend::kAuto;
-  if (s == "egl") return GlBackend::kEgl;
-  if (s == "osmesa") return GlBackend::kOsMesa;
-  throw UsageError("--gl: '" + s + "' is not auto, egl or osmesa");
+  const auto& names = GlBackendNames();
+  for (size_t i = 0; i < names.size(); ++i)
+    if (s == names[i]) return static_cast<GlBackend>(i);
+  throw UsageError("--gl: '" + s + "' is not one of auto, egl, osmesa");
 }
 
 namespace {

@@ -13,12 +13,15 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace mvtm {
 
 enum class GlBackend { kAuto, kEgl, kOsMesa };
 
-// Parses "auto" | "egl" | "osmesa"; throws UsageError.
+// The backends' names in the order of the enum: "auto", "egl", "osmesa" (--gl's choices).
+const std::vector<std::string>& GlBackendNames();
+// Parses one of GlBackendNames(); throws UsageError naming --gl and the choices.
 GlBackend ParseGlBackend(const std::string& s);
 
 class GlContext {

@@ -1,5 +1,7 @@
 #include "render/projector_sources.h"
 
+#include "image/mask.h"
+
 #include <algorithm>
 
 #include "base/error.h"
@@ -59,7 +61,7 @@ const Image* ProjectorSources::MaskOf(size_t k) {
   auto it = mask_.find(k);
   if (it == mask_.end()) {
     fs::path mp = ws_.MaskPath(images_[k]->name);
-    it = mask_.emplace(k, fs::exists(mp) ? ReadImage(mp.string()) : Image()).first;
+    it = mask_.emplace(k, fs::exists(mp) ? ReadMask(mp.string()) : Image()).first;
   }
   return it->second.empty() ? nullptr : &it->second;
 }

@@ -8,6 +8,7 @@
 #include "base/atomic_file.h"
 #include "base/error.h"
 #include "base/version.h"
+#include "io/colmap_model.h"
 
 namespace mvtm {
 
@@ -25,7 +26,7 @@ Workspace::Workspace(fs::path root) : root_(std::move(root)) {}
 fs::path Workspace::SparseDir() const { return root_ / "sparse"; }
 fs::path Workspace::ImagesDir() const { return root_ / "images"; }
 fs::path Workspace::ImagePath(const std::string& name) const { return root_ / "images" / name; }
-fs::path Workspace::TexturePath(const std::string& name) const { return root_ / "textures" / name; }
+fs::path Workspace::TexturePath(const std::string& name) const { return TexturesDir() / name; }
 fs::path Workspace::SourceImagePath(const std::string& name) const {
   fs::path t = TexturePath(name);
   return fs::exists(t) ? t : ImagePath(name);
@@ -39,7 +40,15 @@ fs::path Workspace::LabelsDir() const { return root_ / "labels"; }
 fs::path Workspace::LabelPath(const std::string& name) const { return Derived(LabelsDir(), name, ".png"); }
 fs::path Workspace::MasksDir() const { return root_ / "masks"; }
 fs::path Workspace::MaskPath(const std::string& name) const { return Derived(MasksDir(), name, ".png"); }
-fs::path Workspace::DepthPath(const std::string& name) const { return Derived(root_ / "depth", name, ".exr"); }
+fs::path Workspace::DepthDir() const { return root_ / "depth"; }
+fs::path Workspace::DepthPath(const std::string& name) const { return Derived(DepthDir(), name, ".exr"); }
+fs::path Workspace::TexturesDir() const { return root_ / "textures"; }
+fs::path Workspace::NewMeshPath() const { return root_ / "mesh.ply"; }
+std::vector<fs::path> Workspace::SparseModelFiles() const {
+  std::vector<fs::path> files;
+  for (const auto& f : ColmapModelFiles(SparseDir().string())) files.emplace_back(f);
+  return files;
+}
 fs::path Workspace::TracksPath() const { return root_ / "tracks.tsv"; }
 fs::path Workspace::PartnersPath() const { return root_ / "partners.tsv"; }
 fs::path Workspace::ProvenancePath(const std::string& tool) const {
@@ -48,15 +57,7 @@ fs::path Workspace::ProvenancePath(const std::string& tool) const {
 
 std::vector<std::string> Workspace::Missing(const std::vector<WsItem>& needs) const {
   std::vector<std::string> out;
-  auto model = [&] {
-    for (const char* ext : {".txt", ".bin"}) {
-      bool all = true;
-      for (const char* f : {"cameras", "images", "points3D"})
-        all = all && fs::exists(SparseDir() / (std::string(f) + ext));
-      if (all) return true;
-    }
-    return false;
-  };
+  auto model = [&] { return HasColmapModel(SparseDir().string()); };
   for (WsItem n : needs) {
     switch (n) {
       case WsItem::kSparse:

@@ -45,6 +45,13 @@ class Workspace {
   fs::path MaskPath(const std::string& name) const;
   fs::path MasksDir() const;
   fs::path DepthPath(const std::string& name) const;
+  fs::path DepthDir() const;
+  fs::path TexturesDir() const;
+  // Where a tool that builds the workspace's mesh writes it (mesh.ply).
+  fs::path NewMeshPath() const;
+  // The sparse model's files that exist (text and binary): the inputs every derived output
+  // (depth maps, frames, partners, the mesh) depends on.
+  std::vector<fs::path> SparseModelFiles() const;
   fs::path TracksPath() const;
   fs::path PartnersPath() const;
   fs::path ProvenancePath(const std::string& tool) const;

@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "base/atomic_file.h"
-#include "base/cli.h"
+#include "cli/progress.h"
 #include "base/error.h"
 #include "image/image.h"
 #include "io/colmap_model.h"
@@ -17,7 +17,7 @@ namespace mvtm {
 
 void BakeDepthOptions::Check() const {
   if (!(scale > 0 && scale <= 4)) throw UsageError("--scale: must be in (0, 4]");
-  if (!frames.empty() && !shard.empty()) throw UsageError("give --frames or --shard, not both");
+  CheckWork();
   ParseGlBackend(gl);
 }
 
@@ -25,17 +25,15 @@ BakeDepthReport RunBakeDepth(const BakeDepthOptions& o) {
   o.Check();
   Workspace ws(o.workspace);
   ws.Require("bakedepth", {WsItem::kSparse, WsItem::kMesh});
-  Selection sel = !o.shard.empty() ? Selection::Shard(o.shard) : !o.frames.empty() ? Selection::Frames(o.frames) : Selection();
+  Selection sel = o.Select();
   Reconstruction rec = ReadColmapModel(ws.SparseDir().string());
   auto images = rec.ImagesByName();
   auto chosen = sel.Apply(images.size());
   BakeDepthReport rep;
   rep.selected = chosen.size();
   const fs::path mesh_path = ws.MeshPath();
-  std::vector<fs::path> inputs = {mesh_path};
-  for (const char* f : {"images", "cameras"})
-    for (const char* ext : {".txt", ".bin"})
-      if (fs::exists(ws.SparseDir() / (std::string(f) + ext))) inputs.push_back(ws.SparseDir() / (std::string(f) + ext));
+  std::vector<fs::path> inputs = ws.SparseModelFiles();
+  inputs.push_back(mesh_path);
   std::vector<const ImageRecord*> todo;
   for (size_t i : chosen) {
     if (!o.force && IsUpToDate(ws.DepthPath(images[i]->name), inputs)) {
@@ -50,7 +48,7 @@ BakeDepthReport RunBakeDepth(const BakeDepthOptions& o) {
     auto ctx = GlContext::Create(ParseGlBackend(o.gl));
     rep.gl = ctx->Describe();
     Renderer renderer(mesh);
-    RemoveStaleTemporaries(ws.root() / "depth");
+    RemoveStaleTemporaries(ws.DepthDir());
     Progress bar("bakedepth", todo.size(), o.quiet);
     for (const ImageRecord* im : todo) {
       const Camera& cam = rec.cameras.at(im->camera_id);
@@ -70,8 +68,7 @@ BakeDepthReport RunBakeDepth(const BakeDepthOptions& o) {
     }
     nlohmann::json opts = {{"scale", o.scale}, {"frames", o.frames}, {"shard", o.shard}, {"gl", rep.gl}};
     // Provenance is per run; with shards, each shard writes its own record.
-    ws.WriteProvenance(o.shard.empty() ? "bakedepth" : "bakedepth-shard-" + o.shard.substr(0, o.shard.find('/')),
-                       opts, inputs);
+    ws.WriteProvenance(o.ProvenanceName("bakedepth"), opts, inputs);
   }
   return rep;
 }

@@ -4,18 +4,15 @@
 
 #include <string>
 
-#include "base/selection.h"
+#include "cli/work.h"
 
 namespace mvtm {
 
-struct BakeDepthOptions {
+// Work items: the workspace's images sorted by name (--frames/--shard select among them).
+struct BakeDepthOptions : WorkOptions {
   std::string workspace;
   double scale = 1.0;          // depth map size = image size × scale (0 < scale ≤ 4)
-  std::string frames;          // --frames A:B over the images sorted by name
-  std::string shard;           // --shard I/N
-  bool force = false;          // rebake up-to-date maps
-  std::string gl = "auto";     // auto | egl | osmesa
-  bool quiet = false;
+  std::string gl = "auto";     // one of GlBackendNames()
 
   void Check() const;
 };

@@ -3,7 +3,9 @@
 #include <iostream>
 
 #include "bakedepth.h"
-#include "base/cli.h"
+#include "cli/app.h"
+#include "cli/options.h"
+#include "render/context.h"
 
 int main(int argc, char** argv) {
   mvtm::BakeDepthOptions o;
@@ -13,12 +15,8 @@ int main(int argc, char** argv) {
                      "image of a workspace from its mesh, for the PTM occlusion test.");
   app.add_option("WS", o.workspace, "Workspace folder (sparse/, mesh.ply)")->required();
   app.add_option("--scale", o.scale, "Depth map size relative to the image (0 < F <= 4)")->capture_default_str();
-  auto* fr = app.add_option("--frames", o.frames, "Only images A:B (half-open, by name order)");
-  auto* sh = app.add_option("--shard", o.shard, "Only images i with i % N == I (I/N)");
-  fr->excludes(sh);
-  app.add_flag("--force", o.force, "Rebake maps that are newer than the mesh and model");
-  app.add_option("--gl", o.gl, "OpenGL backend")->check(CLI::IsMember({"auto", "egl", "osmesa"}))->capture_default_str();
-  app.add_flag("-q,--quiet", o.quiet, "No progress bar or summary");
+  mvtm::AddWorkOptions(app, o, "images", "in name order", "Rebake maps that are newer than the mesh and model");
+  mvtm::AddChoiceOption(app, "--gl", o.gl, mvtm::GlBackendNames(), "OpenGL backend");
   return mvtm::RunMain(app, "bakedepth", argc, argv, [&] {
     auto r = mvtm::RunBakeDepth(o);
     if (!o.quiet) {

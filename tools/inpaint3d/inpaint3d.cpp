@@ -11,10 +11,11 @@
 #include <opencv2/photo.hpp>
 
 #include "base/atomic_file.h"
-#include "base/cli.h"
+#include "cli/progress.h"
 #include "base/error.h"
-#include "base/selection.h"
+#include "cli/selection.h"
 #include "base/text.h"
+#include "image/mask.h"
 #include "io/colmap_model.h"
 #include "io/mesh_io.h"
 #include "render/context.h"
@@ -25,15 +26,14 @@
 namespace mvtm {
 
 void Inpaint3dOptions::Check() const {
-  if (method != "3d" && method != "telea" && method != "ns" && method != "patch2d")
-    throw UsageError("--method: '" + method + "' is not 3d, telea, ns or patch2d");
   if (partners < 1 || partners > 16)
     throw UsageError("--partners: " + std::to_string(partners) + " is not in 1..16");
   if (dilate < 0 || dilate > 64)
     throw UsageError("--dilate: " + std::to_string(dilate) + " is not in 0..64");
   if (!(radius > 0 && radius <= 1000)) throw UsageError("--radius: must be in (0, 1000]");
   if (!(bias >= 0 && bias < 1)) throw UsageError("--bias: must be in [0, 1)");
-  if (!frames.empty() && !shard.empty()) throw UsageError("give --frames or --shard, not both");
+  CheckChoice(method, kInpaintMethods, "--method");
+  CheckWork();
   ParseGlBackend(gl);
 }
 
@@ -69,16 +69,12 @@ void PutRgb255(Image& im, int x, int y, const std::array<float, 3>& rgb) {
     im.at(x, y, 0) = conv((rgb[0] + rgb[1] + rgb[2]) / 3.f);
 }
 
-// Binary mask (0/255, CV_8U) of the pixels where any channel is non-zero.
+// The mask (image/mask.h: any channel non-zero) as CV_8U 0/255.
 cv::Mat BinaryMask(const Image& m) {
+  const Image set = MaskFromImage(m);
   cv::Mat b(m.height, m.width, CV_8U, cv::Scalar(0));
   for (int y = 0; y < m.height; ++y)
-    for (int x = 0; x < m.width; ++x)
-      for (int c = 0; c < m.channels; ++c)
-        if (m.at(x, y, c) != 0) {
-          b.at<uint8_t>(y, x) = 255;
-          break;
-        }
+    for (int x = 0; x < m.width; ++x) b.at<uint8_t>(y, x) = static_cast<uint8_t>(set.at(x, y));
   return b;
 }
 
@@ -212,9 +208,7 @@ Inpaint3dReport RunInpaint3d(const Inpaint3dOptions& o) {
               ws.PartnersPath().string(), 0,
               "partner '" + n + "' of '" + q + "' is not an image of the workspace's model");
   }
-  Selection sel = !o.shard.empty()    ? Selection::Shard(o.shard)
-                  : !o.frames.empty() ? Selection::Frames(o.frames)
-                                      : Selection();
+  Selection sel = o.Select();
   std::vector<size_t> chosen = sel.Apply(images.size());
 
   Inpaint3dReport rep;
@@ -390,9 +384,7 @@ Inpaint3dReport RunInpaint3d(const Inpaint3dOptions& o) {
   std::vector<fs::path> ins;
   if (three_d) ins.push_back(ws.MeshPath());
   if (three_d || patch) ins.push_back(ws.PartnersPath());
-  ws.WriteProvenance(
-      o.shard.empty() ? "inpaint3d" : "inpaint3d-shard-" + o.shard.substr(0, o.shard.find('/')),
-      opts, ins);
+  ws.WriteProvenance(o.ProvenanceName("inpaint3d"), opts, ins);
   return rep;
 }
 

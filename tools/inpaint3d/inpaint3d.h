@@ -20,11 +20,14 @@
 //                                          an image with no mask (or an empty one) is copied
 //                                          byte for byte
 //   textures/provenance/STEM.png           8-bit, where each pixel came from (kProvenance*)
-// Images are processed in name order; --frames/--shard select among them (base/selection.h).
+// Images are processed in name order; --frames/--shard select among them (cli/selection.h).
 #pragma once
 
 #include <cstdint>
 #include <string>
+#include <vector>
+
+#include "cli/work.h"
 
 namespace mvtm {
 
@@ -36,17 +39,17 @@ inline constexpr uint8_t kProvenance2d = 253;          // telea / ns (and patch2
 inline constexpr uint8_t kProvenanceVertex = 254;      // vertex colour (3d)
 inline constexpr uint8_t kProvenanceBackground = 255;  // constant background (3d)
 
-struct Inpaint3dOptions {
+// --method choices.
+inline const std::vector<std::string> kInpaintMethods = {"3d", "telea", "ns", "patch2d"};
+
+struct Inpaint3dOptions : WorkOptions {
   std::string workspace;      // WS
-  std::string method = "3d";  // 3d | telea | ns | patch2d
+  std::string method = "3d";  // one of kInpaintMethods
   int partners = 4;           // partners used per image (ranks 1..N of partners.tsv), 1..16
   int dilate = 1;             // pixels the mask is dilated by before inpainting, 0..64
   double radius = 3;          // telea/ns: inpainting radius in pixels, > 0
   double bias = 0.005;        // 3d: relative occlusion bias, [0, 1)
-  std::string frames, shard;  // subsets of the images (name order)
-  bool force = false;         // rewrite up-to-date outputs
-  std::string gl = "auto";    // 3d: OpenGL backend
-  bool quiet = false;
+  std::string gl = "auto";    // 3d: OpenGL backend, one of GlBackendNames()
 
   void Check() const;  // throws UsageError naming the bad value
 };

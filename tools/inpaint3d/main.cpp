@@ -1,7 +1,9 @@
 // inpaint3d — thin main: option table, then RunInpaint3d().
 #include <cstdio>
 
-#include "base/cli.h"
+#include "cli/app.h"
+#include "cli/options.h"
+#include "render/context.h"
 #include "inpaint3d.h"
 
 int main(int argc, char** argv) {
@@ -16,11 +18,9 @@ int main(int argc, char** argv) {
                  "Workspace folder (sparse/, images/, masks/, partners.tsv, mesh.ply; depth/ used "
                  "when present)")
       ->required();
-  app.add_option("--method", o.method,
-                 "3d: partners through the mesh; telea, ns: OpenCV inpainting; patch2d: thesis 5.2 "
-                 "templates")
-      ->check(CLI::IsMember({"3d", "telea", "ns", "patch2d"}))
-      ->capture_default_str();
+  mvtm::AddChoiceOption(app, "--method", o.method, mvtm::kInpaintMethods,
+                        "3d: partners through the mesh; telea, ns: OpenCV inpainting; patch2d: thesis 5.2 "
+                        "templates");
   app.add_option("--partners", o.partners,
                  "N: partners used per image (ranks 1..N of partners.tsv)")
       ->check(CLI::Range(1, 16))
@@ -32,14 +32,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--bias", o.bias, "3d: occlusion bias, relative: occluded when z > depth*(1+B)")
       ->capture_default_str();
-  auto* fr = app.add_option("--frames", o.frames, "Only images A:B (half-open, in name order)");
-  auto* sh = app.add_option("--shard", o.shard, "Only images i with i % N == I (I/N)");
-  fr->excludes(sh);
-  app.add_flag("--force", o.force, "Rewrite outputs that are up to date");
-  app.add_option("--gl", o.gl, "3d: OpenGL backend")
-      ->check(CLI::IsMember({"auto", "egl", "osmesa"}))
-      ->capture_default_str();
-  app.add_flag("-q,--quiet", o.quiet, "No progress bar or summary");
+  mvtm::AddChoiceOption(app, "--gl", o.gl, mvtm::GlBackendNames(), "3d: OpenGL backend");
+  mvtm::AddWorkOptions(app, o, "images", "in name order", "Rewrite outputs that are up to date");
   return mvtm::RunMain(app, "inpaint3d", argc, argv, [&] {
     auto r = mvtm::RunInpaint3d(o);
     if (!o.quiet) {

@@ -1,7 +1,8 @@
 // orb2colmap — thin main: option table, then RunOrb2Colmap().
 #include <iostream>
 
-#include "base/cli.h"
+#include "cli/app.h"
+#include "cli/options.h"
 #include "orb2colmap.h"
 
 int main(int argc, char** argv) {
@@ -12,7 +13,7 @@ int main(int argc, char** argv) {
                      "into a COLMAP model of every frame, interpolating between keyframes.");
   app.add_option("TRAJECTORY", o.trajectory, "Poses: ORB-SLAM2 KeyFrameTrajectory/CameraTrajectory or TUM (t tx ty tz qx qy qz qw), or KITTI 3x4 rows")->required();
   app.add_option("OUTDIR", o.outdir, "Folder for cameras, images, points3D (.txt or .bin)")->required();
-  app.add_option("--input-format", o.input_format, "Trajectory format")->check(CLI::IsMember({"auto", "tum", "kitti"}))->capture_default_str();
+  mvtm::AddChoiceOption(app, "--input-format", o.input_format, mvtm::kOrbInputFormats, "Trajectory format");
   app.add_option("--trajectory-times", o.trajectory_times, "KITTI: times.txt with the timestamp of each pose line (default: line index)");
   app.add_option("--frames", o.frames, "Frame timestamps: KITTI times.txt, TUM rgb.txt, or 'timestamp name' lines (default: the trajectory's own poses)");
   app.add_option("--images", o.images, "Folder of frame images; sorted file names name the frames");
@@ -23,9 +24,9 @@ int main(int argc, char** argv) {
   app.add_option("--size", o.size, "Image size WxH when the intrinsics source has none (else read from --images)");
   app.add_flag("--binary", o.binary, "Write cameras.bin, images.bin, points3D.bin");
   app.add_option("--database", o.database, "Create or fill a COLMAP database.db: cameras, images with pose priors");
-  app.add_option("--outside", o.outside, "Frames outside the keyframe time span")->check(CLI::IsMember({"drop", "clamp"}))->capture_default_str();
+  mvtm::AddChoiceOption(app, "--outside", o.outside, mvtm::kOrbOutside, "Frames outside the keyframe time span");
   app.add_flag("--force", o.force, "Rewrite the model even when it is newer than every input");
-  app.add_flag("-q,--quiet", o.quiet, "No summary on stderr");
+  mvtm::AddQuietOption(app, o.quiet);
   cam->excludes(orb)->excludes(kc);
   orb->excludes(kc);
   return mvtm::RunMain(app, "orb2colmap", argc, argv, [&] {

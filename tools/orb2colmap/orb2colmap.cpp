@@ -8,6 +8,8 @@
 #include "base/atomic_file.h"
 #include "base/error.h"
 #include "base/text.h"
+#include "cli/work.h"
+#include "image/folder.h"
 #include "image/image.h"
 #include "io/colmap_database.h"
 #include "io/colmap_model.h"
@@ -20,10 +22,8 @@ void Orb2ColmapOptions::Check() const {
   int sources = !camera.empty() + !orb_settings.empty() + !kitti_calib.empty();
   if (sources != 1)
     throw UsageError("give exactly one of --camera, --orb-settings, --kitti-calib");
-  if (outside != "drop" && outside != "clamp")
-    throw UsageError("--outside: '" + outside + "' is not drop or clamp");
-  if (input_format != "auto" && input_format != "tum" && input_format != "kitti")
-    throw UsageError("--input-format: '" + input_format + "' is not auto, tum or kitti");
+  CheckChoice(outside, kOrbOutside, "--outside");
+  CheckChoice(input_format, kOrbInputFormats, "--input-format");
   if (kitti_cam < 0 || kitti_cam > 3) throw UsageError("--kitti-cam: must be 0..3");
   if (!images.empty() && !fs::is_directory(images))
     throw UsageError("--images: '" + images + "' is not a folder");
@@ -31,34 +31,12 @@ void Orb2ColmapOptions::Check() const {
 
 namespace {
 
-std::vector<std::string> ListImages(const std::string& dir) {
-  static const std::set<std::string> exts = {".png", ".jpg", ".jpeg", ".tif", ".tiff",
-                                             ".exr", ".bmp", ".pgm", ".ppm"};
-  std::vector<std::string> names;
-  for (const auto& e : fs::directory_iterator(dir)) {
-    if (!e.is_regular_file()) continue;
-    std::string ext = e.path().extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
-    if (exts.count(ext) && e.path().filename().string()[0] != '.')
-      names.push_back(e.path().filename().string());
-  }
-  std::sort(names.begin(), names.end());
-  return names;
-}
-
-void ParseSize(const std::string& s, uint64_t& w, uint64_t& h) {
-  auto x = s.find('x');
-  if (x == std::string::npos) throw UsageError("--size: '" + s + "' is not WxH");
-  int64_t a = ParseIntArg(s.substr(0, x), "--size width"), b = ParseIntArg(s.substr(x + 1), "--size height");
-  if (a <= 0 || b <= 0) throw UsageError("--size: '" + s + "' must be positive");
-  w = static_cast<uint64_t>(a);
-  h = static_cast<uint64_t>(b);
-}
-
 Camera ResolveCamera(const Orb2ColmapOptions& o, const std::vector<std::string>& image_files) {
   uint64_t w = 0, h = 0;
   if (!o.size.empty()) {
-    ParseSize(o.size, w, h);
+    const ImageSize size = ParseImageSize(o.size);
+    w = size.width;
+    h = size.height;
   } else if (!image_files.empty()) {
     auto spec = ReadImageSpec((fs::path(o.images) / image_files.front()).string());
     w = static_cast<uint64_t>(spec.width);
@@ -111,7 +89,7 @@ Orb2ColmapReport RunOrb2Colmap(const Orb2ColmapOptions& o) {
 
   // Frames: timestamps and names.
   std::vector<std::string> image_files;
-  if (!o.images.empty()) image_files = ListImages(o.images);
+  if (!o.images.empty()) image_files = ListImageFiles(o.images);
   std::vector<TimedName> frames;
   if (!o.frames.empty()) {
     frames = ReadTimestamps(o.frames);

@@ -3,15 +3,21 @@
 
 #include <string>
 
+#include <vector>
+
 #include "geometry/interpolate.h"
 #include "io/trajectory.h"
 
 namespace mvtm {
 
+// Choices of --input-format and --outside.
+inline const std::vector<std::string> kOrbInputFormats = {"auto", "tum", "kitti"};
+inline const std::vector<std::string> kOrbOutside = {"drop", "clamp"};
+
 struct Orb2ColmapOptions {
   std::string trajectory;       // TUM / ORB-SLAM2 / KITTI poses (camera-to-world)
   std::string outdir;           // the model is written here (cameras, images, points3D)
-  std::string input_format = "auto";  // auto | tum | kitti
+  std::string input_format = "auto";  // one of kOrbInputFormats
   std::string trajectory_times; // KITTI: times.txt giving the timestamp of each pose line
   std::string frames;           // frame timestamps: KITTI times.txt, TUM rgb.txt, "time name"
   std::string images;           // folder whose files name the frames (sorted by name)
@@ -22,7 +28,7 @@ struct Orb2ColmapOptions {
   std::string size;             // WxH when the intrinsics source has no image size
   bool binary = false;          // write .bin instead of .txt
   std::string database;         // create or fill a COLMAP database.db with pose priors
-  std::string outside = "drop"; // drop | clamp frames outside the keyframe time span
+  std::string outside = "drop"; // one of kOrbOutside: frames outside the keyframe time span
   bool force = false;            // rewrite an up-to-date model
   bool quiet = false;
 

@@ -2,7 +2,9 @@
 #include <cstdio>
 #include <iostream>
 
-#include "base/cli.h"
+#include "cli/app.h"
+#include "cli/options.h"
+#include "index/pose_index.h"
 #include "pickview.h"
 
 int main(int argc, char** argv) {
@@ -17,8 +19,7 @@ int main(int argc, char** argv) {
   app.add_option("--max-heading", o.max_heading_deg, "Heading gate, degrees: images looking further away are never picked")->capture_default_str();
   app.add_option("--heading-weight", o.heading_weight, "Metres of cost per radian of heading difference")->capture_default_str();
   app.add_option("--ahead-weight", o.ahead_weight, "Metres of cost per metre an image is ahead of the query (ptmrender uses 1; 0 = nearest pose)")->capture_default_str();
-  app.add_option("--method", o.method, "Search: kdtree and brute are exact; flann (randomised trees) and grid9 (the thesis's grid) approximate")
-      ->check(CLI::IsMember({"kdtree", "brute", "flann", "grid9"}))->capture_default_str();
+  mvtm::AddChoiceOption(app, "--method", o.method, mvtm::SearchMethodNames(), "Search: kdtree and brute are exact; flann (randomised trees) and grid9 (the thesis's grid) approximate");
   app.add_option("--checks", o.checks, "flann: leaves visited per query (more: slower, fewer misses)")->capture_default_str();
   app.add_flag("--exclude-self", o.exclude_self, "With the workspace's own images as queries: never pick the image itself");
   app.add_flag("--partners", o.partners, "Partners mode: for every image, the nearest images of the other passes (name prefix before '_'); also writes WS/partners.tsv");

@@ -19,7 +19,7 @@
 #include "base/atomic_file.h"
 #include "base/error.h"
 #include "base/text.h"
-#include "image/image.h"
+#include "image/mask.h"
 #include "index/pose_index.h"
 #include "io/colmap_model.h"
 #include "io/trajectory.h"
@@ -150,13 +150,13 @@ class Masks {
     if (it != cache_.end()) return it->second ? &*it->second : nullptr;
     std::optional<Bits> b;
     if (fs::exists(path)) {
-      Image im = ReadImage(path.string());
+      Image im = ReadMask(path.string());
       b.emplace();
       b->width = im.width;
       b->height = im.height;
       b->words.assign((im.pixels() + 63) / 64, 0);
       for (size_t p = 0; p < im.pixels(); ++p)
-        if (im.data[p * static_cast<size_t>(im.channels)] > 0) {
+        if (im.data[p] != 0) {
           b->words[p / 64] |= uint64_t{1} << (p % 64);
           ++b->set;
         }

@@ -2,7 +2,9 @@
 #include <cstdio>
 #include <iostream>
 
-#include "base/cli.h"
+#include "cli/app.h"
+#include "cli/options.h"
+#include "render/context.h"
 #include "ptmrender.h"
 
 int main(int argc, char** argv) {
@@ -19,7 +21,7 @@ int main(int argc, char** argv) {
   app.add_flag("--exclude-self", o.exclude_self, "With --at-images: never use an image as a projector for its own pose");
   app.add_option("--lateral", o.lateral, "Move each pose sideways, metres to the left (+) or right (-): a lane change")->capture_default_str();
   app.add_option("--yaw", o.yaw, "Turn each pose, degrees to the left (+) or right (-), about the camera's up axis")->capture_default_str();
-  app.add_option("--mode", o.mode, "ptm: project photographs; vertex: vertex colours only")->check(CLI::IsMember({"ptm", "vertex"}))->capture_default_str();
+  mvtm::AddChoiceOption(app, "--mode", o.mode, mvtm::kPtmModes, "ptm: project photographs; vertex: vertex colours only");
   app.add_option("--projectors", o.projectors, "K: projectors tried per pixel, best first")->capture_default_str()->check(CLI::Range(1, 16));
   app.add_option("--bias", o.bias, "Occlusion bias, relative: occluded when z > depth*(1+B)")->capture_default_str();
   app.add_option("--max-heading", o.selection.max_heading_deg, "Heading gate for projectors, degrees")->capture_default_str();
@@ -28,15 +30,11 @@ int main(int argc, char** argv) {
   app.add_flag("--no-skybox", o.no_skybox, "Constant background instead of projected sky");
   app.add_flag("--no-masks", o.no_masks, "Ignore masks/ (vehicles are projected too)");
   app.add_option("--size", o.size, "Render size WxH (default: the camera's)");
-  auto* fr = app.add_option("--frames", o.frames, "Only render poses A:B (half-open, in pose order)");
-  auto* sh = app.add_option("--shard", o.shard, "Only render poses i with i % N == I (I/N)");
-  fr->excludes(sh);
   app.add_flag("--explain", o.explain, "Print the effects plan as JSON (with the reason for each effect) and render nothing");
-  app.add_flag("--force", o.force, "Re-render frames that already exist");
   app.add_flag("--provenance", o.provenance, "Also write OUTDIR/provenance/NAME.png: which projector coloured each pixel (254 vertex colour, 255 background)");
   app.add_flag("--exr", o.exr, "Write float EXR frames (0..1) instead of 8-bit PNG");
-  app.add_option("--gl", o.gl, "OpenGL backend")->check(CLI::IsMember({"auto", "egl", "osmesa"}))->capture_default_str();
-  app.add_flag("-q,--quiet", o.quiet, "No progress bar or summary");
+  mvtm::AddChoiceOption(app, "--gl", o.gl, mvtm::GlBackendNames(), "OpenGL backend");
+  mvtm::AddWorkOptions(app, o, "render poses", "in pose order", "Re-render frames that already exist");
   return mvtm::RunMain(app, "ptmrender", argc, argv, [&] {
     auto r = mvtm::RunPtmRender(o, std::cout);
     if (!o.quiet && !o.explain) {

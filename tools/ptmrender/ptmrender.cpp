@@ -14,10 +14,11 @@
 #include <thread>
 
 #include "base/atomic_file.h"
-#include "base/cli.h"
+#include "cli/progress.h"
 #include "base/error.h"
-#include "base/selection.h"
+#include "cli/selection.h"
 #include "base/text.h"
+#include "image/mask.h"
 #include "io/colmap_model.h"
 #include "io/trajectory.h"
 #include "render/context.h"
@@ -29,11 +30,11 @@ namespace mvtm {
 void PtmRenderOptions::Check() const {
   if (!poses.empty() && at_images) throw UsageError("give --poses FILE or --at-images, not both");
   if (exclude_self && !at_images) throw UsageError("--exclude-self needs --at-images");
-  if (mode != "ptm" && mode != "vertex") throw UsageError("--mode: '" + mode + "' is not ptm or vertex");
+  CheckChoice(mode, kPtmModes, "--mode");
   if (projectors < 1 || projectors > 16) throw UsageError("--projectors: must be 1..16");
   if (!(bias >= 0 && bias < 1)) throw UsageError("--bias: must be in [0, 1)");
   if (!std::isfinite(lateral) || !std::isfinite(yaw)) throw UsageError("--lateral/--yaw must be finite");
-  if (!frames.empty() && !shard.empty()) throw UsageError("give --frames or --shard, not both");
+  CheckWork();
   if (!(selection.ahead_weight >= 0 && std::isfinite(selection.ahead_weight)))
     throw UsageError("--ahead-weight: must be a finite number >= 0");
   if (!(selection.max_heading_deg > 0 && selection.max_heading_deg <= 180))
@@ -69,25 +70,10 @@ Rigid3d Offset(const Rigid3d& w2c, double lateral_left, double yaw_left_deg) {
   return c2w.Inverse();
 }
 
-void ParseSize(const std::string& s, uint64_t& w, uint64_t& h) {
-  auto x = s.find('x');
-  if (x == std::string::npos) throw UsageError("--size: '" + s + "' is not WxH");
-  int64_t a = ParseIntArg(s.substr(0, x), "--size width"), b = ParseIntArg(s.substr(x + 1), "--size height");
-  if (a <= 0 || b <= 0 || a > 16384 || b > 16384) throw UsageError("--size: '" + s + "' must be 1..16384");
-  w = static_cast<uint64_t>(a);
-  h = static_cast<uint64_t>(b);
-}
-
 std::string ShortDouble(double v) {
   char b[32];
   std::snprintf(b, sizeof b, "%g", v);
   return b;
-}
-
-bool AnyNonZero(const Image& m) {
-  for (float v : m.data)
-    if (v != 0) return true;
-  return false;
 }
 
 // Writes finished frames on a second thread so that PNG encoding overlaps rendering.
@@ -175,16 +161,15 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
   }
   if (o.lateral != 0 || o.yaw != 0)
     for (auto& p : poses) p.w2c = Offset(p.w2c, o.lateral, o.yaw);
-  Selection sel = !o.shard.empty() ? Selection::Shard(o.shard) : !o.frames.empty() ? Selection::Frames(o.frames) : Selection();
+  Selection sel = o.Select();
   std::vector<size_t> chosen = sel.Apply(poses.size());
 
   // The render camera: the workspace's (first) camera, at --size if given.
   Camera cam = rec.cameras.begin()->second;
   cam.RequireUndistorted();
   if (!o.size.empty()) {
-    uint64_t w, h;
-    ParseSize(o.size, w, h);
-    cam = cam.Scaled(w, h);
+    const ImageSize size = ParseImageSize(o.size);
+    cam = cam.Scaled(size.width, size.height);
   }
 
   // Projectors per pose (all poses: the plan must not depend on how the work is split).
@@ -209,7 +194,7 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
   if (ptm && !o.no_masks)
     for (size_t i : used) {
       fs::path mp = ws.MaskPath(images[i]->name);
-      if (fs::exists(mp) && AnyNonZero(ReadImage(mp.string()))) {
+      if (fs::exists(mp) && CountSet(ReadMask(mp.string())) > 0) {
         any_mask = true;
         mask_example = mp.filename().string();
         break;
@@ -366,7 +351,7 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
                          {"lateral", o.lateral}, {"yaw", o.yaw}, {"mode", o.mode}, {"projectors", o.projectors},
                          {"bias", o.bias}, {"frames", o.frames}, {"shard", o.shard}, {"outdir", o.outdir},
                          {"plan", j["effects"]}, {"gl", rep.gl}};
-  ws.WriteProvenance(o.shard.empty() ? "ptmrender" : "ptmrender-shard-" + o.shard.substr(0, o.shard.find('/')), opts, inputs);
+  ws.WriteProvenance(o.ProvenanceName("ptmrender"), opts, inputs);
   return rep;
 }
 

@@ -3,32 +3,35 @@
 
 #include <iosfwd>
 #include <string>
+#include <vector>
 
+#include "cli/work.h"
 #include "index/view_selection.h"
 #include "render/renderer.h"
 
 namespace mvtm {
 
-struct PtmRenderOptions {
+// --mode choices.
+inline const std::vector<std::string> kPtmModes = {"ptm", "vertex"};
+
+// Work items: the render poses in order (--frames/--shard select among them).
+struct PtmRenderOptions : WorkOptions {
   std::string workspace, outdir;
   std::string poses;             // trajectory file (COLMAP images.txt, TUM, KITTI); else --at-images
   bool at_images = false;        // render at the workspace's own poses
   bool exclude_self = false;     // never project an image onto its own pose
   double lateral = 0;            // metres to the camera's left (+) or right (−): a lane change
   double yaw = 0;                // degrees, turn left (+) or right (−) about the camera's up axis
-  std::string mode = "ptm";      // ptm | vertex
+  std::string mode = "ptm";      // one of kPtmModes
   int projectors = 4;            // K: projectors tried per pixel, nearest first
   double bias = 0.005;           // relative occlusion bias
   bool no_occlusion = false, no_skybox = false, no_masks = false;
   std::string size;              // WxH render size (default: the camera's)
-  std::string frames, shard;     // subsets of the render poses
   bool explain = false;          // print the effects plan as JSON and render nothing
-  bool force = false;            // re-render existing frames
   bool provenance = false;       // also write OUTDIR/provenance/NAME.png (source of each pixel)
   bool exr = false;              // write float EXR instead of PNG
   ViewSelectionOptions selection;
-  std::string gl = "auto";
-  bool quiet = false;
+  std::string gl = "auto";       // one of GlBackendNames()
 
   void Check() const;
 };

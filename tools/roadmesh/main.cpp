@@ -1,7 +1,9 @@
 // roadmesh — thin main: option table, then RunRoadMesh().
 #include <cstdio>
 
-#include "base/cli.h"
+#include "cli/app.h"
+#include "cli/options.h"
+#include "render/context.h"
 #include "roadmesh.h"
 
 int main(int argc, char** argv) {
@@ -26,10 +28,8 @@ int main(int argc, char** argv) {
   app.add_flag("--no-colours", o.no_colours,
                "Write no vertex colours (no images, no OpenGL needed)");
   app.add_flag("--force", o.force, "Replace an existing mesh");
-  app.add_option("--gl", o.gl, "OpenGL backend")
-      ->check(CLI::IsMember({"auto", "egl", "osmesa"}))
-      ->capture_default_str();
-  app.add_flag("-q,--quiet", o.quiet, "No progress bar or summary");
+  mvtm::AddChoiceOption(app, "--gl", o.gl, mvtm::GlBackendNames(), "OpenGL backend");
+  mvtm::AddQuietOption(app, o.quiet);
   return mvtm::RunMain(app, "roadmesh", argc, argv, [&] {
     auto r = mvtm::RunRoadMesh(o);
     if (!o.quiet)

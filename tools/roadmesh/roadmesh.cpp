@@ -6,7 +6,7 @@
 #include <limits>
 #include <vector>
 
-#include "base/cli.h"
+#include "cli/progress.h"
 #include "base/error.h"
 #include "geometry/rigid.h"
 #include "image/image.h"
@@ -225,7 +225,7 @@ RoadMeshReport RunRoadMesh(const RoadMeshOptions& o) {
   if (fs::exists(existing) && !o.force)
     throw Error(existing.string(), 0, "a mesh exists already (--force replaces it)");
   // mesh.ply is the first name Workspace::MeshPath() looks for, so the new mesh wins.
-  const fs::path out_path = ws.root() / "mesh.ply";
+  const fs::path out_path = ws.NewMeshPath();
 
   Reconstruction rec = ReadColmapModel(ws.SparseDir().string());
   const auto images = rec.ImagesByName();

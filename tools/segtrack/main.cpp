@@ -2,7 +2,7 @@
 #include <cstdio>
 #include <iostream>
 
-#include "base/cli.h"
+#include "cli/app.h"
 #include "segtrack.h"
 
 int main(int argc, char** argv) {

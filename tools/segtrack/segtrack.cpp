@@ -4,8 +4,9 @@
 #include <cstdio>
 
 #include "base/atomic_file.h"
-#include "base/cli.h"
+#include "cli/progress.h"
 #include "base/error.h"
+#include "image/folder.h"
 #include "image/image.h"
 #include "track/labels.h"
 #include "workspace/workspace.h"
@@ -68,11 +69,8 @@ std::vector<fs::path> ListLabelImages(const fs::path& dir) {
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) throw Error(dir.string() + ": not a folder");
   std::vector<fs::path> files;
-  for (const auto& e : fs::directory_iterator(dir))
-    if (e.is_regular_file() && e.path().extension() == ".png") files.push_back(e.path());
+  for (const auto& name : ListImageFiles(dir, {".png"})) files.push_back(dir / name);  // labels are lossless
   if (files.empty()) throw Error(dir.string() + ": no label images (*.png)");
-  std::sort(files.begin(), files.end(),
-            [](const fs::path& a, const fs::path& b) { return a.filename().string() < b.filename().string(); });
   return files;
 }
 

@@ -2,7 +2,7 @@
 #include <iostream>
 #include <string>
 
-#include "base/cli.h"
+#include "cli/app.h"
 #include "ssim_tool.h"
 
 int main(int argc, char** argv) {
@@ -43,11 +43,11 @@ int main(int argc, char** argv) {
   app.add_option("--channels", channels,
                  "Colour: mean = per channel, averaged (scikit-image); grey = compare the grey "
                  "images")
-      ->check(CLI::IsMember({"mean", "grey"}).description(""))
+      ->check(CLI::IsMember(mvtm::ChannelModeNames()).description(""))
       ->capture_default_str()
       ->type_name("grey|mean");
   return mvtm::RunMain(app, "ssim", argc, argv, [&] {
-    o.channels = channels == "grey" ? mvtm::ChannelMode::kGrey : mvtm::ChannelMode::kMean;
+    o.channels = channels == mvtm::ChannelModeNames()[1] ? mvtm::ChannelMode::kGrey : mvtm::ChannelMode::kMean;
     try {
       return mvtm::RunSsim(o, std::cout);
     } catch (const mvtm::SizeMismatchError& e) {

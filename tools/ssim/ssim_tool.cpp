@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "base/error.h"
+#include "image/folder.h"
 #include "image/image.h"
 
 namespace mvtm {
@@ -35,23 +36,9 @@ std::string Lower(std::string s) {
   return s;
 }
 
-bool IsImageFile(const fs::path& p) {
-  static const char* const kExt[] = {".png", ".jpg", ".jpeg", ".tif", ".tiff", ".exr",
-                                     ".pgm", ".ppm", ".pnm",  ".bmp", ".hdr",  ".webp"};
-  const std::string ext = Lower(p.extension().string());
-  return std::any_of(std::begin(kExt), std::end(kExt), [&](const char* e) { return ext == e; });
-}
-
 std::vector<fs::path> ListImages(const fs::path& dir) {
   std::vector<fs::path> files;
-  std::error_code ec;
-  for (const auto& entry : fs::directory_iterator(dir, ec)) {
-    if (entry.is_regular_file() && IsImageFile(entry.path()) &&
-        entry.path().filename().string()[0] != '.')
-      files.push_back(entry.path());
-  }
-  if (ec) throw Error(dir.string(), 0, "cannot list folder: " + ec.message());
-  std::sort(files.begin(), files.end());
+  for (const auto& name : ListImageFiles(dir)) files.push_back(dir / name);
   if (files.empty()) throw Error(dir.string(), 0, "no image files in folder");
   return files;
 }
@@ -216,7 +203,7 @@ int RunSsim(const SsimToolOptions& options, std::ostream& out) {
                     {"k2", options.ssim.k2},
                     {"truncate", options.ssim.truncate},
                     {"window", 2 * options.ssim.Radius() + 1},
-                    {"channels", options.channels == ChannelMode::kGrey ? "grey" : "mean"}};
+                    {"channels", ChannelModeNames()[static_cast<size_t>(options.channels)]}};
     nlohmann::json pairs = nlohmann::json::array();
     for (const Row& r : rows) {
       pairs.push_back({{"name", r.name},

@@ -8,6 +8,7 @@
 
 #include <ostream>
 #include <string>
+#include <vector>
 
 #include "image/ssim.h"
 
@@ -22,6 +23,12 @@ enum class ChannelMode {
 // Exit status when A and B (or an image and its mask) differ in size; 0, 1 and 2 are the
 // common ones (success, data error, usage error).
 constexpr int kExitSizeMismatch = 3;
+
+// --channels choices, in the order of ChannelMode.
+inline const std::vector<std::string>& ChannelModeNames() {
+  static const std::vector<std::string> names = {"mean", "grey"};
+  return names;
+}
 
 struct SsimToolOptions {
   std::string a;                              // first image or folder

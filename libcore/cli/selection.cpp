@@ -1,4 +1,4 @@
-#include "base/selection.h"
+#include "cli/selection.h"
 
 #include <algorithm>
 

@@ -4,7 +4,7 @@
 #include <set>
 
 #include "base/error.h"
-#include "base/selection.h"
+#include "cli/selection.h"
 
 namespace mvtm {
 namespace {

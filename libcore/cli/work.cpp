@@ -1,0 +1,43 @@
+#include "cli/work.h"
+
+#include <algorithm>
+
+#include "base/error.h"
+#include "base/text.h"
+
+namespace mvtm {
+
+void WorkOptions::CheckWork() const {
+  if (!frames.empty() && !shard.empty()) throw UsageError("give --frames or --shard, not both");
+  Select();
+}
+
+Selection WorkOptions::Select() const {
+  if (!shard.empty()) return Selection::Shard(shard);
+  if (!frames.empty()) return Selection::Frames(frames);
+  return Selection();
+}
+
+std::string WorkOptions::ProvenanceName(const std::string& tool) const {
+  if (shard.empty()) return tool;
+  return tool + "-shard-" + std::to_string(Selection::Shard(shard).shard_index);
+}
+
+ImageSize ParseImageSize(const std::string& spec, const std::string& option) {
+  const auto x = spec.find('x');
+  if (x == std::string::npos) throw UsageError(option + ": '" + spec + "' is not WxH");
+  const int64_t w = ParseIntArg(spec.substr(0, x), option + " width");
+  const int64_t h = ParseIntArg(spec.substr(x + 1), option + " height");
+  if (w <= 0 || h <= 0 || w > kMaxImageSide || h > kMaxImageSide)
+    throw UsageError(option + ": '" + spec + "' must be 1.." + std::to_string(kMaxImageSide) + " on each side");
+  return {static_cast<uint64_t>(w), static_cast<uint64_t>(h)};
+}
+
+void CheckChoice(const std::string& value, const std::vector<std::string>& choices, const std::string& option) {
+  if (std::find(choices.begin(), choices.end(), value) != choices.end()) return;
+  std::string list;
+  for (const auto& c : choices) list += (list.empty() ? "" : ", ") + c;
+  throw UsageError(option + ": '" + value + "' is not one of " + list);
+}
+
+}  // namespace mvtm
