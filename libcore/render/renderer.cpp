@@ -15,16 +15,6 @@
 
 namespace mvtm {
 
-std::vector<std::string> EffectsPlan::Defines() const {
-  std::vector<std::string> d;
-  d.push_back("MVTM_MAX_PROJECTORS " + std::to_string(std::max(1, projectors)));
-  if (ptm) d.push_back("MVTM_PTM");
-  if (occlusion) d.push_back("MVTM_OCCLUSION");
-  if (masks) d.push_back("MVTM_MASKS");
-  if (skybox) d.push_back("MVTM_SKYBOX");
-  return d;
-}
-
 namespace {
 
 using Clock = std::chrono::steady_clock;

@@ -23,7 +23,8 @@
 #include "camera/camera.h"
 #include "geometry/rigid.h"
 #include "image/image.h"
-#include "io/mesh_io.h"
+#include "render/effects_plan.h"
+#include "scene/mesh.h"
 
 namespace mvtm {
 
@@ -41,19 +42,6 @@ struct Projector {
   // every projector of a frame has a key ≥ 0 and the keys equal the previous frame's, the
   // textures already on the GPU are reused instead of uploaded again.
   int64_t key = -1;
-};
-
-// The effects a frame is rendered with (one shader variant per distinct plan).
-struct EffectsPlan {
-  bool ptm = true;          // false: vertex colours only
-  int projectors = 1;       // projectors tried in rank order (≥ 1)
-  bool occlusion = false;   // test against projector depth maps
-  bool masks = false;       // skip masked projector texels
-  bool skybox = false;      // background from projectors at infinity (else constant colour)
-  double bias = 0.005;      // relative occlusion bias: occluded when z > d·(1 + bias)
-  std::array<float, 3> background{0, 0, 0};  // 0..255
-
-  std::vector<std::string> Defines() const;
 };
 
 struct RenderStats {

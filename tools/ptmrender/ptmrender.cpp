@@ -2,26 +2,22 @@
 
 #include <chrono>
 #include <cmath>
-#include <condition_variable>
 #include <cstdio>
-#include <deque>
-#include <limits>
-#include <map>
-#include <mutex>
-#include <set>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <ostream>
-#include <thread>
+#include <set>
 
 #include "base/atomic_file.h"
-#include "cli/progress.h"
 #include "base/error.h"
-#include "cli/selection.h"
-#include "base/text.h"
+#include "cli/progress.h"
+#include "image/async_writer.h"
 #include "image/mask.h"
 #include "io/colmap_model.h"
+#include "io/mesh_io.h"
 #include "io/trajectory.h"
 #include "render/context.h"
+#include "render/effects_plan.h"
 #include "render/projector_sources.h"
 #include "workspace/workspace.h"
 
@@ -47,13 +43,30 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double Ms(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
 
+constexpr size_t kNoImage = static_cast<size_t>(-1);
+
 struct RenderPose {
-  std::string name;  // output file name (.png)
+  std::string name;  // output file name (.png or .exr)
   Rigid3d w2c;
-  size_t self = static_cast<size_t>(-1);  // workspace image index with this pose (--at-images)
+  size_t self = kNoImage;  // workspace image index with this pose (--at-images)
 };
 
-std::string PngName(const std::string& name, bool exr) {
+// The workspace's model, its images in processing order and their poses as projector candidates.
+struct Scene {
+  Reconstruction rec;
+  std::vector<const ImageRecord*> images;  // ImagesByName
+  std::vector<Rigid3d> candidates;         // images[i]->world_to_camera
+};
+
+// The projectors of every render pose, and what they say about the scene.
+struct ProjectorPicks {
+  std::vector<std::vector<Candidate>> per_pose;
+  std::set<size_t> used;  // image indices any pose may use
+  bool differs = false;   // a projector is not the pose it serves
+  bool several = false;   // some pose has more than one admissible projector
+};
+
+std::string FrameName(const std::string& name, bool exr) {
   fs::path p(name);
   p.replace_extension(exr ? ".exr" : ".png");
   return p.string();
@@ -70,82 +83,17 @@ Rigid3d Offset(const Rigid3d& w2c, double lateral_left, double yaw_left_deg) {
   return c2w.Inverse();
 }
 
-std::string ShortDouble(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%g", v);
-  return b;
+Scene LoadScene(const Workspace& ws) {
+  Scene s;
+  s.rec = ReadColmapModel(ws.SparseDir().string());
+  if (s.rec.images.empty()) throw Error(ws.SparseDir().string(), 0, "the model has no images");
+  s.images = s.rec.ImagesByName();
+  for (const auto* im : s.images) s.candidates.push_back(im->world_to_camera);
+  return s;
 }
 
-// Writes finished frames on a second thread so that PNG encoding overlaps rendering.
-class AsyncWriter {
- public:
-  AsyncWriter() : thread_([this] { Loop(); }) {}
-  ~AsyncWriter() { Finish(); }
-  void Push(std::string path, Image img) {
-    std::unique_lock<std::mutex> l(mu_);
-    cv_.wait(l, [&] { return queue_.size() < 4 || !error_.empty(); });
-    if (!error_.empty()) throw Error(error_);
-    queue_.emplace_back(std::move(path), std::move(img));
-    cv_.notify_all();
-  }
-  void Finish() {
-    {
-      std::lock_guard<std::mutex> l(mu_);
-      done_ = true;
-      cv_.notify_all();
-    }
-    if (thread_.joinable()) thread_.join();
-    if (!error_.empty() && !reported_) {
-      reported_ = true;
-      throw Error(error_);
-    }
-  }
-
- private:
-  void Loop() {
-    for (;;) {
-      std::pair<std::string, Image> job;
-      {
-        std::unique_lock<std::mutex> l(mu_);
-        cv_.wait(l, [&] { return !queue_.empty() || done_; });
-        if (queue_.empty()) return;
-        job = std::move(queue_.front());
-        queue_.pop_front();
-        cv_.notify_all();
-      }
-      try {
-        WriteImage(job.first, job.second);
-      } catch (const std::exception& e) {
-        std::lock_guard<std::mutex> l(mu_);
-        error_ = e.what();
-        queue_.clear();
-        cv_.notify_all();
-        return;
-      }
-    }
-  }
-  std::mutex mu_;
-  std::condition_variable cv_;
-  std::deque<std::pair<std::string, Image>> queue_;
-  bool done_ = false, reported_ = false;
-  std::string error_;
-  std::thread thread_;
-};
-
-}  // namespace
-
-PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
-  o.Check();
-  Workspace ws(o.workspace);
-  ws.Require("ptmrender", {WsItem::kSparse, WsItem::kMesh});
-  Reconstruction rec = ReadColmapModel(ws.SparseDir().string());
-  if (rec.images.empty()) throw Error(ws.SparseDir().string(), 0, "the model has no images");
-  auto images = rec.ImagesByName();
-  std::vector<Rigid3d> cand;
-  for (const auto* im : images) cand.push_back(im->world_to_camera);
-  const bool ptm = o.mode == "ptm";
-
-  // Render poses.
+// --poses FILE (names from the file, else 000000, 000001, ...) or the workspace's own poses.
+std::vector<RenderPose> LoadRenderPoses(const PtmRenderOptions& o, const Scene& scene) {
   std::vector<RenderPose> poses;
   if (!o.poses.empty()) {
     Trajectory tr = ReadTrajectory(o.poses);
@@ -153,193 +101,166 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
     for (size_t i = 0; i < tr.poses.size(); ++i) {
       std::snprintf(buf, sizeof buf, "%06zu", i);
       std::string name = i < tr.names.size() ? tr.names[i] : buf;
-      poses.push_back({PngName(name, o.exr), tr.poses[i].pose.Inverse(), static_cast<size_t>(-1)});
+      poses.push_back({FrameName(name, o.exr), tr.poses[i].pose.Inverse(), kNoImage});
     }
   } else {
-    for (size_t i = 0; i < images.size(); ++i)
-      poses.push_back({PngName(images[i]->name, o.exr), images[i]->world_to_camera, i});
+    for (size_t i = 0; i < scene.images.size(); ++i)
+      poses.push_back({FrameName(scene.images[i]->name, o.exr), scene.images[i]->world_to_camera, i});
   }
   if (o.lateral != 0 || o.yaw != 0)
     for (auto& p : poses) p.w2c = Offset(p.w2c, o.lateral, o.yaw);
-  Selection sel = o.Select();
-  std::vector<size_t> chosen = sel.Apply(poses.size());
+  return poses;
+}
 
-  // The render camera: the workspace's (first) camera, at --size if given.
-  Camera cam = rec.cameras.begin()->second;
+// The render camera: the workspace's (first) camera, at --size if given.
+Camera RenderCamera(const PtmRenderOptions& o, const Scene& scene) {
+  Camera cam = scene.rec.cameras.begin()->second;
   cam.RequireUndistorted();
   if (!o.size.empty()) {
     const ImageSize size = ParseImageSize(o.size);
     cam = cam.Scaled(size.width, size.height);
   }
+  return cam;
+}
 
-  // Projectors per pose (all poses: the plan must not depend on how the work is split).
+// Projectors for every pose (all poses: the plan must not depend on how the work is split).
+ProjectorPicks PickProjectors(const PtmRenderOptions& o, const Scene& scene, const std::vector<RenderPose>& poses) {
+  ProjectorPicks picks;
+  picks.per_pose.resize(poses.size());
+  if (o.mode != "ptm") return picks;
   ViewSelectionOptions so = o.selection;
   so.k = static_cast<size_t>(o.projectors);
-  std::vector<std::vector<Candidate>> picks(poses.size());
-  bool any_differs = false, any_several = false;
-  std::set<size_t> used;
-  if (ptm) {
-    for (size_t i = 0; i < poses.size(); ++i) {
-      picks[i] = SelectViews(poses[i].w2c, cand, so, o.exclude_self ? poses[i].self : static_cast<size_t>(-1));
-      for (const auto& c : picks[i]) {
-        used.insert(c.index);
-        if ((cand[c.index].t - poses[i].w2c.t).norm() > 0 || cand[c.index].q.coeffs() != poses[i].w2c.q.coeffs())
-          any_differs = true;
-      }
-      any_several |= picks[i].size() > 1;
+  for (size_t i = 0; i < poses.size(); ++i) {
+    picks.per_pose[i] = SelectViews(poses[i].w2c, scene.candidates, so, o.exclude_self ? poses[i].self : kNoImage);
+    for (const auto& c : picks.per_pose[i]) {
+      picks.used.insert(c.index);
+      const Rigid3d& p = scene.candidates[c.index];
+      if ((p.t - poses[i].w2c.t).norm() > 0 || p.q.coeffs() != poses[i].w2c.q.coeffs()) picks.differs = true;
     }
+    picks.several |= picks.per_pose[i].size() > 1;
   }
-  bool any_mask = false;
-  std::string mask_example;
-  if (ptm && !o.no_masks)
-    for (size_t i : used) {
-      fs::path mp = ws.MaskPath(images[i]->name);
-      if (fs::exists(mp) && CountSet(ReadMask(mp.string())) > 0) {
-        any_mask = true;
-        mask_example = mp.filename().string();
-        break;
-      }
-    }
+  return picks;
+}
 
-  PtmRenderReport rep;
-  rep.frames = chosen.size();
-  fs::path outdir(o.outdir);
-  std::vector<fs::path> inputs = {ws.MeshPath()};
+// The file name of the first used projector whose mask has a set pixel ("" when none).
+std::string FindMaskedProjector(const Workspace& ws, const Scene& scene, const std::set<size_t>& used) {
+  for (size_t i : used) {
+    fs::path mp = ws.MaskPath(scene.images[i]->name);
+    if (fs::exists(mp) && CountSet(ReadMask(mp.string())) > 0) return mp.filename().string();
+  }
+  return "";
+}
+
+SceneSurvey StartSurvey(const PtmRenderOptions& o, const Workspace& ws, const Scene& scene, const ProjectorPicks& picks) {
+  SceneSurvey s;
+  s.ptm = o.mode == "ptm";
+  s.projectors_requested = o.projectors;
+  s.bias = o.bias;
+  s.no_occlusion = o.no_occlusion;
+  s.no_masks = o.no_masks;
+  s.no_skybox = o.no_skybox;
+  s.projector_differs = picks.differs;
+  s.several_admissible = picks.several;
+  if (s.ptm && !o.no_masks) s.mask_example = FindMaskedProjector(ws, scene, picks.used);
+  return s;
+}
+
+// Holes and coverage of the frames about to be rendered (a depth pass each).
+void SurveyFrames(SceneSurvey& s, Renderer& renderer, const Camera& cam, const Scene& scene,
+                  const std::vector<RenderPose>& poses, const ProjectorPicks& picks, const std::vector<size_t>& frames) {
+  for (size_t i : frames) {
+    std::optional<View> first;
+    if (!picks.per_pose[i].empty()) {
+      const ImageRecord* pk = scene.images[picks.per_pose[i][0].index];
+      first = View{scene.rec.cameras.at(pk->camera_id), pk->world_to_camera};
+    }
+    AddToSurvey(s, SurveyView(renderer, View{cam, poses[i].w2c}, first ? &*first : nullptr), poses[i].name);
+  }
+}
+
+// Grey output when the source images are grey: decided over every image any pose may use (else
+// the workspace's first image), so every split of the work decides alike.
+bool GreySources(const Workspace& ws, const Scene& scene, const std::set<size_t>& used) {
+  bool grey = true;
+  for (size_t k : used) grey = grey && ReadImageSpec(ws.SourceImagePath(scene.images[k]->name).string()).channels == 1;
+  if (used.empty()) grey = ReadImageSpec(ws.SourceImagePath(scene.images[0]->name).string()).channels == 1;
+  return grey;
+}
+
+std::vector<size_t> FramesToRender(const PtmRenderOptions& o, const std::vector<RenderPose>& poses,
+                                   const std::vector<size_t>& chosen, const std::vector<fs::path>& inputs,
+                                   PtmRenderReport& rep) {
   std::vector<size_t> todo;
   for (size_t i : chosen) {
-    if (!o.explain && !o.force && IsUpToDate(outdir / poses[i].name, inputs)) {
+    if (!o.explain && !o.force && IsUpToDate(fs::path(o.outdir) / poses[i].name, inputs)) {
       ++rep.skipped;
       continue;
     }
     todo.push_back(i);
   }
-  if (todo.empty() && !o.explain) return rep;
+  return todo;
+}
 
-  Mesh mesh = ReadMesh(ws.MeshPath().string());
-  if (mesh.faces.empty()) throw Error(ws.MeshPath().string(), 0, "the mesh has no triangles");
-  if (!ptm && !mesh.has_colors()) throw Error(ws.MeshPath().string(), 0, "vertex mode needs vertex colours (the mesh has none)");
-  auto ctx = GlContext::Create(ParseGlBackend(o.gl));
-  rep.gl = ctx->Describe();
-  Renderer renderer(mesh);
+// The frame as written: grey (rounded) when the sources are grey; 0..1 float for EXR.
+Image OutputImage(Image colour, bool grey, bool exr) {
+  if (grey) {
+    colour = ToGrey(colour);
+    for (float& v : colour.data) v = std::nearbyint(v);
+  }
+  if (exr) {
+    colour.bits = 32;
+    for (float& v : colour.data) v /= 255.f;
+  }
+  return colour;
+}
 
-  // Holes: does the render see no surface somewhere? (A depth pass per frame to render.)
-  auto t_plan = Clock::now();
-  size_t frames_with_holes = 0;
-  double min_coverage = 1.0;
-  std::string hole_example;
-  for (size_t i : (o.explain ? chosen : todo)) {
-    View v{cam, poses[i].w2c};
-    Image d = renderer.RenderDepth(v);
-    size_t holes = 0, surf = 0, covered = 0;
-    const Eigen::Matrix3d Rt = v.world_to_camera.R().transpose();
-    const Eigen::Vector3d C = v.world_to_camera.Centre();
-    // Every pixel: a frame with a single hole pixel must get the same plan in every split.
-    for (int y = 0; y < d.height; ++y)
-      for (int x = 0; x < d.width; ++x) {
-        float z = d.at(x, y);
-        if (!std::isfinite(z)) {
-          ++holes;
-          continue;
-        }
-        ++surf;
-        if (picks[i].empty()) continue;
-        const auto& pk = images[picks[i][0].index];
-        Eigen::Vector3d X = Rt * cam.Unproject({x + 0.5, y + 0.5}, z) + C;
-        Eigen::Vector3d xp = pk->world_to_camera * X;
-        const Camera& pc = rec.cameras.at(pk->camera_id);
-        if (xp.z() <= 0) continue;
-        Eigen::Vector2d uv = pc.Project(xp);
-        covered += uv.x() >= 0 && uv.y() >= 0 && uv.x() < double(pc.width) && uv.y() < double(pc.height);
-      }
-    if (holes) {
-      ++frames_with_holes;
-      if (hole_example.empty()) hole_example = poses[i].name;
+struct FrameJob {
+  const PtmRenderOptions& o;
+  const Workspace& ws;
+  const Scene& scene;
+  const Camera& cam;
+  const std::vector<RenderPose>& poses;
+  const ProjectorPicks& picks;
+  const EffectsPlan& plan;
+};
+
+std::vector<Projector> FrameProjectors(const FrameJob& job, size_t i, ProjectorSources& sources, PtmRenderReport& rep) {
+  std::vector<Projector> ps;
+  for (const auto& c : job.picks.per_pose[i]) {
+    Projector p;
+    p.view = sources.ViewOf(c.index);
+    p.image = &sources.ImageOf(c.index);
+    p.key = static_cast<int64_t>(c.index);
+    if (job.plan.occlusion || job.plan.skybox) {
+      auto td = Clock::now();
+      p.depth = &sources.DepthOf(c.index);
+      rep.depth_ms += Ms(td, Clock::now());
     }
-    if (surf) min_coverage = std::min(min_coverage, double(covered) / double(surf));
+    if (job.plan.masks) p.mask = sources.MaskOf(c.index);
+    ps.push_back(p);
   }
-  rep.depth_ms += Ms(t_plan, Clock::now());
+  return ps;
+}
 
-  EffectsPlan plan;
-  plan.ptm = ptm;
-  plan.bias = o.bias;
-  plan.projectors = ptm && any_several ? o.projectors : 1;
-  plan.occlusion = ptm && !o.no_occlusion && any_differs;
-  plan.masks = ptm && any_mask;
-  plan.skybox = ptm && !o.no_skybox && frames_with_holes > 0;
-
-  auto reason = [&](bool on, const std::string& why_on, const std::string& why_off) {
-    return nlohmann::json{{"on", on}, {"reason", on ? why_on : why_off}};
-  };
-  char cov[64];
-  std::snprintf(cov, sizeof cov, "%.1f %%", 100 * min_coverage);
-  nlohmann::json j;
-  j["frames"] = chosen.size();
-  j["render_size"] = {cam.width, cam.height};
-  j["gl"] = rep.gl;
-  j["effects"] = {
-      {"reverse_projection_rejection", reason(ptm, "always on in PTM: cheap and always correct", "vertex-colour mode")},
-      {"clip_test", reason(ptm, "always on in PTM: cheap and always correct", "vertex-colour mode")},
-      {"occlusion", reason(plan.occlusion,
-                           "projectors differ from the render poses, so the mesh can hide points from them; relative bias " + ShortDouble(o.bias),
-                           !ptm ? "vertex-colour mode" : o.no_occlusion ? "turned off by --no-occlusion" : "every projector is the render pose itself")},
-      {"several_projectors", reason(plan.projectors > 1,
-                                    "up to " + std::to_string(plan.projectors) + " projectors per pixel, nearest first, then vertex colours; the first projector covers as little as " + std::string(cov) + " of a view",
-                                    !ptm ? "vertex-colour mode" : o.projectors == 1 ? "--projectors 1 (vertex colours where it does not reach)" : "no frame has more than one admissible projector")},
-      {"vertex_colour_fallback", reason(true, ptm ? "where no projector reaches" : "vertex-colour mode", "")},
-      {"masks", reason(plan.masks, "selected projector " + mask_example + " has masked pixels",
-                       !ptm ? "vertex-colour mode" : o.no_masks ? "turned off by --no-masks" : "no selected projector has a non-empty mask")},
-      {"skybox", reason(plan.skybox,
-                        std::to_string(frames_with_holes) + " of " + std::to_string(o.explain ? chosen.size() : todo.size()) + " frames see no surface somewhere (e.g. " + hole_example + ")",
-                        !ptm ? "vertex-colour mode" : o.no_skybox ? "turned off by --no-skybox" : "every pixel of every frame sees the mesh")}};
-  j["shader_defines"] = plan.Defines();
-  if (o.explain) {
-    out << j.dump(2) << "\n";
-    return rep;
-  }
-
-  // Render.
-  ProjectorSources sources(ws, rec, images, &renderer, /*prefer_textures=*/true);
-  bool grey_sources = true;
-  // Grey output when the source images are grey: decided over every image any pose may use
-  // (else the workspace's first image), so every split of the work decides alike.
-  for (size_t k : used) grey_sources = grey_sources && ReadImageSpec(ws.SourceImagePath(images[k]->name).string()).channels == 1;
-  if (used.empty()) grey_sources = ReadImageSpec(ws.SourceImagePath(images[0]->name).string()).channels == 1;
+void RenderFrames(const FrameJob& job, Renderer& renderer, const std::vector<size_t>& todo, PtmRenderReport& rep) {
+  const fs::path outdir(job.o.outdir);
+  ProjectorSources sources(job.ws, job.scene.rec, job.scene.images, &renderer, /*prefer_textures=*/true);
+  const bool grey = GreySources(job.ws, job.scene, job.picks.used);
   RemoveStaleTemporaries(outdir);
-  if (o.provenance) RemoveStaleTemporaries(outdir / "provenance");
-  AsyncWriter writer;
-  Progress bar("ptmrender", todo.size(), o.quiet);
+  if (job.o.provenance) RemoveStaleTemporaries(outdir / "provenance");
+  AsyncImageWriter writer;
+  Progress bar("ptmrender", todo.size(), job.o.quiet);
   for (size_t i : todo) {
     auto t0 = Clock::now();
     sources.Trim();  // between frames only: a frame's projectors hold references into it
-    std::vector<Projector> ps;
-    for (const auto& c : picks[i]) {
-      Projector p;
-      p.view = sources.ViewOf(c.index);
-      p.image = &sources.ImageOf(c.index);
-      p.key = static_cast<int64_t>(c.index);
-      if (plan.occlusion || plan.skybox) {
-        auto td = Clock::now();
-        p.depth = &sources.DepthOf(c.index);
-        rep.depth_ms += Ms(td, Clock::now());
-      }
-      if (plan.masks) p.mask = sources.MaskOf(c.index);
-      ps.push_back(p);
-    }
+    std::vector<Projector> ps = FrameProjectors(job, i, sources, rep);
     auto t1 = Clock::now();
-    Renderer::Frame f = renderer.Render(View{cam, poses[i].w2c}, ps, plan);
-    auto t2 = Clock::now();
+    Renderer::Frame f = renderer.Render(View{job.cam, job.poses[i].w2c}, ps, job.plan);
     rep.load_ms += Ms(t0, t1);
-    rep.render_ms += Ms(t1, t2);
-    Image colour = grey_sources ? ToGrey(f.colour) : std::move(f.colour);
-    if (grey_sources)
-      for (float& v : colour.data) v = std::nearbyint(v);
-    if (o.exr) {
-      colour.bits = 32;
-      for (float& v : colour.data) v /= 255.f;
-    }
-    writer.Push((outdir / poses[i].name).string(), std::move(colour));
-    if (o.provenance) {
-      fs::path pp = outdir / "provenance" / poses[i].name;
+    rep.render_ms += Ms(t1, Clock::now());
+    writer.Push((outdir / job.poses[i].name).string(), OutputImage(std::move(f.colour), grey, job.o.exr));
+    if (job.o.provenance) {
+      fs::path pp = outdir / "provenance" / job.poses[i].name;
       pp.replace_extension(".png");
       writer.Push(pp.string(), std::move(f.source));
     }
@@ -347,11 +268,71 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
     bar.Step();
   }
   writer.Finish();
-  nlohmann::json opts = {{"poses", o.poses.empty() ? "workspace images" : o.poses}, {"exclude_self", o.exclude_self},
-                         {"lateral", o.lateral}, {"yaw", o.yaw}, {"mode", o.mode}, {"projectors", o.projectors},
-                         {"bias", o.bias}, {"frames", o.frames}, {"shard", o.shard}, {"outdir", o.outdir},
-                         {"plan", j["effects"]}, {"gl", rep.gl}};
+}
+
+nlohmann::json PlanJson(const Camera& cam, size_t frames, const std::string& gl, const SceneSurvey& survey,
+                        const EffectsPlan& plan) {
+  nlohmann::json j;
+  j["frames"] = frames;
+  j["render_size"] = {cam.width, cam.height};
+  j["gl"] = gl;
+  j["effects"] = ExplainEffects(survey, plan);
+  j["shader_defines"] = plan.Defines();
+  return j;
+}
+
+void WriteRunProvenance(const PtmRenderOptions& o, const Workspace& ws, const nlohmann::json& plan_json,
+                        const std::string& gl, const std::vector<fs::path>& inputs) {
+  nlohmann::json opts = {{"poses", o.poses.empty() ? "workspace images" : o.poses},
+                         {"exclude_self", o.exclude_self}, {"lateral", o.lateral}, {"yaw", o.yaw},
+                         {"mode", o.mode}, {"projectors", o.projectors}, {"bias", o.bias},
+                         {"frames", o.frames}, {"shard", o.shard}, {"outdir", o.outdir},
+                         {"plan", plan_json["effects"]}, {"gl", gl}};
   ws.WriteProvenance(o.ProvenanceName("ptmrender"), opts, inputs);
+}
+
+Mesh LoadMesh(const Workspace& ws, bool ptm) {
+  Mesh mesh = ReadMesh(ws.MeshPath().string());
+  if (mesh.faces.empty()) throw Error(ws.MeshPath().string(), 0, "the mesh has no triangles");
+  if (!ptm && !mesh.has_colors())
+    throw Error(ws.MeshPath().string(), 0, "vertex mode needs vertex colours (the mesh has none)");
+  return mesh;
+}
+
+}  // namespace
+
+PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
+  o.Check();
+  Workspace ws(o.workspace);
+  ws.Require("ptmrender", {WsItem::kSparse, WsItem::kMesh});
+  const Scene scene = LoadScene(ws);
+  const std::vector<RenderPose> poses = LoadRenderPoses(o, scene);
+  const std::vector<size_t> chosen = o.Select().Apply(poses.size());
+  const Camera cam = RenderCamera(o, scene);
+  const ProjectorPicks picks = PickProjectors(o, scene, poses);
+  SceneSurvey survey = StartSurvey(o, ws, scene, picks);
+
+  PtmRenderReport rep;
+  rep.frames = chosen.size();
+  const std::vector<fs::path> inputs = {ws.MeshPath()};
+  const std::vector<size_t> todo = FramesToRender(o, poses, chosen, inputs, rep);
+  if (todo.empty() && !o.explain) return rep;
+
+  const Mesh mesh = LoadMesh(ws, survey.ptm);
+  auto ctx = GlContext::Create(ParseGlBackend(o.gl));
+  rep.gl = ctx->Describe();
+  Renderer renderer(mesh);
+  auto t_plan = Clock::now();
+  SurveyFrames(survey, renderer, cam, scene, poses, picks, o.explain ? chosen : todo);
+  rep.depth_ms += Ms(t_plan, Clock::now());
+  const EffectsPlan plan = PlanEffects(survey);
+  const nlohmann::json plan_json = PlanJson(cam, chosen.size(), rep.gl, survey, plan);
+  if (o.explain) {
+    out << plan_json.dump(2) << "\n";
+    return rep;
+  }
+  RenderFrames(FrameJob{o, ws, scene, cam, poses, picks, plan}, renderer, todo, rep);
+  WriteRunProvenance(o, ws, plan_json, rep.gl, inputs);
   return rep;
 }
 

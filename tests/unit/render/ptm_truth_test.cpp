@@ -131,8 +131,9 @@ TEST_F(PtmTruth, SelfProjectionReproducesTheRecordedImage) {
   auto s = Score("self", Root() / "local/images");
   double worst = 1;
   for (const auto& [n, v] : s) worst = std::min(worst, v);
-  std::printf("[self-projection] %zu frames, worst SSIM %.6f\n", s.size(), worst);
-  for (const auto& [n, v] : s) EXPECT_GE(v, 0.98) << n;
+  std::printf("[self-projection] %zu frames, worst SSIM %.9f\n", s.size(), worst);
+  // Measured 1.000000000 on llvmpipe (texel centres hit exactly); 1e-6 leaves room for GPU rounding.
+  for (const auto& [n, v] : s) EXPECT_GE(v, 1 - 1e-6) << n;
 }
 
 TEST_F(PtmTruth, HeldOutPosesPtmBeatsVertexColoursOnEveryFrame) {

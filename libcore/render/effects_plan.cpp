@@ -1,0 +1,116 @@
+#include "render/effects_plan.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "render/renderer.h"
+
+namespace mvtm {
+
+std::vector<std::string> EffectsPlan::Defines() const {
+  std::vector<std::string> d;
+  d.push_back("MVTM_MAX_PROJECTORS " + std::to_string(std::max(1, projectors)));
+  if (ptm) d.push_back("MVTM_PTM");
+  if (occlusion) d.push_back("MVTM_OCCLUSION");
+  if (masks) d.push_back("MVTM_MASKS");
+  if (skybox) d.push_back("MVTM_SKYBOX");
+  return d;
+}
+
+ViewCoverage SurveyView(Renderer& renderer, const View& v, const View* first) {
+  const Image d = renderer.RenderDepth(v);
+  const Camera& cam = v.camera;
+  const Eigen::Matrix3d Rt = v.world_to_camera.R().transpose();
+  const Eigen::Vector3d C = v.world_to_camera.Centre();
+  ViewCoverage c;
+  for (int y = 0; y < d.height; ++y)
+    for (int x = 0; x < d.width; ++x) {
+      const float z = d.at(x, y);
+      if (!std::isfinite(z)) {
+        ++c.holes;
+        continue;
+      }
+      ++c.surface;
+      if (!first) continue;
+      const Eigen::Vector3d X = Rt * cam.Unproject({x + 0.5, y + 0.5}, z) + C;
+      const Eigen::Vector3d xp = first->world_to_camera * X;
+      if (xp.z() <= 0) continue;
+      const Eigen::Vector2d uv = first->camera.Project(xp);
+      const Camera& pc = first->camera;
+      c.covered += uv.x() >= 0 && uv.y() >= 0 && uv.x() < double(pc.width) && uv.y() < double(pc.height);
+    }
+  return c;
+}
+
+void AddToSurvey(SceneSurvey& s, const ViewCoverage& v, const std::string& name) {
+  ++s.frames_surveyed;
+  if (v.holes) {
+    ++s.frames_with_holes;
+    if (s.hole_example.empty()) s.hole_example = name;
+  }
+  if (v.surface) s.min_coverage = std::min(s.min_coverage, double(v.covered) / double(v.surface));
+}
+
+EffectsPlan PlanEffects(const SceneSurvey& s) {
+  EffectsPlan plan;
+  plan.ptm = s.ptm;
+  plan.bias = s.bias;
+  plan.projectors = s.ptm && s.several_admissible ? s.projectors_requested : 1;
+  plan.occlusion = s.ptm && !s.no_occlusion && s.projector_differs;
+  plan.masks = s.ptm && !s.no_masks && !s.mask_example.empty();
+  plan.skybox = s.ptm && !s.no_skybox && s.frames_with_holes > 0;
+  return plan;
+}
+
+namespace {
+
+std::string ShortDouble(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", v);
+  return b;
+}
+
+nlohmann::json Choice(bool on, const std::string& why_on, const std::string& why_off) {
+  return nlohmann::json{{"on", on}, {"reason", on ? why_on : why_off}};
+}
+
+}  // namespace
+
+nlohmann::json ExplainEffects(const SceneSurvey& s, const EffectsPlan& plan) {
+  const std::string vertex_mode = "vertex-colour mode";
+  char cov[64];
+  std::snprintf(cov, sizeof cov, "%.1f %%", 100 * s.min_coverage);
+  const std::string always = "always on in PTM: cheap and always correct";
+  return {
+      {"reverse_projection_rejection", Choice(s.ptm, always, vertex_mode)},
+      {"clip_test", Choice(s.ptm, always, vertex_mode)},
+      {"occlusion",
+       Choice(plan.occlusion,
+              "projectors differ from the render poses, so the mesh can hide points from them; relative bias " +
+                  ShortDouble(s.bias),
+              !s.ptm            ? vertex_mode
+              : s.no_occlusion  ? "turned off by --no-occlusion"
+                                : "every projector is the render pose itself")},
+      {"several_projectors",
+       Choice(plan.projectors > 1,
+              "up to " + std::to_string(plan.projectors) +
+                  " projectors per pixel, nearest first, then vertex colours; the first projector covers as "
+                  "little as " + std::string(cov) + " of a view",
+              !s.ptm                           ? vertex_mode
+              : s.projectors_requested == 1    ? "--projectors 1 (vertex colours where it does not reach)"
+                                               : "no frame has more than one admissible projector")},
+      {"vertex_colour_fallback", Choice(true, s.ptm ? "where no projector reaches" : vertex_mode, "")},
+      {"masks", Choice(plan.masks, "selected projector " + s.mask_example + " has masked pixels",
+                       !s.ptm        ? vertex_mode
+                       : s.no_masks  ? "turned off by --no-masks"
+                                     : "no selected projector has a non-empty mask")},
+      {"skybox", Choice(plan.skybox,
+                        std::to_string(s.frames_with_holes) + " of " + std::to_string(s.frames_surveyed) +
+                            " frames see no surface somewhere (e.g. " + s.hole_example + ")",
+                        !s.ptm         ? vertex_mode
+                        : s.no_skybox  ? "turned off by --no-skybox"
+                                       : "every pixel of every frame sees the mesh")}};
+}
+
+}  // namespace mvtm

@@ -1,0 +1,75 @@
+// mvtm — the effects plan: which rendering effects a job needs, decided from its inputs, and why.
+//
+// DESIGN.md "simulate only the effects a scene calls for". A tool first surveys its inputs
+// (SceneSurvey: the projectors each pose selected, the masks they carry, whether views see
+// holes), then PlanEffects() switches on exactly the effects the scene calls for and
+// ExplainEffects() gives the reason for each choice (ptmrender --explain). The renderer compiles
+// one shader variant per plan (EffectsPlan::Defines).
+//
+// The survey must cover every render pose of the job, not just a shard's, so that every split of
+// the work plans alike (shards byte-identical to one run).
+//
+// Thread safety: plain values and pure functions, except SurveyView, which renders (GL thread).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace mvtm {
+
+// The effects a frame is rendered with (one shader variant per distinct plan).
+struct EffectsPlan {
+  bool ptm = true;          // false: vertex colours only
+  int projectors = 1;       // projectors tried in rank order (≥ 1)
+  bool occlusion = false;   // test against projector depth maps
+  bool masks = false;       // skip masked projector texels
+  bool skybox = false;      // background from projectors at infinity (else constant colour)
+  double bias = 0.005;      // relative occlusion bias: occluded when z > d·(1 + bias)
+  std::array<float, 3> background{0, 0, 0};  // 0..255
+
+  // The shader's #define switches for this plan.
+  std::vector<std::string> Defines() const;
+};
+
+// What the inputs of a job say, and what the user asked for.
+struct SceneSurvey {
+  // The request.
+  bool ptm = true;                 // false: vertex-colour mode
+  int projectors_requested = 4;    // K
+  double bias = 0.005;             // relative occlusion bias
+  bool no_occlusion = false, no_masks = false, no_skybox = false;  // the user's switches
+  // The inputs.
+  bool projector_differs = false;   // some selected projector is not the pose it serves
+  bool several_admissible = false;  // some pose has more than one admissible projector
+  std::string mask_example;         // a selected projector with set mask pixels ("": none)
+  size_t frames_surveyed = 0;       // poses whose views were surveyed for holes
+  size_t frames_with_holes = 0;     // ... of which see no surface somewhere
+  std::string hole_example;         // one of those ("": none)
+  double min_coverage = 1.0;        // least share of a view's surface its first projector covers
+};
+
+class Renderer;
+struct View;
+
+// One view's share of the survey: pixels with no surface, and of the surface pixels those that
+// `first_projector` (when given) sees inside its image, in front of it.
+struct ViewCoverage {
+  size_t holes = 0, surface = 0, covered = 0;
+};
+// Renders the view's depth (every pixel: a single hole pixel must plan alike in every split).
+ViewCoverage SurveyView(Renderer& renderer, const View& view, const View* first_projector);
+// Adds a surveyed view (named `name` in explanations) to the survey.
+void AddToSurvey(SceneSurvey& survey, const ViewCoverage& view, const std::string& name);
+
+// The plan the survey calls for.
+EffectsPlan PlanEffects(const SceneSurvey& survey);
+
+// {"reverse_projection_rejection": {"on": true, "reason": "..."}, "clip_test": ..., "occlusion":
+// ..., "several_projectors": ..., "vertex_colour_fallback": ..., "masks": ..., "skybox": ...}
+nlohmann::json ExplainEffects(const SceneSurvey& survey, const EffectsPlan& plan);
+
+}  // namespace mvtm
