@@ -304,6 +304,8 @@ struct Renderer::Impl {
   }
 
   // Projector uniforms relative to the render camera centre, in double.
+  void DrawSky(const View& view, const std::vector<Projector>& projectors, const EffectsPlan& plan,
+               const std::vector<int>& layer_of);
   void SetProjectors(GLuint prog, const View& v, const std::vector<Projector>& ps, const EffectsPlan& plan,
                      const std::vector<int>& layer_of) {
     int n = std::min<int>(plan.projectors, static_cast<int>(ps.size()));
@@ -424,75 +426,24 @@ Image Renderer::RenderDepth(const View& view, RenderStats* stats) {
   return out;
 }
 
-Renderer::Frame Renderer::Render(const View& view, const std::vector<Projector>& projectors,
-                                 const EffectsPlan& plan_in, RenderStats* stats) {
-  view.camera.RequireUndistorted();
-  Impl& m = *impl_;
-  EffectsPlan plan = plan_in;
-  if (projectors.empty()) plan.ptm = plan.skybox = false;
-  plan.projectors = std::max(1, std::min<int>(plan.projectors, static_cast<int>(projectors.size())));
-  const int w = static_cast<int>(view.camera.width), h = static_cast<int>(view.camera.height);
-  std::vector<const Image*> imgs, depths, masks;
-  std::vector<int> layer_of;
-  if (plan.ptm || plan.skybox) {
-    for (int k = 0; k < plan.projectors; ++k) {
-      const Projector& p = projectors[k];
-      p.view.camera.RequireUndistorted();
-      if (!p.image) throw Error("projector " + std::to_string(k) + " has no image");
-      if (p.image->width != static_cast<int>(p.view.camera.width) || p.image->height != static_cast<int>(p.view.camera.height))
-        throw Error("projector image is " + std::to_string(p.image->width) + "x" + std::to_string(p.image->height) +
-                    " but its camera is " + std::to_string(p.view.camera.width) + "x" + std::to_string(p.view.camera.height));
-      imgs.push_back(p.image);
-      if ((plan.occlusion || plan.skybox) && !p.depth) throw Error("projector " + std::to_string(k) + " has no depth map");
-      depths.push_back(p.depth);
-      masks.push_back(p.mask);
-    }
-    layer_of = m.PlaceProjectors(projectors, plan.projectors, plan.occlusion || plan.skybox, plan.masks);
-    glActiveTexture(GL_TEXTURE0);
-    glBindTexture(GL_TEXTURE_2D_ARRAY, m.images);
-    glActiveTexture(GL_TEXTURE1);
-    glBindTexture(GL_TEXTURE_2D_ARRAY, m.depths);
-    glActiveTexture(GL_TEXTURE2);
-    glBindTexture(GL_TEXTURE_2D_ARRAY, m.masks);
+namespace {
+
+// Every projector the plan uses has an image of its camera's size, and depth when needed.
+void CheckProjectors(const std::vector<Projector>& projectors, const EffectsPlan& plan) {
+  for (int k = 0; k < plan.projectors; ++k) {
+    const Projector& p = projectors[k];
+    p.view.camera.RequireUndistorted();
+    if (!p.image) throw Error("projector " + std::to_string(k) + " has no image");
+    if (p.image->width != static_cast<int>(p.view.camera.width) || p.image->height != static_cast<int>(p.view.camera.height))
+      throw Error("projector image is " + std::to_string(p.image->width) + "x" + std::to_string(p.image->height) +
+                  " but its camera is " + std::to_string(p.view.camera.width) + "x" + std::to_string(p.view.camera.height));
+    if ((plan.occlusion || plan.skybox) && !p.depth) throw Error("projector " + std::to_string(k) + " has no depth map");
   }
-  m.EnsureTarget(m.colour_target, w, h, false);
-  glBindFramebuffer(GL_FRAMEBUFFER, m.colour_target.fbo);
-  glViewport(0, 0, w, h);
-  glClear(GL_DEPTH_BUFFER_BIT);
-  auto defines = plan.Defines();
-  // The mesh first, then the background behind it: the full-screen sky triangle lies on the far
-  // plane and passes the depth test only where no surface was drawn, so its shader runs only on
-  // the holes.
-  std::vector<std::string> inc;
-  if (plan.ptm) inc.push_back("ptm_common.glsl");
-  GLuint prog = m.Program("mesh.vert", "ptm.frag", defines, inc);
-  glUseProgram(prog);
-  if (plan.ptm) m.SetProjectors(prog, view, projectors, plan, layer_of);
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LESS);
-  m.Draw(prog, view, stats);
-  {
-    std::vector<std::string> sky_inc;
-    if (plan.skybox) sky_inc.push_back("ptm_common.glsl");
-    GLuint sky = m.Program("sky.vert", "sky.frag", defines, sky_inc);
-    glUseProgram(sky);
-    glDepthFunc(GL_LEQUAL);
-    glDepthMask(GL_FALSE);
-    glUniform3f(glGetUniformLocation(sky, "u_background"), plan.background[0] / 255.f, plan.background[1] / 255.f,
-                plan.background[2] / 255.f);
-    Eigen::Matrix3f Rt = view.world_to_camera.R().transpose().cast<float>();
-    glUniformMatrix3fv(glGetUniformLocation(sky, "u_Rt"), 1, GL_FALSE, Rt.data());
-    glUniform4f(glGetUniformLocation(sky, "u_K"), float(view.camera.fx()), float(view.camera.fy()),
-                float(view.camera.cx()), float(view.camera.cy()));
-    glUniform2f(glGetUniformLocation(sky, "u_size"), float(w), float(h));
-    if (plan.skybox) m.SetProjectors(sky, view, projectors, plan, layer_of);
-    glBindVertexArray(m.sky_vao);
-    glDrawArrays(GL_TRIANGLES, 0, 3);
-    glDepthMask(GL_TRUE);
-    glDepthFunc(GL_LESS);
-  }
-  auto t0 = Clock::now();
-  Frame out;
+}
+
+// Reads the colour and source attachments of the bound framebuffer (GL rows are bottom-up).
+Renderer::Frame ReadFrame(int w, int h) {
+  Renderer::Frame out;
   out.colour = Image(w, h, 3, 8);
   out.source = Image(w, h, 1, 8);
   std::vector<uint8_t> rgba(static_cast<size_t>(w) * h * 4), src(static_cast<size_t>(w) * h);
@@ -508,6 +459,70 @@ Renderer::Frame Renderer::Render(const View& view, const std::vector<Projector>&
       out.source.data[o] = src[g];
     }
   }
+  return out;
+}
+
+}  // namespace
+
+// The background behind the mesh: the full-screen sky triangle lies on the far plane and passes
+// the depth test only where no surface was drawn, so its shader runs only on the holes.
+void Renderer::Impl::DrawSky(const View& view, const std::vector<Projector>& projectors, const EffectsPlan& plan,
+                             const std::vector<int>& layer_of) {
+  std::vector<std::string> sky_inc;
+  if (plan.skybox) sky_inc.push_back("ptm_common.glsl");
+  GLuint sky = Program("sky.vert", "sky.frag", plan.Defines(), sky_inc);
+  glUseProgram(sky);
+  glDepthFunc(GL_LEQUAL);
+  glDepthMask(GL_FALSE);
+  glUniform3f(glGetUniformLocation(sky, "u_background"), plan.background[0] / 255.f, plan.background[1] / 255.f,
+              plan.background[2] / 255.f);
+  Eigen::Matrix3f Rt = view.world_to_camera.R().transpose().cast<float>();
+  glUniformMatrix3fv(glGetUniformLocation(sky, "u_Rt"), 1, GL_FALSE, Rt.data());
+  glUniform4f(glGetUniformLocation(sky, "u_K"), float(view.camera.fx()), float(view.camera.fy()),
+              float(view.camera.cx()), float(view.camera.cy()));
+  glUniform2f(glGetUniformLocation(sky, "u_size"), float(view.camera.width), float(view.camera.height));
+  if (plan.skybox) SetProjectors(sky, view, projectors, plan, layer_of);
+  glBindVertexArray(sky_vao);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  glDepthMask(GL_TRUE);
+  glDepthFunc(GL_LESS);
+}
+
+Renderer::Frame Renderer::Render(const View& view, const std::vector<Projector>& projectors,
+                                 const EffectsPlan& plan_in, RenderStats* stats) {
+  view.camera.RequireUndistorted();
+  Impl& m = *impl_;
+  EffectsPlan plan = plan_in;
+  if (projectors.empty()) plan.ptm = plan.skybox = false;
+  plan.projectors = std::max(1, std::min<int>(plan.projectors, static_cast<int>(projectors.size())));
+  const int w = static_cast<int>(view.camera.width), h = static_cast<int>(view.camera.height);
+  std::vector<int> layer_of;
+  if (plan.ptm || plan.skybox) {
+    CheckProjectors(projectors, plan);
+    layer_of = m.PlaceProjectors(projectors, plan.projectors, plan.occlusion || plan.skybox, plan.masks);
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, m.images);
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, m.depths);
+    glActiveTexture(GL_TEXTURE2);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, m.masks);
+  }
+  m.EnsureTarget(m.colour_target, w, h, false);
+  glBindFramebuffer(GL_FRAMEBUFFER, m.colour_target.fbo);
+  glViewport(0, 0, w, h);
+  glClear(GL_DEPTH_BUFFER_BIT);
+  // The mesh first, then the background behind it.
+  std::vector<std::string> inc;
+  if (plan.ptm) inc.push_back("ptm_common.glsl");
+  GLuint prog = m.Program("mesh.vert", "ptm.frag", plan.Defines(), inc);
+  glUseProgram(prog);
+  if (plan.ptm) m.SetProjectors(prog, view, projectors, plan, layer_of);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  m.Draw(prog, view, stats);
+  m.DrawSky(view, projectors, plan, layer_of);
+  auto t0 = Clock::now();
+  Frame out = ReadFrame(w, h);
   if (stats) stats->readback_ms += Ms(t0, Clock::now());
   CheckGlError("Render");
   return out;
