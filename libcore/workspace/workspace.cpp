@@ -43,6 +43,9 @@ fs::path Workspace::MaskPath(const std::string& name) const { return Derived(Mas
 fs::path Workspace::DepthDir() const { return root_ / "depth"; }
 fs::path Workspace::DepthPath(const std::string& name) const { return Derived(DepthDir(), name, ".exr"); }
 fs::path Workspace::TexturesDir() const { return root_ / "textures"; }
+fs::path Workspace::TextureProvenancePath(const std::string& name) const {
+  return Derived(TexturesDir() / "provenance", name, ".png");
+}
 fs::path Workspace::NewMeshPath() const { return root_ / "mesh.ply"; }
 std::vector<fs::path> Workspace::SparseModelFiles() const {
   std::vector<fs::path> files;

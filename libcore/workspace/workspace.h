@@ -10,6 +10,7 @@
 //   partners.tsv          pickview's view selection
 //   depth/NAME.exr        float32 linear camera-space depth, +inf = no surface (bakedepth)
 //   textures/NAME         images with vehicles removed (inpaint3d); preferred over images/
+//   textures/provenance/NAME.png  where each inpainted pixel came from (inpaint3d)
 //   provenance/TOOL.json  resolved options, version and input checksums of each tool's last run
 // NAME keeps any sub-folders of the image name; derived files replace the extension (".png",
 // ".exr") after the full name's stem, e.g. "A_0001.jpg" → "masks/A_0001.png".
@@ -47,6 +48,8 @@ class Workspace {
   fs::path DepthPath(const std::string& name) const;
   fs::path DepthDir() const;
   fs::path TexturesDir() const;
+  // textures/provenance/STEM.png: where each pixel of textures/NAME came from (inpaint3d).
+  fs::path TextureProvenancePath(const std::string& name) const;
   // Where a tool that builds the workspace's mesh writes it (mesh.ply).
   fs::path NewMeshPath() const;
   // The sparse model's files that exist (text and binary): the inputs every derived output
