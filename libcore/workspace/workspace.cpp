@@ -42,6 +42,11 @@ fs::path Workspace::MasksDir() const { return root_ / "masks"; }
 fs::path Workspace::MaskPath(const std::string& name) const { return Derived(MasksDir(), name, ".png"); }
 fs::path Workspace::DepthDir() const { return root_ / "depth"; }
 fs::path Workspace::DepthPath(const std::string& name) const { return Derived(DepthDir(), name, ".exr"); }
+fs::path Workspace::StereoDir() const { return root_ / "stereo"; }
+fs::path Workspace::StereoDepthPath(const std::string& name) const { return Derived(StereoDir(), name, ".exr"); }
+fs::path Workspace::StereoConfidencePath(const std::string& name) const {
+  return Derived(StereoDir(), name, ".conf.exr");
+}
 fs::path Workspace::TexturesDir() const { return root_ / "textures"; }
 fs::path Workspace::TextureProvenancePath(const std::string& name) const {
   return Derived(TexturesDir() / "provenance", name, ".png");

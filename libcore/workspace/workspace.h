@@ -9,6 +9,8 @@
 //   tracks.tsv            segtrack's tracks
 //   partners.tsv          pickview's view selection
 //   depth/NAME.exr        float32 linear camera-space depth, +inf = no surface (bakedepth)
+//   stereo/NAME.exr       float32 linear depth from multi-view stereo, +inf = untrusted (densify)
+//   stereo/NAME.conf.exr  its confidence, 0..1
 //   textures/NAME         images with vehicles removed (inpaint3d); preferred over images/
 //   textures/provenance/NAME.png  where each inpainted pixel came from (inpaint3d)
 //   provenance/TOOL.json  resolved options, version and input checksums of each tool's last run
@@ -47,6 +49,10 @@ class Workspace {
   fs::path MasksDir() const;
   fs::path DepthPath(const std::string& name) const;
   fs::path DepthDir() const;
+  // stereo/NAME.exr and stereo/NAME.conf.exr: dense depth from the photos and its confidence (densify).
+  fs::path StereoDir() const;
+  fs::path StereoDepthPath(const std::string& name) const;
+  fs::path StereoConfidencePath(const std::string& name) const;
   fs::path TexturesDir() const;
   // textures/provenance/STEM.png: where each pixel of textures/NAME came from (inpaint3d).
   fs::path TextureProvenancePath(const std::string& name) const;

@@ -1,0 +1,242 @@
+#include "stereo/plane_sweep.h"
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "base/error.h"
+
+namespace mvtm {
+
+namespace {
+
+constexpr float kNoScore = -2.f;  // below every ZNCC: "this neighbour / plane says nothing"
+
+// Window mean and standard deviation of an image (box filter, reflected borders).
+void WindowStats(const cv::Mat& I, int win, cv::Mat& mean, cv::Mat& sd) {
+  cv::Mat sq;
+  cv::boxFilter(I, mean, CV_32F, {win, win}, {-1, -1}, true, cv::BORDER_REFLECT);
+  cv::boxFilter(I.mul(I), sq, CV_32F, {win, win}, {-1, -1}, true, cv::BORDER_REFLECT);
+  cv::Mat var = sq - mean.mul(mean);
+  cv::max(var, 0.0, var);
+  cv::sqrt(var, sd);
+}
+
+// n·r for the ray r = K⁻¹(u, v, 1) through the centre of each pixel (COLMAP pixel coordinates).
+cv::Mat RayDot(const Camera& cam, const Eigen::Vector3d& n, int w, int h) {
+  cv::Mat out(h, w, CV_32F);
+  const double ax = n.x() / cam.fx(), ay = n.y() / cam.fy();
+  const double c0 = n.z() - ax * cam.cx() - ay * cam.cy();
+  for (int y = 0; y < h; ++y) {
+    float* row = out.ptr<float>(y);
+    for (int x = 0; x < w; ++x) row[x] = static_cast<float>(c0 + ax * (x + 0.5) + ay * (y + 0.5));
+  }
+  return out;
+}
+
+struct RefWindows {
+  cv::Mat mean, sd;
+  int win = 7;
+};
+
+// ZNCC of the reference with the warped neighbour J; kNoScore where the window is not wholly
+// seen by the neighbour (`seen` < 1) or J is flat there.
+cv::Mat Zncc(const cv::Mat& I, const RefWindows& r, const cv::Mat& J, const cv::Mat& seen) {
+  const cv::Size k(r.win, r.win);
+  cv::Mat mJ, mJJ, mIJ, cover;
+  cv::boxFilter(J, mJ, CV_32F, k, {-1, -1}, true, cv::BORDER_REFLECT);
+  cv::boxFilter(J.mul(J), mJJ, CV_32F, k, {-1, -1}, true, cv::BORDER_REFLECT);
+  cv::boxFilter(I.mul(J), mIJ, CV_32F, k, {-1, -1}, true, cv::BORDER_REFLECT);
+  cv::boxFilter(seen, cover, CV_32F, k, {-1, -1}, true, cv::BORDER_CONSTANT);
+  cv::Mat out(I.size(), CV_32F);
+  for (int y = 0; y < I.rows; ++y) {
+    const float *a = r.mean.ptr<float>(y), *sa = r.sd.ptr<float>(y), *b = mJ.ptr<float>(y);
+    const float *bb = mJJ.ptr<float>(y), *ab = mIJ.ptr<float>(y), *c = cover.ptr<float>(y);
+    float* o = out.ptr<float>(y);
+    for (int x = 0; x < I.cols; ++x) {
+      const float var_b = bb[x] - b[x] * b[x];
+      if (c[x] < 0.999f || var_b <= 1e-6f || sa[x] <= 1e-3f) {
+        o[x] = kNoScore;
+        continue;
+      }
+      const float v = (ab[x] - a[x] * b[x]) / (sa[x] * std::sqrt(var_b));
+      o[x] = std::max(-1.f, std::min(1.f, v));
+    }
+  }
+  return out;
+}
+
+// OpenCV pixel coordinates have the top-left pixel centre at (0, 0), COLMAP's at (0.5, 0.5).
+cv::Matx33d ToOpenCv(const Eigen::Matrix3d& H) {
+  Eigen::Matrix3d S = Eigen::Matrix3d::Identity(), Si = Eigen::Matrix3d::Identity();
+  S(0, 2) = S(1, 2) = -0.5;
+  Si(0, 2) = Si(1, 2) = 0.5;
+  const Eigen::Matrix3d G = S * H * Si;
+  return cv::Matx33d(G(0, 0), G(0, 1), G(0, 2), G(1, 0), G(1, 1), G(1, 2), G(2, 0), G(2, 1), G(2, 2));
+}
+
+// The neighbour's ZNCC with the reference on one plane; kNoScore where the neighbour does not
+// see the plane point in front of it, or the homography is singular (the plane passes through
+// the neighbour's centre).
+cv::Mat NeighbourScore(const StereoView& ref, const RefWindows& rw, const StereoView& nb, const Eigen::Vector3d& n,
+                       double d) {
+  const Eigen::Matrix3d H = PlaneHomography(ref, nb, n, d);
+  const double scale = H.norm();
+  if (!std::isfinite(scale) || scale == 0 || std::abs(H.determinant()) < 1e-12 * scale * scale * scale)
+    return cv::Mat(ref.grey.size(), CV_32F, cv::Scalar(kNoScore));
+  const cv::Matx33d G = ToOpenCv(H);
+  const cv::Mat ones(nb.grey.size(), CV_32F, cv::Scalar(1));
+  cv::Mat J, seen;
+  cv::warpPerspective(nb.grey, J, G, ref.grey.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_CONSTANT, 0);
+  cv::warpPerspective(ones, seen, G, ref.grey.size(), cv::INTER_NEAREST | cv::WARP_INVERSE_MAP, cv::BORDER_CONSTANT, 0);
+  // The point must lie in front of the neighbour: its depth there is z_ref · w, w the third
+  // homogeneous coordinate (K's last row is 0 0 1), and z_ref > 0 is checked by the caller.
+  for (int y = 0; y < seen.rows; ++y) {
+    float* s = seen.ptr<float>(y);
+    for (int x = 0; x < seen.cols; ++x)
+      if (G(2, 0) * x + G(2, 1) * y + G(2, 2) <= 0) s[x] = 0;
+  }
+  return Zncc(ref.grey, rw, J, seen);
+}
+
+// Mean of the best k scores per pixel (kNoScore when fewer than k neighbours say something).
+cv::Mat BestK(const std::vector<cv::Mat>& scores, int k) {
+  const cv::Size sz = scores.front().size();
+  cv::Mat out(sz, CV_32F);
+  std::vector<float> v(scores.size());
+  for (int y = 0; y < sz.height; ++y)
+    for (int x = 0; x < sz.width; ++x) {
+      for (size_t j = 0; j < scores.size(); ++j) v[j] = scores[j].at<float>(y, x);
+      std::partial_sort(v.begin(), v.begin() + k, v.end(), std::greater<float>());
+      float sum = 0;
+      bool ok = v[size_t(k) - 1] > kNoScore;
+      for (int j = 0; j < k && ok; ++j) sum += v[size_t(j)];
+      out.at<float>(y, x) = ok ? sum / float(k) : kNoScore;
+    }
+  return out;
+}
+
+// The aggregated score of every plane of a family (planes in parallel).
+std::vector<cv::Mat> FamilyScores(const StereoView& ref, const RefWindows& rw, const std::vector<StereoView>& nbs,
+                                  const SweepFamily& f, const cv::Mat& ray_dot, int k) {
+  std::vector<cv::Mat> out(f.offsets.size());
+  cv::parallel_for_(cv::Range(0, static_cast<int>(f.offsets.size())), [&](const cv::Range& range) {
+    for (int p = range.start; p < range.end; ++p) {
+      const double d = f.offsets[size_t(p)];
+      std::vector<cv::Mat> per;
+      if (d != 0)
+        for (const StereoView& nb : nbs) per.push_back(NeighbourScore(ref, rw, nb, f.normal, d));
+      cv::Mat s = per.empty() ? cv::Mat(ref.grey.size(), CV_32F, cv::Scalar(kNoScore)) : BestK(per, k);
+      // Only planes in front of the reference camera: z = d / (n·r) > 0.
+      for (int y = 0; y < s.rows; ++y)
+        for (int x = 0; x < s.cols; ++x)
+          if (!(d / ray_dot.at<float>(y, x) > 0)) s.at<float>(y, x) = kNoScore;
+      out[size_t(p)] = s;
+    }
+  });
+  return out;
+}
+
+// Per pixel, the family's best plane refined by a parabola through its neighbours' scores; keeps
+// it where it beats `best` (depth and score of the best family so far).
+void TakeBest(const SweepFamily& f, const std::vector<cv::Mat>& scores, const cv::Mat& ray_dot, cv::Mat& best_z,
+              cv::Mat& best_s) {
+  const int P = static_cast<int>(scores.size());
+  auto param = [&](int p) { return f.inverse_spacing ? 1.0 / f.offsets[size_t(p)] : f.offsets[size_t(p)]; };
+  for (int y = 0; y < best_z.rows; ++y)
+    for (int x = 0; x < best_z.cols; ++x) {
+      int bp = -1;
+      float bs = kNoScore;
+      for (int p = 0; p < P; ++p)
+        if (scores[size_t(p)].at<float>(y, x) > bs) bs = scores[size_t(p)].at<float>(y, x), bp = p;
+      if (bp < 0 || bs <= best_s.at<float>(y, x)) continue;
+      double s = param(bp);
+      if (bp > 0 && bp + 1 < P) {
+        const double a = scores[size_t(bp - 1)].at<float>(y, x), c = scores[size_t(bp + 1)].at<float>(y, x);
+        const double den = a - 2.0 * bs + c;
+        if (a > kNoScore && c > kNoScore && den < 0) {
+          const double delta = std::clamp(0.5 * (a - c) / den, -0.5, 0.5);
+          s += delta * (delta > 0 ? param(bp + 1) - s : s - param(bp - 1));
+        }
+      }
+      const double d = f.inverse_spacing ? 1.0 / s : s;
+      const double z = d / ray_dot.at<float>(y, x);
+      if (!(z > 0) || !std::isfinite(z)) continue;
+      best_z.at<float>(y, x) = static_cast<float>(z);
+      best_s.at<float>(y, x) = bs;
+    }
+}
+
+}  // namespace
+
+void PlaneSweepOptions::Check() const {
+  if (window < 3 || window > 31 || window % 2 == 0) throw UsageError("--window: must be odd, 3..31");
+  if (best_k < 1) throw UsageError("--best-k: must be >= 1");
+  if (!(min_score >= -1 && min_score <= 1)) throw UsageError("--min-score: must be in [-1, 1]");
+  if (!(min_texture >= 0 && std::isfinite(min_texture))) throw UsageError("--min-texture: must be >= 0");
+}
+
+SweepFamily MakeFrontoSweep(double near_z, double far_z, int planes) {
+  if (!(near_z > 0 && far_z > near_z && planes >= 2)) throw Error("fronto sweep: need 0 < near < far and >= 2 planes");
+  SweepFamily f;
+  f.name = "fronto";
+  f.inverse_spacing = true;
+  for (int i = 0; i < planes; ++i) {
+    const double s = 1.0 / far_z + (1.0 / near_z - 1.0 / far_z) * i / (planes - 1);
+    f.offsets.push_back(1.0 / s);
+  }
+  std::sort(f.offsets.begin(), f.offsets.end());
+  return f;
+}
+
+SweepFamily MakeOffsetSweep(const std::string& name, const Eigen::Vector3d& normal, double lo, double hi, int planes) {
+  if (!(hi > lo && planes >= 2 && std::abs(normal.norm() - 1) < 1e-9))
+    throw Error(name + " sweep: need lo < hi, a unit normal and >= 2 planes");
+  SweepFamily f;
+  f.name = name;
+  f.normal = normal;
+  for (int i = 0; i < planes; ++i) f.offsets.push_back(lo + (hi - lo) * i / (planes - 1));
+  return f;
+}
+
+Eigen::Matrix3d PlaneHomography(const StereoView& ref, const StereoView& nb, const Eigen::Vector3d& n, double d) {
+  const Eigen::Matrix3d Rr = ref.world_to_camera.R(), Rn = nb.world_to_camera.R();
+  const Eigen::Matrix3d R = Rn * Rr.transpose();
+  const Eigen::Vector3d t = nb.world_to_camera.t - R * ref.world_to_camera.t;
+  const Eigen::Matrix3d M = R + t * n.transpose() / d;
+  return nb.camera.K() * M * ref.camera.K().inverse();
+}
+
+DepthMap SweepDepth(const StereoView& ref, const std::vector<StereoView>& nbs, const std::vector<SweepFamily>& families,
+                    const PlaneSweepOptions& o) {
+  o.Check();
+  const int w = ref.grey.cols, h = ref.grey.rows;
+  if (w != int(ref.camera.width) || h != int(ref.camera.height)) throw Error("reference image and camera differ in size");
+  for (const auto& nb : nbs)
+    if (nb.grey.cols != int(nb.camera.width) || nb.grey.rows != int(nb.camera.height))
+      throw Error("neighbour image and camera differ in size");
+  DepthMap out{Image(w, h, 1, 32, std::numeric_limits<float>::infinity()), Image(w, h, 1, 32, 0.f)};
+  const int k = std::min<int>(o.best_k, static_cast<int>(nbs.size()));
+  if (k < 1) return out;
+  RefWindows rw;
+  rw.win = o.window;
+  WindowStats(ref.grey, o.window, rw.mean, rw.sd);
+  cv::Mat best_z(h, w, CV_32F, cv::Scalar(std::numeric_limits<float>::infinity()));
+  cv::Mat best_s(h, w, CV_32F, cv::Scalar(kNoScore));
+  for (const SweepFamily& f : families) {
+    const cv::Mat ray_dot = RayDot(ref.camera, f.normal, w, h);
+    TakeBest(f, FamilyScores(ref, rw, nbs, f, ray_dot, k), ray_dot, best_z, best_s);
+  }
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const float s = best_s.at<float>(y, x);
+      if (s < o.min_score || rw.sd.at<float>(y, x) < o.min_texture) continue;
+      out.depth.at(x, y) = best_z.at<float>(y, x);
+      out.confidence.at(x, y) = std::clamp(s, 0.f, 1.f);
+    }
+  return out;
+}
+
+}  // namespace mvtm
