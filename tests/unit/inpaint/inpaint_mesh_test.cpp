@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <limits>
+#include <memory>
 
 #include "base/error.h"
 #include "inpaint/inpaint.h"
@@ -13,16 +14,8 @@
 namespace mvtm {
 namespace {
 
-class InpaintMeshTest : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() { ctx_ = GlContext::Create().release(); }
-  static void TearDownTestSuite() {
-    delete ctx_;
-    ctx_ = nullptr;
-  }
-  static GlContext* ctx_;
-};
-GlContext* InpaintMeshTest::ctx_ = nullptr;
+// The test program's one GL context (render/context.h: one per process), made on first use.
+void NeedGl() { static const std::unique_ptr<GlContext> context = GlContext::Create(); }
 
 constexpr int kW = 64, kH = 48;
 const std::array<uint8_t, 3> kVertexColour = {10, 200, 30};
@@ -31,21 +24,12 @@ const std::array<float, 3> kPartnerColour = {90, 120, 150};
 // f = 50 px: a plane at z = 10 spans 25 px per 5 units from the principal point.
 Camera Cam() { return ParseCameraSpec("PINHOLE 64 48 50 50 32 24"); }
 
-// The square [−s, s]² at z = 10 as 4×4 quads of one vertex colour.
+// The square [−s, s]² at z = 10 as two triangles of one vertex colour.
 Mesh Plane(double s) {
   Mesh m;
-  const int n = 4;
-  for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i) {
-      m.vertices.emplace_back(-s + 2 * s * i / n, -s + 2 * s * j / n, 10);
-      m.colors.push_back(kVertexColour);
-    }
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
-      m.faces.push_back({a, b, d});
-      m.faces.push_back({a, d, c});
-    }
+  m.vertices = {{-s, -s, 10}, {s, -s, 10}, {-s, s, 10}, {s, s, 10}};
+  m.colors.assign(4, kVertexColour);
+  m.faces = {{0, 1, 3}, {0, 3, 2}};
   return m;
 }
 
@@ -75,7 +59,8 @@ Image Square(int x0, int y0, int side) {
   return m;
 }
 
-TEST_F(InpaintMeshTest, PartnerOfAConstantPlaneGivesItsColourExactly) {
+TEST(InpaintThroughMesh, PartnerOfAConstantPlaneGivesItsColourExactly) {
+  NeedGl();
   Renderer r(Plane(50));
   const Image colour = ConstantColour();
   const Image depth(kW, kH, 1, 32, 10.f);  // the plane z = 10 seen straight on
@@ -95,7 +80,8 @@ TEST_F(InpaintMeshTest, PartnerOfAConstantPlaneGivesItsColourExactly) {
   EXPECT_EQ(out.counts.partners, 144u);
 }
 
-TEST_F(InpaintMeshTest, SixteenBitsAndFloatGreyOnTheirOwnScale) {
+TEST(InpaintThroughMesh, SixteenBitsAndFloatGreyOnTheirOwnScale) {
+  NeedGl();
   // Grey takes the mean of RGB (120) on the 8-bit scale: ×257 for 16 bits, ÷255 for float.
   Renderer r(Plane(50));
   const Image colour = ConstantColour();
@@ -113,7 +99,8 @@ TEST_F(InpaintMeshTest, SixteenBitsAndFloatGreyOnTheirOwnScale) {
   }
 }
 
-TEST_F(InpaintMeshTest, MaskedPartnerFallsBackToVertexColour) {
+TEST(InpaintThroughMesh, MaskedPartnerFallsBackToVertexColour) {
+  NeedGl();
   Renderer r(Plane(50));
   const Image colour = ConstantColour();
   const Image depth(kW, kH, 1, 32, 10.f);
@@ -129,7 +116,8 @@ TEST_F(InpaintMeshTest, MaskedPartnerFallsBackToVertexColour) {
   EXPECT_EQ(out.counts.vertex, 144u);
 }
 
-TEST_F(InpaintMeshTest, FullMaskWithoutPartnersIsVertexColourElseBackground) {
+TEST(InpaintThroughMesh, FullMaskWithoutPartnersIsVertexColourElseBackground) {
+  NeedGl();
   // The plane ±5 at z = 10 covers the columns within 25 px of the centre, not the image's edges.
   Renderer r(Plane(5));
   Inpainted out = InpaintThroughMesh(r, LookingDownZ({0, 0, 0}), Pattern(),
@@ -146,7 +134,8 @@ TEST_F(InpaintMeshTest, FullMaskWithoutPartnersIsVertexColourElseBackground) {
   EXPECT_GT(out.counts.background, 10u * kH);
 }
 
-TEST_F(InpaintMeshTest, WhereNoSurfaceIsSeenTheSkyComesFromThePartner) {
+TEST(InpaintThroughMesh, WhereNoSurfaceIsSeenTheSkyComesFromThePartner) {
+  NeedGl();
   Renderer r(Plane(5));
   const View own = LookingDownZ({0, 0, 0});
   const Image colour = ConstantColour();
@@ -165,7 +154,8 @@ TEST_F(InpaintMeshTest, WhereNoSurfaceIsSeenTheSkyComesFromThePartner) {
             size_t(kW * kH));
 }
 
-TEST_F(InpaintMeshTest, EmptyMaskCopiesAndSizesAreChecked) {
+TEST(InpaintThroughMesh, EmptyMaskCopiesAndSizesAreChecked) {
+  NeedGl();
   Renderer r(Plane(50));
   const Image im = Pattern();
   Inpainted out = InpaintThroughMesh(r, LookingDownZ({0, 0, 0}), im, Image(kW, kH, 1, 8), {}, 0);
