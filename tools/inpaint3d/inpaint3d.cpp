@@ -98,7 +98,10 @@ class MeshStage {
 // The state one run carries from image to image.
 struct Run {
   Run(const Inpaint3dOptions& options, const Workspace& workspace, const Inputs& inputs)
-      : o(options), ws(workspace), in(inputs), sources(ws, in.rec, in.images, nullptr, /*prefer_textures=*/false) {}
+      : o(options),
+        ws(workspace),
+        in(inputs),
+        sources(ws, in.rec, in.images, nullptr, /*prefer_textures=*/false) {}
 
   const Inpaint3dOptions& o;
   const Workspace& ws;
