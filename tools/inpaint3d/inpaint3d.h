@@ -2,18 +2,17 @@
 // Alg. 4–5), with the 2-D baselines of §5.2 for comparison.
 //
 // For every image whose mask (masks/NAME.png) has a non-zero pixel, the pixels under the mask
-// (dilated by `dilate` pixels) are replaced; every other pixel keeps its bytes:
-//   3d       the mesh rendered from the image's own pose, textured by its partner images
-//            (partners.tsv, pickview --partners) with their own masks respected and the
-//            occlusion test on; where no partner reaches, vertex colours; where the mesh has no
-//            surface, the skybox (sky projected from the partners), else a constant background.
-//   telea    OpenCV cv::inpaint, INPAINT_TELEA, radius `radius`.
-//   ns       OpenCV cv::inpaint, INPAINT_NS (Navier–Stokes), radius `radius`.
-//   patch2d  thesis §5.2: for each blob (8-connected component of the mask) four templates
-//            (strips left of, right of, above and below its bounding box) are matched in each
-//            partner image by squared difference (cv::matchTemplate TM_SQDIFF); the best match
-//            per pixel of template gives an offset and the pixels under the blob are copied
-//            from that partner at that offset. No partner: Telea.
+// (dilated by `dilate` pixels) are replaced; every other pixel keeps its bytes. The methods are
+// libcore/inpaint's (inpaint/inpaint.h):
+//   3d       InpaintThroughMesh: the mesh rendered from the image's own pose, textured by its
+//            partner images (partners.tsv, pickview --partners) with their own masks respected
+//            and the occlusion test on; where no partner reaches, vertex colours; where the mesh
+//            has no surface, the skybox (sky projected from the partners), else a constant
+//            background.
+//   telea    InpaintOpenCv: OpenCV cv::inpaint, INPAINT_TELEA, radius `radius`.
+//   ns       InpaintOpenCv: OpenCV cv::inpaint, INPAINT_NS (Navier–Stokes), radius `radius`.
+//   patch2d  InpaintPatch2d: thesis §5.2, templates around each blob matched in the partner
+//            images, the blob copied from the best match. No partner: Telea.
 // Inputs are always the recorded images (images/NAME), never textures/. Outputs, each written
 // atomically and skipped when newer than its inputs unless `force`:
 //   textures/NAME                          the image, same format, channel count and bit depth;
@@ -28,16 +27,9 @@
 #include <vector>
 
 #include "cli/work.h"
+#include "inpaint/inpaint.h"  // kProvenance* values
 
 namespace mvtm {
-
-// Provenance image values.
-inline constexpr uint8_t kProvenanceOriginal = 0;  // outside the (dilated) mask: the recorded pixel
-// 1..16: partner of rank r projected onto the mesh (3d) or copied (patch2d)
-inline constexpr uint8_t kProvenanceSkyOffset = 100;   // 101..116: sky from partner of rank r (3d)
-inline constexpr uint8_t kProvenance2d = 253;          // telea / ns (and patch2d without a partner)
-inline constexpr uint8_t kProvenanceVertex = 254;      // vertex colour (3d)
-inline constexpr uint8_t kProvenanceBackground = 255;  // constant background (3d)
 
 // --method choices.
 inline const std::vector<std::string> kInpaintMethods = {"3d", "telea", "ns", "patch2d"};

@@ -10,18 +10,17 @@
 #include <map>
 #include <memory>
 #include <optional>
-#include <sstream>
 
 #include <unistd.h>
 
 #include <nlohmann/json.hpp>
 
-#include "base/atomic_file.h"
 #include "base/error.h"
 #include "base/text.h"
 #include "image/mask.h"
 #include "index/pose_index.h"
 #include "io/colmap_model.h"
+#include "io/partners.h"
 #include "io/trajectory.h"
 #include "workspace/workspace.h"
 
@@ -179,22 +178,15 @@ class Masks {
   std::map<std::string, std::optional<Bits>> cache_;
 };
 
-std::string Fixed6(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.6f", v);
-  return buf;
-}
-
-std::string Table(const std::vector<Query>& queries, const std::vector<std::vector<Candidate>>& picks,
-                  const std::vector<std::string>& names) {
-  std::ostringstream s;
-  s.imbue(std::locale::classic());
-  s << "query\trank\timage\tdistance\theading_deg\n";
+// The selection as partners.tsv rows (io/partners.h), the table printed in every mode.
+std::vector<PartnerRow> Rows(const std::vector<Query>& queries, const std::vector<std::vector<Candidate>>& picks,
+                             const std::vector<std::string>& names) {
+  std::vector<PartnerRow> rows;
   for (size_t i = 0; i < queries.size(); ++i)
     for (size_t r = 0; r < picks[i].size(); ++r)
-      s << queries[i].name << '\t' << r + 1 << '\t' << names[picks[i][r].index] << '\t'
-        << Fixed6(picks[i][r].distance) << '\t' << Fixed6(picks[i][r].heading_deg) << '\n';
-  return s.str();
+      rows.push_back({queries[i].name, static_cast<int64_t>(r + 1), names[picks[i][r].index],
+                      picks[i][r].distance, picks[i][r].heading_deg});
+  return rows;
 }
 
 // One group of candidates with its own index (a pass of the road, or all of --other).
@@ -350,6 +342,25 @@ std::vector<fs::path> ModelFiles(const Workspace& ws) {
   return files;
 }
 
+// Partners mode: WS/partners.tsv and the provenance record of the run.
+void WritePartnersAndProvenance(const PickViewOptions& o, const Workspace& ws, const Workspace* other_ws,
+                                const std::vector<PartnerRow>& rows) {
+  WritePartners(ws.PartnersPath().string(), rows);
+  nlohmann::json opts = {{"k", o.k},
+                         {"max_heading_deg", o.max_heading_deg},
+                         {"heading_weight", o.heading_weight},
+                         {"ahead_weight", o.ahead_weight},
+                         {"method", o.method},
+                         {"checks", o.checks},
+                         {"other", o.other},
+                         {"prefer_unmasked", o.prefer_unmasked},
+                         {"tie_margin", o.tie_margin}};
+  std::vector<fs::path> inputs = ModelFiles(ws);
+  if (other_ws)
+    for (const auto& f : ModelFiles(*other_ws)) inputs.push_back(f);
+  ws.WriteProvenance("pickview", opts, inputs);
+}
+
 }  // namespace
 
 PickViewReport RunPickView(const PickViewOptions& o, std::ostream& out, std::istream& in) {
@@ -418,25 +429,12 @@ PickViewReport RunPickView(const PickViewOptions& o, std::ostream& out, std::ist
     rep.unmatched += p.empty();
   }
 
-  std::string table = Table(queries, picks, cands.names);
+  std::vector<PartnerRow> rows = Rows(queries, picks, cands.names);
   if (o.partners) {
-    WriteTextAtomic(ws.PartnersPath(), [&](std::ostream& f) { f << table; });
+    WritePartnersAndProvenance(o, ws, other_ws ? &*other_ws : nullptr, rows);
     rep.partners_path = ws.PartnersPath().string();
-    nlohmann::json opts = {{"k", o.k},
-                           {"max_heading_deg", o.max_heading_deg},
-                           {"heading_weight", o.heading_weight},
-                           {"ahead_weight", o.ahead_weight},
-                           {"method", o.method},
-                           {"checks", o.checks},
-                           {"other", o.other},
-                           {"prefer_unmasked", o.prefer_unmasked},
-                           {"tie_margin", o.tie_margin}};
-    std::vector<fs::path> inputs = ModelFiles(ws);
-    if (other_ws)
-      for (const auto& f : ModelFiles(*other_ws)) inputs.push_back(f);
-    ws.WriteProvenance("pickview", opts, inputs);
   }
-  out << table;
+  WritePartners(out, rows);
   out.flush();
   if (!out) throw Error("-", 0, "cannot write the output");
   return rep;

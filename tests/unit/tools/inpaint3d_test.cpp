@@ -110,6 +110,18 @@ TEST_F(Inpaint3dFixture, ThreeDBeatsOpenCvInsideTheMasks) {
     std::printf("  %-10s %.4f   (%zu inpainted, %zu copied; %.1f ms/image)\n", m, s[m], r.inpainted,
                 r.copied, r.ms / double(r.inpainted + r.copied));
     EXPECT_GT(r.inpainted, 0u);
+    // Every masked pixel is accounted for by exactly one provenance.
+    EXPECT_GT(r.masked_pixels, 0u);
+    EXPECT_EQ(r.from_partners + r.from_sky + r.from_vertex + r.from_background + r.from_2d,
+              r.masked_pixels)
+        << m;
+    const std::string method = m;
+    if (method == "telea" || method == "ns") {
+      EXPECT_EQ(r.from_2d, r.masked_pixels);
+    }
+    if (method == "3d") {
+      EXPECT_GT(r.from_partners, r.masked_pixels / 2);
+    }
   }
   EXPECT_GT(s["3d"], s["telea"]);
   EXPECT_GT(s["3d"], s["ns"]);
