@@ -142,15 +142,19 @@ std::vector<cv::Mat> FamilyScores(const StereoView& ref, const RefWindows& rw, c
 // Per pixel, the family's best plane refined by a parabola through its neighbours' scores; keeps
 // it where it beats `best` (depth and score of the best family so far).
 void TakeBest(const SweepFamily& f, const std::vector<cv::Mat>& scores, const cv::Mat& ray_dot, cv::Mat& best_z,
-              cv::Mat& best_s) {
+              cv::Mat& best_s, cv::Mat& best_margin) {
   const int P = static_cast<int>(scores.size());
   auto param = [&](int p) { return f.inverse_spacing ? 1.0 / f.offsets[size_t(p)] : f.offsets[size_t(p)]; };
   for (int y = 0; y < best_z.rows; ++y)
     for (int x = 0; x < best_z.cols; ++x) {
-      int bp = -1;
+      int bp = -1, n = 0;
       float bs = kNoScore;
-      for (int p = 0; p < P; ++p)
-        if (scores[size_t(p)].at<float>(y, x) > bs) bs = scores[size_t(p)].at<float>(y, x), bp = p;
+      double sum = 0;
+      for (int p = 0; p < P; ++p) {
+        const float v = scores[size_t(p)].at<float>(y, x);
+        if (v > kNoScore) sum += v, ++n;
+        if (v > bs) bs = v, bp = p;
+      }
       if (bp < 0 || bs <= best_s.at<float>(y, x)) continue;
       double s = param(bp);
       if (bp > 0 && bp + 1 < P) {
@@ -166,6 +170,9 @@ void TakeBest(const SweepFamily& f, const std::vector<cv::Mat>& scores, const cv
       if (!(z > 0) || !std::isfinite(z)) continue;
       best_z.at<float>(y, x) = static_cast<float>(z);
       best_s.at<float>(y, x) = bs;
+      // How much the best plane stands out from the family's mean: near the epipole of a
+      // forward-moving camera every plane warps alike and the match says nothing.
+      best_margin.at<float>(y, x) = static_cast<float>(bs - sum / n);
     }
 }
 
@@ -176,6 +183,7 @@ void PlaneSweepOptions::Check() const {
   if (best_k < 1) throw UsageError("--best-k: must be >= 1");
   if (!(min_score >= -1 && min_score <= 1)) throw UsageError("--min-score: must be in [-1, 1]");
   if (!(min_texture >= 0 && std::isfinite(min_texture))) throw UsageError("--min-texture: must be >= 0");
+  if (!(min_margin >= 0 && min_margin <= 2)) throw UsageError("--min-margin: must be in [0, 2]");
 }
 
 SweepFamily MakeFrontoSweep(double near_z, double far_z, int planes) {
@@ -224,17 +232,17 @@ DepthMap SweepDepth(const StereoView& ref, const std::vector<StereoView>& nbs, c
   rw.win = o.window;
   WindowStats(ref.grey, o.window, rw.mean, rw.sd);
   cv::Mat best_z(h, w, CV_32F, cv::Scalar(std::numeric_limits<float>::infinity()));
-  cv::Mat best_s(h, w, CV_32F, cv::Scalar(kNoScore));
+  cv::Mat best_s(h, w, CV_32F, cv::Scalar(kNoScore)), best_margin(h, w, CV_32F, cv::Scalar(0));
   for (const SweepFamily& f : families) {
     const cv::Mat ray_dot = RayDot(ref.camera, f.normal, w, h);
-    TakeBest(f, FamilyScores(ref, rw, nbs, f, ray_dot, k), ray_dot, best_z, best_s);
+    TakeBest(f, FamilyScores(ref, rw, nbs, f, ray_dot, k), ray_dot, best_z, best_s, best_margin);
   }
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
-      const float s = best_s.at<float>(y, x);
-      if (s < o.min_score || rw.sd.at<float>(y, x) < o.min_texture) continue;
+      const float s = best_s.at<float>(y, x), margin = best_margin.at<float>(y, x);
+      if (s < o.min_score || margin < o.min_margin || rw.sd.at<float>(y, x) < o.min_texture) continue;
       out.depth.at(x, y) = best_z.at<float>(y, x);
-      out.confidence.at(x, y) = std::clamp(s, 0.f, 1.f);
+      out.confidence.at(x, y) = std::clamp(std::min(s, margin), 0.f, 1.f);
     }
   return out;
 }

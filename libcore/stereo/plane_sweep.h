@@ -15,8 +15,10 @@
 //    Each sweep family (a normal and its plane offsets, ordered) is searched exhaustively; the
 //    best plane is refined by a parabola through its neighbours' scores (sub-plane).
 //  * Output: linear depth z (float32), +inf where nothing is trusted (score below the minimum,
-//    a textureless window, fewer than k neighbours that see the pixel, no plane in front), and a
-//    confidence in [0, 1] (the aggregated ZNCC; 0 where the depth is +inf).
+//    a best plane that does not stand out from the others — no parallax, as near the epipole of
+//    a forward-moving camera, or a repetitive texture —, a textureless window, fewer than k
+//    neighbours that see the pixel, no plane in front), and a confidence in [0, 1]: the smaller
+//    of the aggregated ZNCC and its margin over the family's mean (0 where the depth is +inf).
 //
 // Hard cases, all handled without NaN: a plane through the reference centre (d = 0: skipped),
 // a plane through a neighbour's centre (singular homography: that neighbour abstains for that
@@ -59,6 +61,7 @@ struct PlaneSweepOptions {
   int best_k = 2;            // neighbours aggregated per pixel (the best k of N), ≥ 1
   double min_score = 0.5;    // aggregated ZNCC below which a pixel gets no depth, in [-1, 1]
   double min_texture = 2.0;  // grey standard deviation (0..255 scale) below which a window is textureless
+  double min_margin = 0.2;   // best score minus the family's mean score below which the match is ambiguous
 
   void Check() const;  // throws UsageError naming the option
 };

@@ -130,7 +130,7 @@ DensifyReport RunDensify(const DensifyOptions& o) {
   rep.valid_share = share / double(rep.written);
   nlohmann::json opts = {{"scale", o.scale}, {"planes", o.planes}, {"neighbours", o.neighbours.count},
                          {"window", o.sweep.window}, {"best_k", o.sweep.best_k}, {"min_score", o.sweep.min_score},
-                         {"min_texture", o.sweep.min_texture}, {"no_ground", o.no_ground}, {"no_facade", o.no_facade},
+                         {"min_texture", o.sweep.min_texture}, {"min_margin", o.sweep.min_margin}, {"no_ground", o.no_ground}, {"no_facade", o.no_facade},
                          {"no_fronto", o.no_fronto}, {"frames", o.frames}, {"shard", o.shard}};
   ws.WriteProvenance(o.ProvenanceName("densify"), opts, inputs);
   return rep;

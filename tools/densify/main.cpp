@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   app.add_option("--window", o.sweep.window, "ZNCC window side in pixels (odd, 3..31)")->capture_default_str();
   app.add_option("--best-k", o.sweep.best_k, "Neighbours aggregated per pixel: the best K of N")->capture_default_str();
   app.add_option("--min-score", o.sweep.min_score, "Aggregated ZNCC below which a pixel gets no depth")->capture_default_str();
+  app.add_option("--min-margin", o.sweep.min_margin, "Best score minus the mean over planes below which a match is ambiguous")->capture_default_str();
   app.add_option("--min-texture", o.sweep.min_texture, "Grey standard deviation (0..255) below which a window is textureless")->capture_default_str();
   mvtm::AddWorkOptions(app, o, "images", "in name order", "Recompute maps that are newer than the model");
   return mvtm::RunMain(app, "densify", argc, argv, [&] {
