@@ -17,11 +17,10 @@
 // Thread safety: a baker belongs to the thread holding the GL context (render/context.h).
 #pragma once
 
+#include <Eigen/Core>
 #include <cstddef>
 #include <memory>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "camera/camera.h"
 #include "geometry/rigid.h"

@@ -2,6 +2,8 @@
 // a straight road on a known plane with walls at known distances (seen through a rigid motion to
 // UTM-sized coordinates), the same road driven the other way, no points at all, bad paths; and the
 // area-weighted normals the corridor relies on (scene/mesh.h) on a shape worked out by hand.
+#include "mesh/corridor.h"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -9,7 +11,6 @@
 #include <cmath>
 
 #include "base/error.h"
-#include "mesh/corridor.h"
 
 namespace mvtm {
 namespace {
@@ -157,7 +158,8 @@ TEST(Corridor, BadPathsThrow) {
   one.images.erase(std::next(one.images.begin()), one.images.end());
   EXPECT_THROW(BuildCorridor(one, CorridorOptions()), Error);
   Reconstruction still = Road(false, true, m);
-  for (auto& [id, im] : still.images) im.world_to_camera = still.images.begin()->second.world_to_camera;
+  for (auto& [id, im] : still.images)
+    im.world_to_camera = still.images.begin()->second.world_to_camera;
   EXPECT_THROW(BuildCorridor(still, CorridorOptions()), Error);
 }
 

@@ -2,29 +2,26 @@
 // colour; two cameras above a plane mix by cos/distance = h / (r² + h²); a plane hides the one
 // below it; a camera behind the surface colours nothing; an image smaller than its camera is
 // sampled through the scaled camera; 16-bit grey is brought to 8 bits.
+#include "mesh/vertex_colours.h"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include "base/error.h"
-#include "mesh/vertex_colours.h"
 #include "render/context.h"
 
 namespace mvtm {
 namespace {
 
+// A GL context current for each test (the baker renders depth maps).
 class VertexColours : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() { ctx_ = GlContext::Create().release(); }
-  static void TearDownTestSuite() {
-    delete ctx_;
-    ctx_ = nullptr;
-  }
-  static GlContext* ctx_;
+  std::unique_ptr<GlContext> ctx_ = GlContext::Create();
 };
-GlContext* VertexColours::ctx_ = nullptr;
 
 // PINHOLE 200×200, f = 50, principal point at the centre: ±4 visible at distance 2.
 Camera Cam() {
