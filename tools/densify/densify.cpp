@@ -30,8 +30,8 @@ using Clock = std::chrono::steady_clock;
 // The image as grey float on the 0..255 scale, resized to `cam`'s size.
 cv::Mat LoadGrey(const fs::path& path, const Camera& cam) {
   const Image im = ToGrey(ReadImage(path.string()));
-  cv::Mat g(im.height, im.width, CV_32F, const_cast<float*>(im.data.data()));
-  g = g.clone() * (255.0 / im.MaxValue());
+  cv::Mat g;  // a copy: the Image's buffer dies with it
+  cv::Mat(im.height, im.width, CV_32F, const_cast<float*>(im.data.data())).convertTo(g, CV_32F, 255.0 / im.MaxValue());
   if (g.cols != int(cam.width) || g.rows != int(cam.height))
     cv::resize(g, g, cv::Size(int(cam.width), int(cam.height)), 0, 0, cv::INTER_AREA);
   return g;
