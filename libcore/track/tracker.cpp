@@ -60,15 +60,6 @@ void TrackOptions::Check() const {
   if (dilate < 0 || dilate > 1000) throw UsageError("dilate must be in 0..1000 pixels, got " + std::to_string(dilate));
 }
 
-const char* RowStateName(RowState s) {
-  switch (s) {
-    case RowState::kDetected: return "detected";
-    case RowState::kInterpolated: return "interpolated";
-    case RowState::kRejected: return "rejected";
-  }
-  return "?";
-}
-
 std::pair<size_t, size_t> TrackResult::FrameRows(int frame) const {
   if (frame < 0 || static_cast<size_t>(frame) + 1 >= frame_begin_.size()) return {0, 0};
   return {frame_begin_[static_cast<size_t>(frame)], frame_begin_[static_cast<size_t>(frame) + 1]};
