@@ -86,6 +86,15 @@ class Tracker {
     int id;
     std::vector<Det> dets;
   };
+  // A track's smoothed centroid and box size at each of its detections.
+  struct Smoothed {
+    std::vector<double> cx, cy, w, h;
+  };
+  // The steps of Finish(), one track at a time, then the frame index of the sorted rows.
+  Smoothed Smooth(const Track& tr, const std::vector<Blob>& blobs) const;
+  void AddDetectedRows(const Track& tr, const Smoothed& s, bool rejected, TrackResult& res) const;
+  void FillGaps(const Track& tr, const Smoothed& s, TrackResult& res) const;
+  void IndexFrames(TrackResult& res) const;
   int width_, height_;
   TrackOptions o_;
   int frames_ = 0;
