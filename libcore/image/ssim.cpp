@@ -481,8 +481,8 @@ void ForEachChunk(std::atomic<int>& next, int row_begin, int row_end, Fn fn) {
   }
 }
 
-Similarity CompareImpl(const Image& a, const Image& b, const SsimOptions& options,
-                       const Image* mask, Image* map, bool with_moments) {
+// Throws unless a, b (and the mask) can be compared under `options`.
+void CheckInputs(const Image& a, const Image& b, const SsimOptions& options, const Image* mask) {
   options.Check();
   if (a.width != b.width || a.height != b.height || a.channels != b.channels)
     throw SizeMismatchError("images differ in size: " + Dims(a) + " vs " + Dims(b));
@@ -502,17 +502,10 @@ Similarity CompareImpl(const Image& a, const Image& b, const SsimOptions& option
       << " SSIM window (sigma " << options.sigma << ", truncate " << options.truncate << ")";
     throw Error(s.str());
   }
+}
 
-  Similarity result;
-  result.data_range = options.DataRangeFor(a.bits);
-  const std::vector<double> wt = GaussianWeights(options.sigma, r);
-  const int nc = (a.channels == 2 || a.channels == 4) ? a.channels - 1 : a.channels;
-  const size_t npix = a.pixels();
-
-  // The colour channels, read in place from the interleaved samples.
-  std::vector<PlanePair> pairs(nc);
-  for (int c = 0; c < nc; ++c) pairs[c] = {a.data.data() + c, b.data.data() + c, a.channels};
-
+// 1 where any channel of the mask is non-zero (empty without a mask).
+std::vector<uint8_t> InsideMask(const Image* mask, size_t npix) {
   std::vector<uint8_t> inside;
   if (mask) {
     inside.assign(npix, 0);
@@ -520,6 +513,93 @@ Similarity CompareImpl(const Image& a, const Image& b, const SsimOptions& option
       for (int c = 0; c < mask->channels; ++c)
         if (mask->data[q * mask->channels + c] != 0.f) inside[q] = 1;
   }
+  return inside;
+}
+
+// Pixel counts: SSIM over cropped band ∩ mask, NCC/PSNR over the mask.
+void CountPixels(const std::vector<uint8_t>& inside, bool masked, int w, int h, int r,
+                 Similarity& result) {
+  if (masked) {
+    for (size_t q = 0; q < inside.size(); ++q) result.pixels += inside[q];
+    for (int i = r; i < h - r; ++i)
+      for (int j = r; j < w - r; ++j) result.ssim_pixels += inside[static_cast<size_t>(i) * w + j];
+  } else {
+    result.pixels = static_cast<size_t>(w) * h;
+    result.ssim_pixels = static_cast<size_t>(w - 2 * r) * (h - 2 * r);
+  }
+}
+
+// NCC and PSNR from the per-row moments of each channel.
+void NccAndPsnr(const std::vector<std::vector<RowMoments>>& moments, int h, Similarity& result) {
+  const int nc = static_cast<int>(moments.size());
+  const double n = static_cast<double>(result.pixels);
+  double ncc_total = 0, sdd = 0;
+  for (int c = 0; c < nc; ++c) {
+    RowMoments m{};
+    for (int i = 0; i < h; ++i)
+      for (int q = 0; q < kMoments; ++q) m[q] += moments[c][i][q];
+    const double var_x = m[kSxx] - m[kSx] * m[kSx] / n;
+    const double var_y = m[kSyy] - m[kSy] * m[kSy] / n;
+    const double cov = m[kSxy] - m[kSx] * m[kSy] / n;
+    ncc_total += (var_x > 0 && var_y > 0) ? cov / std::sqrt(var_x * var_y) : kNaN;
+    sdd += m[kSdd];
+  }
+  result.ncc = result.pixels ? ncc_total / nc : kNaN;
+  const double mse = sdd / (n * nc);
+  result.psnr = !result.pixels ? kNaN
+                : mse == 0     ? std::numeric_limits<double>::infinity()
+                               : 10 * std::log10(result.data_range * result.data_range / mse);
+}
+
+// Runs the SSIM kernels over rows [ssim_begin, ssim_end) into row_sum, and, when `moments` is
+// not empty, the moment kernels over every row, on `threads` threads.
+void RunKernels(const Job& job, const std::vector<PlanePair>& pairs, const SsimOptions& options,
+                int ssim_begin, int ssim_end, std::vector<std::vector<double>>& row_sum,
+                std::vector<std::vector<RowMoments>>& moments) {
+  const int nc = static_cast<int>(pairs.size()), h = job.h;
+  const bool with_moments = !moments.empty();
+  std::vector<double> x0(nc), y0(nc);
+  for (int c = 0; c < nc; ++c) {
+    x0[c] = pairs[c].x[0];
+    y0[c] = pairs[c].y[0];
+  }
+  const int t = ThreadCount(options.threads, ssim_end - ssim_begin);
+  std::vector<Scratch> scratch;
+  scratch.reserve(t);
+  for (int k = 0; k < t; ++k) scratch.emplace_back(job.w, job.r);
+
+  SsimRowsFn ssim_rows;
+  MomentRowsFn moment_rows;
+  PickKernels(options.simd, &ssim_rows, &moment_rows);
+  std::atomic<int> next_ssim{0}, next_moments{0};
+  RunThreads(t, [&](int k) {
+    ForEachChunk(next_ssim, ssim_begin, ssim_end, [&](int i0, int i1) {
+      for (int c = 0; c < nc; ++c)
+        ssim_rows(job, pairs[c], i0, i1, c == 0, scratch[k], row_sum[c].data());
+    });
+    if (with_moments) {
+      ForEachChunk(next_moments, 0, h, [&](int i0, int i1) {
+        for (int c = 0; c < nc; ++c)
+          moment_rows(job, pairs[c], x0[c], y0[c], i0, i1, moments[c].data());
+      });
+    }
+  });
+}
+
+Similarity CompareImpl(const Image& a, const Image& b, const SsimOptions& options,
+                       const Image* mask, Image* map, bool with_moments) {
+  CheckInputs(a, b, options, mask);
+  const int w = a.width, h = a.height, r = options.Radius();
+
+  Similarity result;
+  result.data_range = options.DataRangeFor(a.bits);
+  const std::vector<double> wt = GaussianWeights(options.sigma, r);
+  const int nc = (a.channels == 2 || a.channels == 4) ? a.channels - 1 : a.channels;
+
+  // The colour channels, read in place from the interleaved samples.
+  std::vector<PlanePair> pairs(nc);
+  for (int c = 0; c < nc; ++c) pairs[c] = {a.data.data() + c, b.data.data() + c, a.channels};
+  const std::vector<uint8_t> inside = InsideMask(mask, a.pixels());
 
   Job job;
   job.w = w;
@@ -539,46 +619,12 @@ Similarity CompareImpl(const Image& a, const Image& b, const SsimOptions& option
   std::vector<std::vector<double>> row_sum(nc, std::vector<double>(h, 0.0));
   std::vector<std::vector<RowMoments>> moments(with_moments ? nc : 0,
                                                std::vector<RowMoments>(h, RowMoments{}));
-  std::vector<double> x0(nc), y0(nc);
-  for (int c = 0; c < nc; ++c) {
-    x0[c] = pairs[c].x[0];
-    y0[c] = pairs[c].y[0];
-  }
-  const int t = ThreadCount(options.threads, ssim_end - ssim_begin);
-  std::vector<Scratch> scratch;
-  scratch.reserve(t);
-  for (int k = 0; k < t; ++k) scratch.emplace_back(w, r);
-
-  SsimRowsFn ssim_rows;
-  MomentRowsFn moment_rows;
-  PickKernels(options.simd, &ssim_rows, &moment_rows);
-  std::atomic<int> next_ssim{0}, next_moments{0};
-  RunThreads(t, [&](int k) {
-    ForEachChunk(next_ssim, ssim_begin, ssim_end, [&](int i0, int i1) {
-      for (int c = 0; c < nc; ++c)
-        ssim_rows(job, pairs[c], i0, i1, c == 0, scratch[k], row_sum[c].data());
-    });
-    if (with_moments) {
-      ForEachChunk(next_moments, 0, h, [&](int i0, int i1) {
-        for (int c = 0; c < nc; ++c)
-          moment_rows(job, pairs[c], x0[c], y0[c], i0, i1, moments[c].data());
-      });
-    }
-  });
+  RunKernels(job, pairs, options, ssim_begin, ssim_end, row_sum, moments);
 
   if (map && nc > 1) {
     for (float& v : map->data) v /= static_cast<float>(nc);
   }
-
-  // Pixel counts: SSIM over cropped band ∩ mask, NCC/PSNR over the mask.
-  if (mask) {
-    for (size_t q = 0; q < npix; ++q) result.pixels += inside[q];
-    for (int i = r; i < h - r; ++i)
-      for (int j = r; j < w - r; ++j) result.ssim_pixels += inside[static_cast<size_t>(i) * w + j];
-  } else {
-    result.pixels = npix;
-    result.ssim_pixels = static_cast<size_t>(w - 2 * r) * (h - 2 * r);
-  }
+  CountPixels(inside, mask != nullptr, w, h, r, result);
 
   double ssim_total = 0;
   for (int c = 0; c < nc; ++c) {
@@ -589,23 +635,7 @@ Similarity CompareImpl(const Image& a, const Image& b, const SsimOptions& option
   result.ssim = result.ssim_pixels ? ssim_total / nc : kNaN;
 
   if (with_moments) {
-    const double n = static_cast<double>(result.pixels);
-    double ncc_total = 0, sdd = 0;
-    for (int c = 0; c < nc; ++c) {
-      RowMoments m{};
-      for (int i = 0; i < h; ++i)
-        for (int q = 0; q < kMoments; ++q) m[q] += moments[c][i][q];
-      const double var_x = m[kSxx] - m[kSx] * m[kSx] / n;
-      const double var_y = m[kSyy] - m[kSy] * m[kSy] / n;
-      const double cov = m[kSxy] - m[kSx] * m[kSy] / n;
-      ncc_total += (var_x > 0 && var_y > 0) ? cov / std::sqrt(var_x * var_y) : kNaN;
-      sdd += m[kSdd];
-    }
-    result.ncc = result.pixels ? ncc_total / nc : kNaN;
-    const double mse = sdd / (n * nc);
-    result.psnr = !result.pixels ? kNaN
-                  : mse == 0     ? std::numeric_limits<double>::infinity()
-                                 : 10 * std::log10(result.data_range * result.data_range / mse);
+    NccAndPsnr(moments, h, result);
   } else {
     result.ncc = result.psnr = kNaN;
   }

@@ -10,6 +10,7 @@
 #include "base/atomic_file.h"
 #include "base/error.h"
 #include "base/text.h"
+#include "io/text_file.h"
 
 namespace mvtm {
 
@@ -93,106 +94,149 @@ Eigen::Quaterniond CheckedQuaternion(double w, double x, double y, double z,
 // ---------------------------------------------------------------------------------------------
 // Text
 
+std::map<uint32_t, Camera> ReadColmapCamerasText(std::istream& stream, const std::string& name) {
+  std::map<uint32_t, Camera> cameras;
+  LineReader in(stream, name);
+  std::string line;
+  while (in.Next(line)) {
+    auto tok = SplitBlank(line);
+    if (tok.size() < 4) in.Fail("camera line needs CAMERA_ID MODEL WIDTH HEIGHT PARAMS[]");
+    Camera c;
+    int64_t id = ParseInt(tok[0], in, "CAMERA_ID");
+    if (id < 0 || id > UINT32_MAX) in.Fail("CAMERA_ID out of range");
+    c.id = static_cast<uint32_t>(id);
+    try {
+      c.model = CameraModelFromName(std::string(tok[1]));
+    } catch (const Error& e) {
+      in.Fail(e.what());
+    }
+    int64_t w = ParseInt(tok[2], in, "WIDTH"), h = ParseInt(tok[3], in, "HEIGHT");
+    if (w <= 0 || h <= 0) in.Fail("WIDTH and HEIGHT must be positive");
+    c.width = static_cast<uint64_t>(w);
+    c.height = static_cast<uint64_t>(h);
+    size_t np = static_cast<size_t>(CameraModelNumParams(c.model));
+    if (tok.size() != 4 + np)
+      in.Fail(std::string(tok[1]) + " takes " + std::to_string(np) + " parameters, found " +
+              std::to_string(tok.size() - 4));
+    for (size_t i = 4; i < tok.size(); ++i) c.params.push_back(ParseDouble(tok[i], in, "PARAMS"));
+    if (!cameras.emplace(c.id, c).second) in.Fail("duplicate CAMERA_ID " + std::to_string(c.id));
+  }
+  return cameras;
+}
+
+namespace {
+
+// The POINTS2D line of an image: triples X Y POINT3D_ID (-1: none).
+std::vector<Point2D> ParsePoints2D(std::string_view text, const LineReader& in) {
+  auto pt = SplitBlank(Trim(text));
+  if (pt.size() % 3 != 0) in.Fail("POINTS2D needs triples X Y POINT3D_ID");
+  std::vector<Point2D> points;
+  for (size_t i = 0; i < pt.size(); i += 3) {
+    Point2D p;
+    p.xy = {ParseDouble(pt[i], in, "X"), ParseDouble(pt[i + 1], in, "Y")};
+    int64_t pid = ParseInt(pt[i + 2], in, "POINT3D_ID");
+    p.point3D_id = pid < 0 ? kInvalidPoint3DId : static_cast<uint64_t>(pid);
+    points.push_back(p);
+  }
+  return points;
+}
+
+// The pose line of an image: IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME.
+ImageRecord ParseImageLine(const std::string& line, const LineReader& in) {
+  auto tok = SplitBlank(line);
+  if (tok.size() != 10)
+    in.Fail("image line needs 10 fields (IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME), found " +
+            std::to_string(tok.size()));
+  ImageRecord im;
+  int64_t id = ParseInt(tok[0], in, "IMAGE_ID");
+  if (id < 0 || id > UINT32_MAX) in.Fail("IMAGE_ID out of range");
+  im.id = static_cast<uint32_t>(id);
+  double q[4], t[3];
+  const char* qn[4] = {"QW", "QX", "QY", "QZ"};
+  const char* tn[3] = {"TX", "TY", "TZ"};
+  for (int i = 0; i < 4; ++i) q[i] = ParseDouble(tok[1 + i], in, qn[i]);
+  for (int i = 0; i < 3; ++i) t[i] = ParseDouble(tok[5 + i], in, tn[i]);
+  im.world_to_camera.q = CheckedQuaternion(q[0], q[1], q[2], q[3], in.name(), in.line());
+  im.world_to_camera.t = Eigen::Vector3d(t[0], t[1], t[2]);
+  int64_t cid = ParseInt(tok[8], in, "CAMERA_ID");
+  if (cid < 0 || cid > UINT32_MAX) in.Fail("CAMERA_ID out of range");
+  im.camera_id = static_cast<uint32_t>(cid);
+  im.name = std::string(tok[9]);
+  return im;
+}
+
+}  // namespace
+
+void ForEachColmapImageText(std::istream& stream, const std::string& name,
+                            const std::function<void(ImageRecord&&, long line)>& each) {
+  LineReader in(stream, name);
+  std::string line, pts;
+  while (in.Next(line)) {
+    ImageRecord im = ParseImageLine(line, in);
+    const long image_line = in.line();
+    if (!in.NextRaw(pts)) in.Fail("image " + std::to_string(im.id) + " has no POINTS2D line");
+    im.points2D = ParsePoints2D(pts, in);
+    each(std::move(im), image_line);
+  }
+}
+
+std::map<uint32_t, ImageRecord> ReadColmapImagesText(std::istream& stream, const std::string& name) {
+  std::map<uint32_t, ImageRecord> images;
+  ForEachColmapImageText(stream, name, [&](ImageRecord&& im, long line) {
+    const uint32_t id = im.id;
+    if (!images.emplace(id, std::move(im)).second)
+      throw Error(name, line, "duplicate IMAGE_ID " + std::to_string(id));
+  });
+  return images;
+}
+
+std::map<uint64_t, Point3D> ReadColmapPoints3DText(std::istream& stream, const std::string& name) {
+  std::map<uint64_t, Point3D> points;
+  LineReader in(stream, name);
+  std::string line;
+  while (in.Next(line)) {
+    auto tok = SplitBlank(line);
+    if (tok.size() < 8 || (tok.size() - 8) % 2 != 0)
+      in.Fail("point line needs POINT3D_ID X Y Z R G B ERROR TRACK[] (pairs)");
+    Point3D p;
+    int64_t id = ParseInt(tok[0], in, "POINT3D_ID");
+    if (id < 0) in.Fail("POINT3D_ID must not be negative");
+    p.id = static_cast<uint64_t>(id);
+    p.xyz = {ParseDouble(tok[1], in, "X"), ParseDouble(tok[2], in, "Y"),
+             ParseDouble(tok[3], in, "Z")};
+    for (int c = 0; c < 3; ++c) {
+      int64_t v = ParseInt(tok[4 + c], in, "RGB");
+      if (v < 0 || v > 255) in.Fail("colour component out of 0..255");
+      p.rgb[c] = static_cast<uint8_t>(v);
+    }
+    p.error = ParseDouble(tok[7], in, "ERROR");
+    for (size_t i = 8; i < tok.size(); i += 2) {
+      int64_t iid = ParseInt(tok[i], in, "IMAGE_ID"), idx = ParseInt(tok[i + 1], in, "POINT2D_IDX");
+      if (iid < 0 || iid > UINT32_MAX || idx < 0 || idx > UINT32_MAX) in.Fail("track element out of range");
+      p.track.push_back({static_cast<uint32_t>(iid), static_cast<uint32_t>(idx)});
+    }
+    if (!points.emplace(p.id, std::move(p)).second)
+      in.Fail("duplicate POINT3D_ID " + std::to_string(id));
+  }
+  return points;
+}
+
 Reconstruction ReadColmapText(const std::string& dir) {
   Reconstruction r;
   const std::string cam_file = (fs::path(dir) / "cameras.txt").string();
   const std::string img_file = (fs::path(dir) / "images.txt").string();
   const std::string pts_file = (fs::path(dir) / "points3D.txt").string();
   {
-    LineReader in(cam_file);
-    std::string line;
-    while (in.Next(line)) {
-      auto tok = SplitBlank(line);
-      if (tok.size() < 4) in.Fail("camera line needs CAMERA_ID MODEL WIDTH HEIGHT PARAMS[]");
-      Camera c;
-      int64_t id = ParseInt(tok[0], in, "CAMERA_ID");
-      if (id < 0 || id > UINT32_MAX) in.Fail("CAMERA_ID out of range");
-      c.id = static_cast<uint32_t>(id);
-      try {
-        c.model = CameraModelFromName(std::string(tok[1]));
-      } catch (const Error& e) {
-        in.Fail(e.what());
-      }
-      int64_t w = ParseInt(tok[2], in, "WIDTH"), h = ParseInt(tok[3], in, "HEIGHT");
-      if (w <= 0 || h <= 0) in.Fail("WIDTH and HEIGHT must be positive");
-      c.width = static_cast<uint64_t>(w);
-      c.height = static_cast<uint64_t>(h);
-      size_t np = static_cast<size_t>(CameraModelNumParams(c.model));
-      if (tok.size() != 4 + np)
-        in.Fail(std::string(tok[1]) + " takes " + std::to_string(np) + " parameters, found " +
-                std::to_string(tok.size() - 4));
-      for (size_t i = 4; i < tok.size(); ++i) c.params.push_back(ParseDouble(tok[i], in, "PARAMS"));
-      if (!r.cameras.emplace(c.id, c).second) in.Fail("duplicate CAMERA_ID " + std::to_string(c.id));
-    }
+    std::ifstream in = OpenTextFile(cam_file);
+    r.cameras = ReadColmapCamerasText(in, cam_file);
   }
   {
-    LineReader in(img_file);
-    std::string line;
-    while (in.Next(line)) {
-      auto tok = SplitBlank(line);
-      if (tok.size() != 10)
-        in.Fail("image line needs 10 fields (IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME), found " +
-                std::to_string(tok.size()));
-      ImageRecord im;
-      int64_t id = ParseInt(tok[0], in, "IMAGE_ID");
-      if (id < 0 || id > UINT32_MAX) in.Fail("IMAGE_ID out of range");
-      im.id = static_cast<uint32_t>(id);
-      double q[4], t[3];
-      const char* qn[4] = {"QW", "QX", "QY", "QZ"};
-      const char* tn[3] = {"TX", "TY", "TZ"};
-      for (int i = 0; i < 4; ++i) q[i] = ParseDouble(tok[1 + i], in, qn[i]);
-      for (int i = 0; i < 3; ++i) t[i] = ParseDouble(tok[5 + i], in, tn[i]);
-      im.world_to_camera.q = CheckedQuaternion(q[0], q[1], q[2], q[3], in.name(), in.line());
-      im.world_to_camera.t = Eigen::Vector3d(t[0], t[1], t[2]);
-      int64_t cid = ParseInt(tok[8], in, "CAMERA_ID");
-      if (cid < 0 || cid > UINT32_MAX) in.Fail("CAMERA_ID out of range");
-      im.camera_id = static_cast<uint32_t>(cid);
-      im.name = std::string(tok[9]);
-      long image_line = in.line();
-      std::string pts;
-      if (!in.NextRaw(pts)) in.Fail("image " + std::to_string(im.id) + " has no POINTS2D line");
-      auto pt = SplitBlank(Trim(pts));
-      if (pt.size() % 3 != 0) in.Fail("POINTS2D needs triples X Y POINT3D_ID");
-      for (size_t i = 0; i < pt.size(); i += 3) {
-        Point2D p;
-        p.xy = {ParseDouble(pt[i], in, "X"), ParseDouble(pt[i + 1], in, "Y")};
-        int64_t pid = ParseInt(pt[i + 2], in, "POINT3D_ID");
-        p.point3D_id = pid < 0 ? kInvalidPoint3DId : static_cast<uint64_t>(pid);
-        im.points2D.push_back(p);
-      }
-      if (!r.images.emplace(im.id, std::move(im)).second)
-        throw Error(img_file, image_line, "duplicate IMAGE_ID " + std::to_string(id));
-    }
+    std::ifstream in = OpenTextFile(img_file);
+    r.images = ReadColmapImagesText(in, img_file);
   }
-  if (fs::exists(pts_file)) {
-    LineReader in(pts_file);
-    std::string line;
-    while (in.Next(line)) {
-      auto tok = SplitBlank(line);
-      if (tok.size() < 8 || (tok.size() - 8) % 2 != 0)
-        in.Fail("point line needs POINT3D_ID X Y Z R G B ERROR TRACK[] (pairs)");
-      Point3D p;
-      int64_t id = ParseInt(tok[0], in, "POINT3D_ID");
-      if (id < 0) in.Fail("POINT3D_ID must not be negative");
-      p.id = static_cast<uint64_t>(id);
-      p.xyz = {ParseDouble(tok[1], in, "X"), ParseDouble(tok[2], in, "Y"),
-               ParseDouble(tok[3], in, "Z")};
-      for (int c = 0; c < 3; ++c) {
-        int64_t v = ParseInt(tok[4 + c], in, "RGB");
-        if (v < 0 || v > 255) in.Fail("colour component out of 0..255");
-        p.rgb[c] = static_cast<uint8_t>(v);
-      }
-      p.error = ParseDouble(tok[7], in, "ERROR");
-      for (size_t i = 8; i < tok.size(); i += 2) {
-        int64_t iid = ParseInt(tok[i], in, "IMAGE_ID"), idx = ParseInt(tok[i + 1], in, "POINT2D_IDX");
-        if (iid < 0 || iid > UINT32_MAX || idx < 0 || idx > UINT32_MAX) in.Fail("track element out of range");
-        p.track.push_back({static_cast<uint32_t>(iid), static_cast<uint32_t>(idx)});
-      }
-      if (!r.points3D.emplace(p.id, std::move(p)).second)
-        in.Fail("duplicate POINT3D_ID " + std::to_string(id));
-    }
-  } else {
-    throw Error(pts_file, 0, "cannot open");
+  {
+    std::ifstream in = OpenTextFile(pts_file);
+    r.points3D = ReadColmapPoints3DText(in, pts_file);
   }
   CheckReferences(r, img_file, pts_file);
   return r;

@@ -16,6 +16,8 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
+#include <istream>
 #include <map>
 #include <string>
 #include <vector>
@@ -31,6 +33,16 @@ namespace mvtm {
 Reconstruction ReadColmapModel(const std::string& dir);
 Reconstruction ReadColmapText(const std::string& dir);
 Reconstruction ReadColmapBinary(const std::string& dir);
+// The three text files one by one, from streams; `name` is used in "NAME:LINE: what" messages.
+// Each checks its own file (fields, numbers, duplicate ids); ReadColmapText(dir) also checks
+// that the files agree (cameras named by images, points and images named by tracks).
+std::map<uint32_t, Camera> ReadColmapCamerasText(std::istream& in, const std::string& name);
+std::map<uint32_t, ImageRecord> ReadColmapImagesText(std::istream& in, const std::string& name);
+std::map<uint64_t, Point3D> ReadColmapPoints3DText(std::istream& in, const std::string& name);
+// images.txt in file order, without the duplicate-id check: calls each(image, line) with the
+// line number of the image's pose line (a trajectory reader keeps the file's order and lines).
+void ForEachColmapImageText(std::istream& in, const std::string& name,
+                            const std::function<void(ImageRecord&&, long line)>& each);
 // Writes the three files atomically (each to a temporary name, then renamed).
 void WriteColmapText(const Reconstruction& r, const std::string& dir);
 void WriteColmapBinary(const Reconstruction& r, const std::string& dir);

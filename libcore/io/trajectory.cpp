@@ -2,12 +2,15 @@
 
 #include <filesystem>
 #include <fstream>
+#include <streambuf>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
 #include "base/atomic_file.h"
 #include "base/error.h"
 #include "base/text.h"
+#include "io/colmap_model.h"
+#include "io/text_file.h"
 
 namespace mvtm {
 
@@ -15,20 +18,21 @@ namespace fs = std::filesystem;
 
 namespace {
 
-Eigen::Quaterniond QuaternionOrFail(double w, double x, double y, double z, const LineReader& in) {
+Eigen::Quaterniond NormalisedOrFail(double w, double x, double y, double z, const std::string& name,
+                                    long line) {
   double n = std::sqrt(w * w + x * x + y * y + z * z);
-  if (!(n > 1e-12)) in.Fail("quaternion has zero norm");
+  if (!(n > 1e-12)) throw Error(name, line, "quaternion has zero norm");
   Eigen::Quaterniond q(w / n, x / n, y / n, z / n);
   return q;
 }
 
-}  // namespace
-
-TrajectoryFormat DetectTrajectoryFormat(const std::string& path) {
-  LineReader in(path);
+// Reads lines up to and including the first data line and tells the format from them. Appends
+// every line read to `seen` (when given), so the caller can hand them to the reader again.
+TrajectoryFormat DetectFormat(LineReader& in, std::string* seen) {
   std::string raw;
   bool colmap_header = false;
   while (in.NextRaw(raw)) {
+    if (seen) seen->append(raw).push_back('\n');
     std::string_view t = Trim(raw);
     if (t.empty()) continue;
     if (t.front() == '#') {
@@ -43,11 +47,67 @@ TrajectoryFormat DetectTrajectoryFormat(const std::string& path) {
     in.Fail("cannot tell the trajectory format: " + std::to_string(n) +
             " fields (TUM has 8, KITTI 12, COLMAP images.txt 10)");
   }
-  throw Error(path, 0, "cannot tell the trajectory format: the file has no poses");
+  throw Error(in.name(), 0, "cannot tell the trajectory format: the file has no poses");
 }
 
-Trajectory ReadTum(const std::string& path) {
+// A stream buffer that gives `prefix` and then the rest of `rest`: the lines that format
+// detection has read, followed by what it has not, without seeking (stdin, pipes).
+class PrefixedBuf : public std::streambuf {
+ public:
+  PrefixedBuf(std::string prefix, std::streambuf* rest) : prefix_(std::move(prefix)), rest_(rest) {
+    setg(prefix_.data(), prefix_.data(), prefix_.data() + prefix_.size());
+  }
+
+ protected:
+  int_type underflow() override {
+    if (gptr() < egptr()) return traits_type::to_int_type(*gptr());
+    const std::streamsize n = rest_->sgetn(chunk_, sizeof chunk_);
+    if (n <= 0) return traits_type::eof();
+    setg(chunk_, chunk_, chunk_ + n);
+    return traits_type::to_int_type(*gptr());
+  }
+
+ private:
+  std::string prefix_;
+  std::streambuf* rest_;
+  char chunk_[4096];
+};
+
+Trajectory ReadColmapImagesTrajectory(std::istream& stream, const std::string& name) {
+  Trajectory tr;
+  ForEachColmapImageText(stream, name, [&](ImageRecord&& im, long line) {
+    const Eigen::Quaterniond& q = im.world_to_camera.q;
+    Rigid3d w2c(NormalisedOrFail(q.w(), q.x(), q.y(), q.z(), name, line), im.world_to_camera.t);
+    StampedPose p;
+    p.time = static_cast<double>(im.id);
+    p.line = line;
+    p.pose = w2c.Inverse();
+    tr.poses.push_back(p);
+    tr.names.push_back(std::move(im.name));
+  });
+  if (tr.poses.empty()) throw Error(name, 0, "trajectory file has no poses");
+  return tr;
+}
+
+Trajectory ReadTrajectoryAs(std::istream& in, const std::string& name, TrajectoryFormat format) {
+  switch (format) {
+    case TrajectoryFormat::kTum: return ReadTum(in, name);
+    case TrajectoryFormat::kKitti: return ReadKittiPoses(in, name);
+    case TrajectoryFormat::kColmap: return ReadColmapImagesTrajectory(in, name);
+    default: break;
+  }
+  throw Error(name, 0, "unknown trajectory format");
+}
+
+}  // namespace
+
+TrajectoryFormat DetectTrajectoryFormat(const std::string& path) {
   LineReader in(path);
+  return DetectFormat(in, nullptr);
+}
+
+Trajectory ReadTum(std::istream& stream, const std::string& name) {
+  LineReader in(stream, name);
   Trajectory tr;
   std::string line;
   while (in.Next(line)) {
@@ -61,15 +121,21 @@ Trajectory ReadTum(const std::string& path) {
     StampedPose p;
     p.time = v[0];
     p.line = in.line();
-    p.pose = Rigid3d(QuaternionOrFail(v[7], v[4], v[5], v[6], in), Eigen::Vector3d(v[1], v[2], v[3]));
+    p.pose = Rigid3d(NormalisedOrFail(v[7], v[4], v[5], v[6], name, in.line()),
+                     Eigen::Vector3d(v[1], v[2], v[3]));
     tr.poses.push_back(p);
   }
-  if (tr.poses.empty()) throw Error(path, 0, "trajectory file has no poses");
+  if (tr.poses.empty()) throw Error(name, 0, "trajectory file has no poses");
   return tr;
 }
 
-Trajectory ReadKittiPoses(const std::string& path, const std::string& times_path) {
-  LineReader in(path);
+Trajectory ReadTum(const std::string& path) {
+  std::ifstream in = OpenTextFile(path);
+  return ReadTum(in, path);
+}
+
+Trajectory ReadKittiPoses(std::istream& stream, const std::string& name) {
+  LineReader in(stream, name);
   Trajectory tr;
   std::string line;
   while (in.Next(line)) {
@@ -86,7 +152,13 @@ Trajectory ReadKittiPoses(const std::string& path, const std::string& times_path
     p.pose = Rigid3d::FromMatrix(m);
     tr.poses.push_back(p);
   }
-  if (tr.poses.empty()) throw Error(path, 0, "trajectory file has no poses");
+  if (tr.poses.empty()) throw Error(name, 0, "trajectory file has no poses");
+  return tr;
+}
+
+Trajectory ReadKittiPoses(const std::string& path, const std::string& times_path) {
+  std::ifstream in = OpenTextFile(path);
+  Trajectory tr = ReadKittiPoses(in, path);
   if (!times_path.empty()) {
     auto times = ReadTimestamps(times_path);
     if (times.size() != tr.poses.size())
@@ -98,37 +170,21 @@ Trajectory ReadKittiPoses(const std::string& path, const std::string& times_path
   return tr;
 }
 
-static Trajectory ReadColmapImagesTxt(const std::string& path) {
-  LineReader in(path);
-  Trajectory tr;
-  std::string line, pts;
-  while (in.Next(line)) {
-    auto tok = SplitBlank(line);
-    if (tok.size() != 10) in.Fail("image line needs 10 fields, found " + std::to_string(tok.size()));
-    double v[7];
-    for (int i = 0; i < 7; ++i) v[i] = ParseDouble(tok[1 + i], in, "pose");
-    Rigid3d w2c(QuaternionOrFail(v[0], v[1], v[2], v[3], in), Eigen::Vector3d(v[4], v[5], v[6]));
-    StampedPose p;
-    p.time = static_cast<double>(ParseInt(tok[0], in, "IMAGE_ID"));
-    p.line = in.line();
-    p.pose = w2c.Inverse();
-    tr.poses.push_back(p);
-    tr.names.emplace_back(tok[9]);
-    in.NextRaw(pts);  // the POINTS2D line
+Trajectory ReadTrajectory(std::istream& in, const std::string& name, TrajectoryFormat format) {
+  if (format != TrajectoryFormat::kAuto) return ReadTrajectoryAs(in, name, format);
+  std::string seen;
+  {
+    LineReader lines(in, name);
+    format = DetectFormat(lines, &seen);
   }
-  if (tr.poses.empty()) throw Error(path, 0, "trajectory file has no poses");
-  return tr;
+  PrefixedBuf buf(std::move(seen), in.rdbuf());
+  std::istream joined(&buf);
+  return ReadTrajectoryAs(joined, name, format);
 }
 
 Trajectory ReadTrajectory(const std::string& path, TrajectoryFormat format) {
-  if (format == TrajectoryFormat::kAuto) format = DetectTrajectoryFormat(path);
-  switch (format) {
-    case TrajectoryFormat::kTum: return ReadTum(path);
-    case TrajectoryFormat::kKitti: return ReadKittiPoses(path);
-    case TrajectoryFormat::kColmap: return ReadColmapImagesTxt(path);
-    default: break;
-  }
-  throw Error(path, 0, "unknown trajectory format");
+  std::ifstream in = OpenTextFile(path);
+  return ReadTrajectory(in, path, format);
 }
 
 void WriteTum(const std::string& path, const std::vector<StampedPose>& c2w) {
@@ -154,8 +210,8 @@ void WriteKittiPoses(const std::string& path, const std::vector<StampedPose>& c2
   });
 }
 
-std::vector<TimedName> ReadTimestamps(const std::string& path) {
-  LineReader in(path);
+std::vector<TimedName> ReadTimestamps(std::istream& stream, const std::string& name) {
+  LineReader in(stream, name);
   std::vector<TimedName> out;
   std::string line;
   while (in.Next(line)) {
@@ -167,8 +223,13 @@ std::vector<TimedName> ReadTimestamps(const std::string& path) {
     t.line = in.line();
     out.push_back(t);
   }
-  if (out.empty()) throw Error(path, 0, "no timestamps");
+  if (out.empty()) throw Error(name, 0, "no timestamps");
   return out;
+}
+
+std::vector<TimedName> ReadTimestamps(const std::string& path) {
+  std::ifstream in = OpenTextFile(path);
+  return ReadTimestamps(in, path);
 }
 
 Camera ReadKittiCalib(const std::string& path, int cam_index, uint64_t width, uint64_t height) {

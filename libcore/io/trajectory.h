@@ -12,8 +12,12 @@
 //    converted to camera axes (x right, y down, z forward) by negating the y and z columns.
 // Every reader reports malformed input as "FILE:LINE: what" (field count, non-numeric,
 // non-finite, zero-norm quaternion) and never crashes. Quaternions are normalised on read.
+// The text readers take a stream as well as a path; `name` stands for FILE in messages ("-" for
+// standard input). Stream readers read forward only: they work on pipes and std::cin.
+// A COLMAP images.txt is parsed by io/colmap_model.h's reader (its rules and messages).
 #pragma once
 
+#include <istream>
 #include <optional>
 #include <string>
 #include <vector>
@@ -34,9 +38,15 @@ struct Trajectory {
 // on alternating lines) from the first data line. Throws Error when none fits.
 TrajectoryFormat DetectTrajectoryFormat(const std::string& path);
 Trajectory ReadTum(const std::string& path);
+Trajectory ReadTum(std::istream& in, const std::string& name);
 // `times` (optional): KITTI times.txt giving each line's timestamp; else the line index.
 Trajectory ReadKittiPoses(const std::string& path, const std::string& times_path = "");
+Trajectory ReadKittiPoses(std::istream& in, const std::string& name);
+// kAuto: the format is detected as by DetectTrajectoryFormat. The stream version keeps the
+// lines read for detection and hands them to the reader, so it never seeks or reopens.
 Trajectory ReadTrajectory(const std::string& path, TrajectoryFormat format = TrajectoryFormat::kAuto);
+Trajectory ReadTrajectory(std::istream& in, const std::string& name,
+                          TrajectoryFormat format = TrajectoryFormat::kAuto);
 void WriteTum(const std::string& path, const std::vector<StampedPose>& c2w);
 void WriteKittiPoses(const std::string& path, const std::vector<StampedPose>& c2w);
 
@@ -47,6 +57,7 @@ struct TimedName {
 };
 // "timestamp [name]" per line; also reads KITTI times.txt (no names) and TUM rgb.txt.
 std::vector<TimedName> ReadTimestamps(const std::string& path);
+std::vector<TimedName> ReadTimestamps(std::istream& in, const std::string& name);
 
 // KITTI calib.txt: the pinhole camera of projection matrix Pn (fx=P[0][0], fy=P[1][1],
 // cx=P[0][2], cy=P[1][2]) with the given image size.

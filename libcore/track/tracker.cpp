@@ -60,15 +60,6 @@ void TrackOptions::Check() const {
   if (dilate < 0 || dilate > 1000) throw UsageError("dilate must be in 0..1000 pixels, got " + std::to_string(dilate));
 }
 
-const char* RowStateName(RowState s) {
-  switch (s) {
-    case RowState::kDetected: return "detected";
-    case RowState::kInterpolated: return "interpolated";
-    case RowState::kRejected: return "rejected";
-  }
-  return "?";
-}
-
 std::pair<size_t, size_t> TrackResult::FrameRows(int frame) const {
   if (frame < 0 || static_cast<size_t>(frame) + 1 >= frame_begin_.size()) return {0, 0};
   return {frame_begin_[static_cast<size_t>(frame)], frame_begin_[static_cast<size_t>(frame) + 1]};
@@ -141,109 +132,119 @@ void Tracker::AddBlobs(std::vector<Blob> blobs) {
   for (Blob& b : blobs) blobs_.push_back(std::move(b));
 }
 
-TrackResult Tracker::Finish() {
-  TrackResult res;
-  res.width = width_;
-  res.height = height_;
-  res.blobs = std::move(blobs_);
-  TrackSummary& sum = res.summary;
-  sum.frames = frames_;
-  sum.tracks = static_cast<int>(tracks_.size());
+namespace {
+
+// `src`'s pixels scaled to nw x nh (nearest neighbour); cx, cy: their centroid relative to the
+// box (the source's relative centroid when no pixel survives).
+Blob ScaledBlob(const Blob& src, int nw, int nh) {
+  Blob s;
+  s.w = nw, s.h = nh;
+  s.mask.resize(static_cast<size_t>(nw) * nh);
+  const cv::Mat in(src.h, src.w, CV_8U, const_cast<uint8_t*>(src.mask.data()));
+  cv::Mat out(nh, nw, CV_8U, s.mask.data());
+  cv::resize(in, out, out.size(), 0, 0, cv::INTER_NEAREST);
+  double sx = 0, sy = 0;
+  for (int yy = 0; yy < nh; ++yy)
+    for (int xx = 0; xx < nw; ++xx)
+      if (s.mask[static_cast<size_t>(yy) * nw + xx]) sx += xx, sy += yy, ++s.area;
+  s.cx = src.cx - src.x, s.cy = src.cy - src.y;
+  if (s.area > 0) s.cx = sx / s.area, s.cy = sy / s.area;
+  return s;
+}
+
+// Sets r's box, centroid and area to the pixels of `d` drawn at (r.draw_x, r.draw_y) that fall
+// inside a width x height image; none: an empty box at the drawing position, area 0.
+void ClipDrawn(const Blob& d, int width, int height, TrackRow& r) {
+  int x0 = width, y0 = height, x1 = -1, y1 = -1, area = 0;
+  double sx = 0, sy = 0;
+  for (int yy = std::max(0, -r.draw_y); yy < std::min(d.h, height - r.draw_y); ++yy)
+    for (int xx = std::max(0, -r.draw_x); xx < std::min(d.w, width - r.draw_x); ++xx)
+      if (d.mask[static_cast<size_t>(yy) * d.w + xx]) {
+        const int X = r.draw_x + xx, Y = r.draw_y + yy;
+        x0 = std::min(x0, X), x1 = std::max(x1, X), y0 = std::min(y0, Y), y1 = std::max(y1, Y);
+        sx += X, sy += Y, ++area;
+      }
+  if (area > 0) {
+    r.x = x0, r.y = y0, r.w = x1 - x0 + 1, r.h = y1 - y0 + 1;
+    r.cx = sx / area, r.cy = sy / area, r.area = area;
+  } else {
+    r.x = r.draw_x, r.y = r.draw_y, r.w = r.h = 0, r.cx = r.scx, r.cy = r.scy, r.area = 0;
+  }
+}
+
+}  // namespace
+
+Tracker::Smoothed Tracker::Smooth(const Track& tr, const std::vector<Blob>& blobs) const {
+  const size_t m = tr.dets.size();
+  std::vector<double> f(m);
+  Smoothed s{std::vector<double>(m), std::vector<double>(m), std::vector<double>(m), std::vector<double>(m)};
+  for (size_t i = 0; i < m; ++i) {
+    const Blob& b = blobs[tr.dets[i].blob];
+    f[i] = tr.dets[i].frame, s.cx[i] = b.cx, s.cy[i] = b.cy, s.w[i] = b.w, s.h[i] = b.h;
+  }
   const Smoother smoother{o_.smooth};
+  for (auto* v : {&s.cx, &s.cy, &s.w, &s.h}) smoother.Apply(f, *v);
+  return s;
+}
 
-  for (const Track& tr : tracks_) {
-    const size_t m = tr.dets.size();
-    std::vector<double> f(m), cx(m), cy(m), w(m), h(m);
-    for (size_t i = 0; i < m; ++i) {
-      const Blob& b = res.blobs[tr.dets[i].blob];
-      f[i] = tr.dets[i].frame, cx[i] = b.cx, cy[i] = b.cy, w[i] = b.w, h[i] = b.h;
+void Tracker::AddDetectedRows(const Track& tr, const Smoothed& s, bool rejected, TrackResult& res) const {
+  for (size_t i = 0; i < tr.dets.size(); ++i) {
+    const Blob& b = res.blobs[tr.dets[i].blob];
+    TrackRow r;
+    r.frame = tr.dets[i].frame;
+    r.track = tr.id;
+    r.state = rejected ? RowState::kRejected : RowState::kDetected;
+    r.x = b.x, r.y = b.y, r.w = b.w, r.h = b.h, r.cx = b.cx, r.cy = b.cy, r.area = b.area;
+    r.scx = s.cx[i], r.scy = s.cy[i], r.sw = s.w[i], r.sh = s.h[i];
+    r.blob = tr.dets[i].blob;
+    r.draw_x = b.x, r.draw_y = b.y;
+    res.rows.push_back(r);
+    rejected ? ++res.summary.rejected_blobs : ++res.summary.detected;
+  }
+}
+
+void Tracker::FillGaps(const Track& tr, const Smoothed& s, TrackResult& res) const {
+  for (size_t i = 0; i + 1 < tr.dets.size(); ++i) {
+    const int f0 = tr.dets[i].frame, f1 = tr.dets[i + 1].frame, gap = f1 - f0 - 1;
+    if (gap == 0) continue;
+    if (gap > o_.max_gap) {
+      ++res.summary.unfilled_gaps;
+      continue;
     }
-    for (auto* v : {&cx, &cy, &w, &h}) smoother.Apply(f, *v);
-
-    const int span = tr.dets.back().frame - tr.dets.front().frame + 1;
-    const bool rejected = span < o_.min_life || static_cast<double>(m) < o_.min_ratio * span;
-    rejected ? ++sum.rejected : ++sum.kept;
-
-    for (size_t i = 0; i < m; ++i) {
-      const Blob& b = res.blobs[tr.dets[i].blob];
+    const size_t src_index = tr.dets[i].blob;
+    for (int t = f0 + 1; t < f1; ++t) {
+      const double a = static_cast<double>(t - f0) / (f1 - f0);
       TrackRow r;
-      r.frame = tr.dets[i].frame;
+      r.frame = t;
       r.track = tr.id;
-      r.state = rejected ? RowState::kRejected : RowState::kDetected;
-      r.x = b.x, r.y = b.y, r.w = b.w, r.h = b.h, r.cx = b.cx, r.cy = b.cy, r.area = b.area;
-      r.scx = cx[i], r.scy = cy[i], r.sw = w[i], r.sh = h[i];
-      r.blob = tr.dets[i].blob;
-      r.draw_x = b.x, r.draw_y = b.y;
+      r.state = RowState::kInterpolated;
+      r.scx = (1 - a) * s.cx[i] + a * s.cx[i + 1];
+      r.scy = (1 - a) * s.cy[i] + a * s.cy[i + 1];
+      r.sw = (1 - a) * s.w[i] + a * s.w[i + 1];
+      r.sh = (1 - a) * s.h[i] + a * s.h[i + 1];
+      // The last detected blob, scaled by the smoothed size ratio (nearest neighbour).
+      const Blob& src = res.blobs[src_index];
+      const int nw = std::max(1, RoundHalfUp(src.w * (r.sw / s.w[i])));
+      const int nh = std::max(1, RoundHalfUp(src.h * (r.sh / s.h[i])));
+      size_t bi = src_index;
+      double rcx = src.cx - src.x, rcy = src.cy - src.y;  // centroid relative to the box
+      if (nw != src.w || nh != src.h) {
+        Blob scaled = ScaledBlob(src, nw, nh);
+        rcx = scaled.cx, rcy = scaled.cy;
+        res.blobs.push_back(std::move(scaled));
+        bi = res.blobs.size() - 1;
+      }
+      r.blob = bi;
+      r.draw_x = RoundHalfUp(r.scx - rcx);
+      r.draw_y = RoundHalfUp(r.scy - rcy);
+      ClipDrawn(res.blobs[bi], width_, height_, r);
       res.rows.push_back(r);
-      rejected ? ++sum.rejected_blobs : ++sum.detected;
-    }
-    if (rejected) continue;
-
-    for (size_t i = 0; i + 1 < m; ++i) {
-      const int f0 = tr.dets[i].frame, f1 = tr.dets[i + 1].frame, gap = f1 - f0 - 1;
-      if (gap == 0) continue;
-      if (gap > o_.max_gap) {
-        ++sum.unfilled_gaps;
-        continue;
-      }
-      const size_t src_index = tr.dets[i].blob;
-      for (int t = f0 + 1; t < f1; ++t) {
-        const double a = static_cast<double>(t - f0) / (f1 - f0);
-        TrackRow r;
-        r.frame = t;
-        r.track = tr.id;
-        r.state = RowState::kInterpolated;
-        r.scx = (1 - a) * cx[i] + a * cx[i + 1];
-        r.scy = (1 - a) * cy[i] + a * cy[i + 1];
-        r.sw = (1 - a) * w[i] + a * w[i + 1];
-        r.sh = (1 - a) * h[i] + a * h[i + 1];
-        // The last detected blob, scaled by the smoothed size ratio (nearest neighbour).
-        const Blob& src = res.blobs[src_index];
-        const int nw = std::max(1, RoundHalfUp(src.w * (r.sw / w[i])));
-        const int nh = std::max(1, RoundHalfUp(src.h * (r.sh / h[i])));
-        size_t bi = src_index;
-        double rcx = src.cx - src.x, rcy = src.cy - src.y;  // centroid relative to the box
-        if (nw != src.w || nh != src.h) {
-          Blob s;
-          s.w = nw, s.h = nh;
-          s.mask.resize(static_cast<size_t>(nw) * nh);
-          const cv::Mat in(src.h, src.w, CV_8U, const_cast<uint8_t*>(src.mask.data()));
-          cv::Mat out(nh, nw, CV_8U, s.mask.data());
-          cv::resize(in, out, out.size(), 0, 0, cv::INTER_NEAREST);
-          double sx = 0, sy = 0;
-          for (int yy = 0; yy < nh; ++yy)
-            for (int xx = 0; xx < nw; ++xx)
-              if (s.mask[static_cast<size_t>(yy) * nw + xx]) sx += xx, sy += yy, ++s.area;
-          if (s.area > 0) rcx = sx / s.area, rcy = sy / s.area;
-          s.cx = rcx, s.cy = rcy;
-          res.blobs.push_back(std::move(s));
-          bi = res.blobs.size() - 1;
-        }
-        r.blob = bi;
-        r.draw_x = RoundHalfUp(r.scx - rcx);
-        r.draw_y = RoundHalfUp(r.scy - rcy);
-        // What is drawn, clipped to the image.
-        const Blob& d = res.blobs[bi];
-        int x0 = width_, y0 = height_, x1 = -1, y1 = -1, area = 0;
-        double sx = 0, sy = 0;
-        for (int yy = std::max(0, -r.draw_y); yy < std::min(d.h, height_ - r.draw_y); ++yy)
-          for (int xx = std::max(0, -r.draw_x); xx < std::min(d.w, width_ - r.draw_x); ++xx)
-            if (d.mask[static_cast<size_t>(yy) * d.w + xx]) {
-              const int X = r.draw_x + xx, Y = r.draw_y + yy;
-              x0 = std::min(x0, X), x1 = std::max(x1, X), y0 = std::min(y0, Y), y1 = std::max(y1, Y);
-              sx += X, sy += Y, ++area;
-            }
-        if (area > 0) {
-          r.x = x0, r.y = y0, r.w = x1 - x0 + 1, r.h = y1 - y0 + 1;
-          r.cx = sx / area, r.cy = sy / area, r.area = area;
-        } else {
-          r.x = r.draw_x, r.y = r.draw_y, r.w = r.h = 0, r.cx = r.scx, r.cy = r.scy, r.area = 0;
-        }
-        res.rows.push_back(r);
-        ++sum.interpolated;
-      }
+      ++res.summary.interpolated;
     }
   }
+}
+
+void Tracker::IndexFrames(TrackResult& res) const {
   std::sort(res.rows.begin(), res.rows.end(), [](const TrackRow& a, const TrackRow& b) {
     return std::tie(a.frame, a.track) < std::tie(b.frame, b.track);
   });
@@ -252,6 +253,25 @@ TrackResult Tracker::Finish() {
   for (int fr = frames_ - 1; fr >= 0; --fr)  // frames without rows start where the next begins
     res.frame_begin_[static_cast<size_t>(fr)] =
         std::min(res.frame_begin_[static_cast<size_t>(fr)], res.frame_begin_[static_cast<size_t>(fr) + 1]);
+}
+
+TrackResult Tracker::Finish() {
+  TrackResult res;
+  res.width = width_;
+  res.height = height_;
+  res.blobs = std::move(blobs_);
+  TrackSummary& sum = res.summary;
+  sum.frames = frames_;
+  sum.tracks = static_cast<int>(tracks_.size());
+  for (const Track& tr : tracks_) {
+    const Smoothed s = Smooth(tr, res.blobs);
+    const int span = tr.dets.back().frame - tr.dets.front().frame + 1;
+    const bool rejected = span < o_.min_life || static_cast<double>(tr.dets.size()) < o_.min_ratio * span;
+    rejected ? ++sum.rejected : ++sum.kept;
+    AddDetectedRows(tr, s, rejected, res);
+    if (!rejected) FillGaps(tr, s, res);
+  }
+  IndexFrames(res);
 
   tracks_.clear();
   live_.clear();

@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "track/blobs.h"
+#include "track/track_row.h"
 
 namespace mvtm {
 
@@ -39,27 +40,6 @@ struct TrackOptions {
   int dilate = 0;        // pixels: radius of the disk the output masks are dilated by
 
   void Check() const;  // throws UsageError naming the bad value and the allowed range
-};
-
-enum class RowState { kDetected, kInterpolated, kRejected };
-const char* RowStateName(RowState s);  // "detected", "interpolated", "rejected"
-
-// One blob of one track in one frame: a row of tracks.tsv.
-struct TrackRow {
-  int frame = 0;  // 0-based frame index
-  int track = 0;  // track id, 1-based
-  RowState state = RowState::kDetected;
-  // The pixels drawn (detected, rejected: the blob as found; interpolated: the moved blob,
-  // clipped to the image): bounding box, centroid, pixel count. An interpolated blob that falls
-  // entirely outside the image has area 0 and an empty box at its unclipped position.
-  int x = 0, y = 0, w = 0, h = 0;
-  double cx = 0, cy = 0;
-  int area = 0;
-  // The track's smoothed centroid and box size at this frame.
-  double scx = 0, scy = 0, sw = 0, sh = 0;
-  // The pixels: `result.blobs[blob]` drawn with its box at (draw_x, draw_y).
-  size_t blob = 0;
-  int draw_x = 0, draw_y = 0;
 };
 
 struct TrackSummary {
@@ -106,6 +86,15 @@ class Tracker {
     int id;
     std::vector<Det> dets;
   };
+  // A track's smoothed centroid and box size at each of its detections.
+  struct Smoothed {
+    std::vector<double> cx, cy, w, h;
+  };
+  // The steps of Finish(), one track at a time, then the frame index of the sorted rows.
+  Smoothed Smooth(const Track& tr, const std::vector<Blob>& blobs) const;
+  void AddDetectedRows(const Track& tr, const Smoothed& s, bool rejected, TrackResult& res) const;
+  void FillGaps(const Track& tr, const Smoothed& s, TrackResult& res) const;
+  void IndexFrames(TrackResult& res) const;
   int width_, height_;
   TrackOptions o_;
   int frames_ = 0;

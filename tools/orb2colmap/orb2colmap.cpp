@@ -57,39 +57,63 @@ Camera ResolveCamera(const Orb2ColmapOptions& o, const std::vector<std::string>&
 
 std::string Basename(const std::string& p) { return fs::path(p).filename().string(); }
 
-}  // namespace
+// True when all three model files exist and are newer than every input.
+bool ModelIsUpToDate(const Orb2ColmapOptions& o) {
+  const char* ext = o.binary ? ".bin" : ".txt";
+  std::vector<fs::path> inputs;
+  for (const std::string& in : {o.trajectory, o.trajectory_times, o.frames, o.orb_settings, o.kitti_calib, o.images})
+    if (!in.empty()) inputs.emplace_back(in);
+  bool fresh = true;
+  for (const char* f : {"cameras", "images", "points3D"})
+    fresh = fresh && IsUpToDate(fs::path(o.outdir) / (std::string(f) + ext), inputs);
+  return fresh;
+}
 
-Orb2ColmapReport RunOrb2Colmap(const Orb2ColmapOptions& o) {
-  o.Check();
-  Orb2ColmapReport rep;
-  if (!o.force && o.database.empty()) {
-    const char* ext = o.binary ? ".bin" : ".txt";
-    std::vector<fs::path> inputs;
-    for (const std::string& in : {o.trajectory, o.trajectory_times, o.frames, o.orb_settings, o.kitti_calib, o.images})
-      if (!in.empty()) inputs.emplace_back(in);
-    bool fresh = true;
-    for (const char* f : {"cameras", "images", "points3D"})
-      fresh = fresh && IsUpToDate(fs::path(o.outdir) / (std::string(f) + ext), inputs);
-    if (fresh) {
-      rep.up_to_date = true;
-      return rep;
+// The poses of --input-format (TUM or KITTI; a COLMAP model is refused), camera-to-world.
+Trajectory ReadInputTrajectory(const Orb2ColmapOptions& o, TrajectoryFormat* fmt) {
+  *fmt = o.input_format == "tum"     ? TrajectoryFormat::kTum
+         : o.input_format == "kitti" ? TrajectoryFormat::kKitti
+                                     : DetectTrajectoryFormat(o.trajectory);
+  if (*fmt == TrajectoryFormat::kKitti) return ReadKittiPoses(o.trajectory, o.trajectory_times);
+  if (*fmt == TrajectoryFormat::kTum) return ReadTum(o.trajectory);
+  throw Error(o.trajectory, 0, "a COLMAP model is already a COLMAP model: nothing to convert");
+}
+
+// Names the frames that have none: after the images (one each, in order), else after the
+// frame index (KITTI) or the timestamp. Named frames keep their base name.
+void NameFrames(const Orb2ColmapOptions& o, const std::vector<std::string>& image_files,
+                TrajectoryFormat fmt, std::vector<TimedName>& frames) {
+  bool named = std::all_of(frames.begin(), frames.end(), [](const TimedName& f) { return !f.name.empty(); });
+  if (named) {
+    for (auto& f : frames) f.name = Basename(f.name);
+  } else if (!image_files.empty()) {
+    if (image_files.size() != frames.size())
+      throw Error(o.images, 0,
+                  std::to_string(image_files.size()) + " images for " + std::to_string(frames.size()) +
+                      " frame timestamps" + (o.frames.empty() ? "" : " in " + o.frames));
+    for (size_t i = 0; i < frames.size(); ++i) frames[i].name = image_files[i];
+  } else {
+    char buf[64];
+    for (size_t i = 0; i < frames.size(); ++i) {
+      if (fmt == TrajectoryFormat::kKitti)
+        std::snprintf(buf, sizeof buf, "%06zu.png", i);
+      else
+        std::snprintf(buf, sizeof buf, "%.6f.png", frames[i].time);
+      frames[i].name = buf;
     }
   }
+  std::map<std::string, long> seen;
+  for (const auto& f : frames) {
+    auto [it, fresh] = seen.emplace(f.name, f.line);
+    if (!fresh)
+      throw Error(o.frames.empty() ? o.trajectory : o.frames, f.line,
+                  "frame name '" + f.name + "' repeats line " + std::to_string(it->second));
+  }
+}
 
-  Trajectory traj;
-  TrajectoryFormat fmt = o.input_format == "tum"     ? TrajectoryFormat::kTum
-                         : o.input_format == "kitti" ? TrajectoryFormat::kKitti
-                                                     : DetectTrajectoryFormat(o.trajectory);
-  if (fmt == TrajectoryFormat::kKitti) traj = ReadKittiPoses(o.trajectory, o.trajectory_times);
-  else if (fmt == TrajectoryFormat::kTum) traj = ReadTum(o.trajectory);
-  else throw Error(o.trajectory, 0, "a COLMAP model is already a COLMAP model: nothing to convert");
-  std::vector<StampedPose> keys = traj.poses;
-  rep.reordered = SortKeyframes(keys, o.trajectory);
-  rep.keyframes = keys.size();
-
-  // Frames: timestamps and names.
-  std::vector<std::string> image_files;
-  if (!o.images.empty()) image_files = ListImageFiles(o.images);
+// The frames to write: --frames' timestamps, else every keyframe, named by NameFrames.
+std::vector<TimedName> ReadFrames(const Orb2ColmapOptions& o, const std::vector<StampedPose>& keys,
+                                  const std::vector<std::string>& image_files, TrajectoryFormat fmt) {
   std::vector<TimedName> frames;
   if (!o.frames.empty()) {
     frames = ReadTimestamps(o.frames);
@@ -97,47 +121,20 @@ Orb2ColmapReport RunOrb2Colmap(const Orb2ColmapOptions& o) {
     // Every pose is a frame, in time order; exact duplicates were merged by SortKeyframes.
     for (const auto& k : keys) frames.push_back({k.time, "", k.line});
   }
-  bool named = std::all_of(frames.begin(), frames.end(), [](const TimedName& f) { return !f.name.empty(); });
-  if (!named) {
-    if (!image_files.empty()) {
-      if (image_files.size() != frames.size())
-        throw Error(o.images, 0,
-                    std::to_string(image_files.size()) + " images for " + std::to_string(frames.size()) +
-                        " frame timestamps" + (o.frames.empty() ? "" : " in " + o.frames));
-      for (size_t i = 0; i < frames.size(); ++i) frames[i].name = image_files[i];
-    } else {
-      char buf[64];
-      for (size_t i = 0; i < frames.size(); ++i) {
-        if (fmt == TrajectoryFormat::kKitti)
-          std::snprintf(buf, sizeof buf, "%06zu.png", i);
-        else
-          std::snprintf(buf, sizeof buf, "%.6f.png", frames[i].time);
-        frames[i].name = buf;
-      }
-    }
-  } else {
-    for (auto& f : frames) f.name = Basename(f.name);
-  }
-  {
-    std::map<std::string, long> seen;
-    for (const auto& f : frames) {
-      auto [it, fresh] = seen.emplace(f.name, f.line);
-      if (!fresh)
-        throw Error(o.frames.empty() ? o.trajectory : o.frames, f.line,
-                    "frame name '" + f.name + "' repeats line " + std::to_string(it->second));
-    }
-  }
-  rep.frames = frames.size();
+  NameFrames(o, image_files, fmt, frames);
+  return frames;
+}
 
-  Camera cam = ResolveCamera(o, image_files);
-  Reconstruction model;
-  Outside outside = o.outside == "clamp" ? Outside::kClamp : Outside::kDrop;
+struct Posed {
+  const TimedName* frame;
+  Rigid3d w2c;
+};
 
-  // Poses first, so that nothing is written (model or database) when the input is unusable.
-  struct Posed {
-    const TimedName* frame;
-    Rigid3d w2c;
-  };
+// Interpolates each frame's pose (world-to-camera); frames outside the keyframes' time span are
+// dropped or clamped as --outside says. Throws when no frame is left.
+std::vector<Posed> PoseFrames(const Orb2ColmapOptions& o, const std::vector<StampedPose>& keys,
+                              const std::vector<TimedName>& frames, Orb2ColmapReport& rep) {
+  const Outside outside = o.outside == "clamp" ? Outside::kClamp : Outside::kDrop;
   std::vector<Posed> posed;
   for (const auto& f : frames) {
     bool inside = f.time >= keys.front().time && f.time <= keys.back().time;
@@ -153,7 +150,12 @@ Orb2ColmapReport RunOrb2Colmap(const Orb2ColmapOptions& o) {
   }
   if (posed.empty())
     throw Error(o.trajectory, 0, "no frame lies inside the pose time span (use --outside clamp?)");
+  return posed;
+}
 
+// The model of the posed frames, images numbered from 1; with --database, the camera and the
+// images (with their pose priors) go into the database too, and the model takes its ids.
+Reconstruction BuildModel(const Orb2ColmapOptions& o, Camera cam, const std::vector<Posed>& posed) {
   std::unique_ptr<ColmapDatabase> db;
   std::map<std::string, std::pair<uint32_t, uint32_t>> db_images;
   uint32_t next_id = 1;
@@ -174,8 +176,8 @@ Orb2ColmapReport RunOrb2Colmap(const Orb2ColmapOptions& o) {
     else cam_id = db->AddCamera(cam);
     cam.id = cam_id;
   }
+  Reconstruction model;
   model.cameras[cam.id] = cam;
-
   uint32_t fallback_id = 1;
   for (const auto& p : posed) {
     ImageRecord im;
@@ -192,6 +194,30 @@ Orb2ColmapReport RunOrb2Colmap(const Orb2ColmapOptions& o) {
     model.images[im.id] = std::move(im);
   }
   if (db) db->Commit();
+  return model;
+}
+
+}  // namespace
+
+Orb2ColmapReport RunOrb2Colmap(const Orb2ColmapOptions& o) {
+  o.Check();
+  Orb2ColmapReport rep;
+  if (!o.force && o.database.empty() && ModelIsUpToDate(o)) {
+    rep.up_to_date = true;
+    return rep;
+  }
+  TrajectoryFormat fmt;
+  std::vector<StampedPose> keys = ReadInputTrajectory(o, &fmt).poses;
+  rep.reordered = SortKeyframes(keys, o.trajectory);
+  rep.keyframes = keys.size();
+
+  const std::vector<std::string> image_files = o.images.empty() ? std::vector<std::string>() : ListImageFiles(o.images);
+  const std::vector<TimedName> frames = ReadFrames(o, keys, image_files, fmt);
+  rep.frames = frames.size();
+  const Camera cam = ResolveCamera(o, image_files);
+  // Poses first, so that nothing is written (model or database) when the input is unusable.
+  const std::vector<Posed> posed = PoseFrames(o, keys, frames, rep);
+  const Reconstruction model = BuildModel(o, cam, posed);
   if (o.binary) WriteColmapBinary(model, o.outdir);
   else WriteColmapText(model, o.outdir);
   rep.written = model.images.size();

@@ -1,13 +1,13 @@
 #include "segtrack.h"
 
 #include <algorithm>
-#include <cstdio>
 
 #include "base/atomic_file.h"
 #include "cli/progress.h"
 #include "base/error.h"
 #include "image/folder.h"
 #include "image/image.h"
+#include "io/tracks.h"
 #include "track/labels.h"
 #include "workspace/workspace.h"
 
@@ -43,12 +43,6 @@ void ForEachLabel(const std::vector<fs::path>& files, const LabelDecoder& decode
     use(i, vehicle, w0, h0);
     if (progress) progress->Step();
   }
-}
-
-std::string Fixed(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3f", v);
-  return buf;
 }
 
 }  // namespace
@@ -99,15 +93,10 @@ SegtrackReport RunSegtrack(const SegtrackOptions& o) {
     WriteImage(ws.MaskPath(files[i].filename().string()).string(), out);
   }
 
-  WriteTextAtomic(ws.TracksPath(), [&](std::ostream& s) {
-    s << "frame\tname\ttrack\tstate\tx\ty\tw\th\tcx\tcy\tarea\tscx\tscy\tsw\tsh\n";
-    for (const TrackRow& r : res.rows) {
-      s << r.frame << '\t' << files[static_cast<size_t>(r.frame)].filename().string() << '\t' << r.track << '\t'
-        << RowStateName(r.state) << '\t' << r.x << '\t' << r.y << '\t' << r.w << '\t' << r.h << '\t'
-        << Fixed(r.cx) << '\t' << Fixed(r.cy) << '\t' << r.area << '\t' << Fixed(r.scx) << '\t'
-        << Fixed(r.scy) << '\t' << Fixed(r.sw) << '\t' << Fixed(r.sh) << '\n';
-    }
-  });
+  std::vector<TracksTsvRow> table;
+  table.reserve(res.rows.size());
+  for (const TrackRow& r : res.rows) table.push_back({files[static_cast<size_t>(r.frame)].filename().string(), r});
+  WriteTracksTsv(ws.TracksPath().string(), table);
 
   nlohmann::json opts = {{"labeldir", labeldir.string()},
                          {"classes", o.binary ? "" : o.classes},

@@ -5,6 +5,7 @@
 #include <clocale>
 #include <locale>
 #include <random>
+#include <sstream>
 
 #include "base/error.h"
 #include "io/colmap_model.h"
@@ -116,6 +117,55 @@ TEST(ColmapModel, EmptyPointsLineAndEmptyModel) {
   Reconstruction back = ReadColmapText(d.string());
   EXPECT_EQ(back.images.size(), 3u);
   EXPECT_TRUE(back.points3D.empty());
+}
+
+// The stream readers are what the path reader runs: from an istringstream they give the same
+// model, and their messages name the stream as given.
+TEST(ColmapModel, StreamReadersGiveWhatTheFileGives) {
+  test::ScopedCommaLocale comma;
+  auto d = test::FreshDir("colmap-stream");
+  Reconstruction r = RandomModel(6, 20, 5);
+  WriteColmapText(r, d.string());
+  Reconstruction file = ReadColmapText(d.string());
+  Reconstruction stream;
+  std::istringstream cams(test::ReadFile(d / "cameras.txt"));
+  std::istringstream imgs(test::ReadFile(d / "images.txt"));
+  std::istringstream pts(test::ReadFile(d / "points3D.txt"));
+  stream.cameras = ReadColmapCamerasText(cams, "cams");
+  stream.images = ReadColmapImagesText(imgs, "imgs");
+  stream.points3D = ReadColmapPoints3DText(pts, "pts");
+  ExpectSame(file, stream);
+  ExpectSame(r, stream);
+  for (const auto& [id, im] : file.images)
+    EXPECT_EQ(im.world_to_camera.q.coeffs(), stream.images.at(id).world_to_camera.q.coeffs());
+
+  // File order and pose lines (after the 4 header lines, two lines per image).
+  std::istringstream again(test::ReadFile(d / "images.txt"));
+  std::vector<std::pair<uint32_t, long>> seen;
+  ForEachColmapImageText(again, "imgs", [&](ImageRecord&& im, long line) { seen.emplace_back(im.id, line); });
+  ASSERT_EQ(seen.size(), r.images.size());
+  long line = 5;
+  auto it = r.images.begin();
+  for (const auto& [id, at] : seen) {
+    EXPECT_EQ(id, (it++)->first);
+    EXPECT_EQ(at, line);
+    line += 2;
+  }
+
+  std::istringstream bad("1 1 0 0 0 0 0 0 1 a.png\n\n1 1 0 0 0 0 0 0 1 b.png\n\n");
+  try {
+    ReadColmapImagesText(bad, "-");
+    ADD_FAILURE() << "duplicate IMAGE_ID not reported";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), "-:3: duplicate IMAGE_ID 1");
+  }
+  std::istringstream bad_cam("1 PINHOLE 100 50 80 80 50\n");
+  try {
+    ReadColmapCamerasText(bad_cam, "-");
+    ADD_FAILURE() << "short camera line not reported";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), "-:1: PINHOLE takes 4 parameters, found 3");
+  }
 }
 
 struct BadCase {

@@ -2,7 +2,11 @@
 // answers, and FILE:LINE errors.
 #include <gtest/gtest.h>
 
+#include <sstream>
+#include <streambuf>
+
 #include "base/error.h"
+#include "io/colmap_model.h"
 #include "io/trajectory.h"
 #include "comma_locale.h"
 #include "test_util.h"
@@ -73,6 +77,153 @@ TEST(Trajectory, ErrorsNameTheLine) {
     FAIL();
   } catch (const Error& e) {
     EXPECT_EQ(std::string(e.what()), (d / "k.txt:2: rotation part is not a rotation (det 0)").string());
+  }
+}
+
+// A forward-only stream like a pipe or std::cin: one character at a time, and seeking fails
+// (and is counted, so a test can say it never happened).
+class PipeBuf : public std::streambuf {
+ public:
+  explicit PipeBuf(std::string text) : text_(std::move(text)) {}
+  int seeks = 0;
+
+ protected:
+  int_type underflow() override {
+    if (next_ >= text_.size()) return traits_type::eof();
+    c_ = text_[next_++];
+    setg(&c_, &c_, &c_ + 1);
+    return traits_type::to_int_type(c_);
+  }
+  pos_type seekoff(off_type, std::ios_base::seekdir, std::ios_base::openmode) override {
+    ++seeks;
+    return pos_type(off_type(-1));
+  }
+  pos_type seekpos(pos_type, std::ios_base::openmode) override {
+    ++seeks;
+    return pos_type(off_type(-1));
+  }
+
+ private:
+  std::string text_;
+  size_t next_ = 0;
+  char c_ = 0;
+};
+
+void ExpectSameTrajectory(const Trajectory& a, const Trajectory& b) {
+  ASSERT_EQ(a.poses.size(), b.poses.size());
+  for (size_t i = 0; i < a.poses.size(); ++i) {
+    EXPECT_EQ(a.poses[i].time, b.poses[i].time) << i;
+    EXPECT_EQ(a.poses[i].line, b.poses[i].line) << i;
+    EXPECT_EQ(a.poses[i].pose.t, b.poses[i].pose.t) << i;
+    EXPECT_EQ(a.poses[i].pose.q.coeffs(), b.poses[i].pose.q.coeffs()) << i;
+  }
+  EXPECT_EQ(a.names, b.names);
+}
+
+std::vector<StampedPose> SomePoses() {
+  std::vector<StampedPose> poses;
+  for (int i = 0; i < 4; ++i) {
+    Eigen::Quaterniond q(Eigen::AngleAxisd(0.2 * i + 0.1, Eigen::Vector3d(1, -2, 3).normalized()));
+    poses.push_back({100.25 + i, Rigid3d(q, Eigen::Vector3d(451000.5 + i, 5410000.25, 120.0 / 7)), 0});
+  }
+  return poses;
+}
+
+// Every format, read from a file, from an istringstream and from a pipe-like stream with the
+// format detected from the stream itself: the same poses, times, lines and names.
+TEST(Trajectory, StreamsGiveWhatTheFileGives) {
+  test::ScopedCommaLocale comma;
+  auto d = test::FreshDir("traj-stream");
+  WriteTum((d / "t.txt").string(), SomePoses());
+  WriteKittiPoses((d / "k.txt").string(), SomePoses());
+  test::WriteFile(d / "k-gaps.txt", "\n# comment\n" + test::ReadFile(d / "k.txt") + "\n");
+  Reconstruction model;
+  for (const auto& p : SomePoses()) {
+    ImageRecord im;
+    im.id = static_cast<uint32_t>(p.time);
+    im.camera_id = 1;
+    im.name = "img" + std::to_string(im.id) + ".png";
+    im.world_to_camera = p.pose.Inverse();
+    model.images[im.id] = im;
+  }
+  WriteColmapText(model, (d / "sparse").string());
+  const std::string images = (d / "sparse" / "images.txt").string();
+  // Without its header comment a COLMAP images.txt is told by its 10 fields.
+  std::string bare = test::ReadFile(images);
+  bare = bare.substr(bare.find("\n", bare.rfind("# ")) + 1);
+  test::WriteFile(d / "bare.txt", bare);
+
+  struct Case {
+    std::string file;
+    TrajectoryFormat format;
+  };
+  for (const Case& c : {Case{(d / "t.txt").string(), TrajectoryFormat::kTum},
+                        Case{(d / "k.txt").string(), TrajectoryFormat::kKitti},
+                        Case{(d / "k-gaps.txt").string(), TrajectoryFormat::kKitti},
+                        Case{images, TrajectoryFormat::kColmap},
+                        Case{(d / "bare.txt").string(), TrajectoryFormat::kColmap}}) {
+    SCOPED_TRACE(c.file);
+    EXPECT_EQ(DetectTrajectoryFormat(c.file), c.format);
+    const Trajectory file = ReadTrajectory(c.file);
+    EXPECT_EQ(file.poses.size(), 4u);
+    std::istringstream text(test::ReadFile(c.file));
+    ExpectSameTrajectory(file, ReadTrajectory(text, c.file, c.format));
+    PipeBuf pipe(test::ReadFile(c.file));
+    std::istream in(&pipe);
+    ExpectSameTrajectory(file, ReadTrajectory(in, c.file));
+    EXPECT_EQ(pipe.seeks, 0);
+  }
+  // The per-format stream readers agree with their path versions too.
+  std::istringstream tum(test::ReadFile(d / "t.txt"));
+  ExpectSameTrajectory(ReadTum((d / "t.txt").string()), ReadTum(tum, (d / "t.txt").string()));
+  std::istringstream kitti(test::ReadFile(d / "k.txt"));
+  ExpectSameTrajectory(ReadKittiPoses((d / "k.txt").string()), ReadKittiPoses(kitti, "k"));
+  // COLMAP images: camera-to-world poses, image ids as times, names, pose lines.
+  const Trajectory colmap = ReadTrajectory(images);
+  for (size_t i = 0; i < 4; ++i) {
+    EXPECT_EQ(colmap.poses[i].time, SomePoses()[i].time - 0.25);
+    EXPECT_EQ(colmap.poses[i].line, static_cast<long>(5 + 2 * i));
+    EXPECT_LT((colmap.poses[i].pose.t - SomePoses()[i].pose.t).norm(), 1e-8);  // a few ulps of 5e6
+    EXPECT_LT(RotationAngle(colmap.poses[i].pose.q, SomePoses()[i].pose.q), 1e-15);
+  }
+  EXPECT_EQ(colmap.names[3], "img103.png");
+  // Timestamps.
+  test::WriteFile(d / "rgb.txt", "# tum rgb.txt\n1305031102.175304 rgb/1305031102.175304.png\n1305031102.211214 rgb/b.png\n");
+  std::istringstream ts(test::ReadFile(d / "rgb.txt"));
+  auto from_file = ReadTimestamps((d / "rgb.txt").string());
+  auto from_stream = ReadTimestamps(ts, "rgb");
+  ASSERT_EQ(from_file.size(), 2u);
+  ASSERT_EQ(from_stream.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(from_file[i].time, from_stream[i].time);
+    EXPECT_EQ(from_file[i].name, from_stream[i].name);
+    EXPECT_EQ(from_file[i].line, from_stream[i].line);
+  }
+}
+
+// Errors from a stream name it as given, with the line counted across format detection.
+TEST(Trajectory, PipeErrorsNameTheStreamAndLine) {
+  struct C {
+    std::string text, msg;
+  };
+  const std::vector<C> cases = {
+      {"# c\n\n1 0 0 0 0 0 0 1\n2 0 0 nan 0 0 0 1\n", "-:4: tz: 'nan' is not finite"},
+      {"1 0 0 0 0 0 0 1\n1 0 0 0 0 1 0 0 0 0 1 0\n", "-:2: TUM pose needs 8 fields (timestamp tx ty tz qx qy qz qw), found 12"},
+      {"# c\n1 2 3 4 5\n", "-:2: cannot tell the trajectory format: 5 fields (TUM has 8, KITTI 12, COLMAP images.txt 10)"},
+      {"# only a comment\n", "-: cannot tell the trajectory format: the file has no poses"},
+      {"", "-: cannot tell the trajectory format: the file has no poses"},
+      {"1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 0 0", "-:2: rotation part is not a rotation (det 0)"},
+      {"1 0 0 0 0 0 0 0 1 a.png\n\n", "-:1: quaternion has zero norm"},
+  };
+  for (const auto& c : cases) {
+    PipeBuf pipe(c.text);
+    std::istream in(&pipe);
+    try {
+      ReadTrajectory(in, "-");
+      ADD_FAILURE() << c.msg;
+    } catch (const Error& e) {
+      EXPECT_EQ(std::string(e.what()), c.msg);
+    }
   }
 }
 
