@@ -76,46 +76,10 @@ Model LoadModel(const Workspace& ws) {
   return m;
 }
 
-// A temporary copy of stdin, so that the trajectory readers (which detect the format, then read)
-// can open it twice; removed on destruction.
-class StdinCopy {
- public:
-  explicit StdinCopy(std::istream& in) {
-    std::string tmpl = (fs::temp_directory_path() / "pickview-stdin-XXXXXX").string();
-    int fd = mkstemp(tmpl.data());
-    if (fd < 0) throw Error(tmpl, 0, "cannot create a temporary file for standard input");
-    ::close(fd);
-    path_ = tmpl;
-    std::ofstream f(path_, std::ios::binary);
-    f << in.rdbuf();
-    if (!f) throw Error(path_, 0, "cannot write the copy of standard input");
-  }
-  ~StdinCopy() {
-    std::error_code ec;
-    fs::remove(path_, ec);
-  }
-  const std::string& path() const { return path_; }
-
- private:
-  std::string path_;
-};
-
 std::vector<Query> ReadQueries(const std::string& path, std::istream& in) {
-  Trajectory tr;
-  if (path == "-") {
-    StdinCopy copy(in);
-    try {
-      tr = ReadTrajectory(copy.path());
-    } catch (const Error& e) {
-      // Name stdin "-" in the message, not the temporary copy.
-      std::string what = e.what(), prefix = Located(e.file(), e.line(), "");
-      if (e.file() == copy.path() && what.compare(0, prefix.size(), prefix) == 0)
-        throw Error("-", e.line(), what.substr(prefix.size()));
-      throw;
-    }
-  } else {
-    tr = ReadTrajectory(path);
-  }
+  // Standard input is read as a stream (no temporary copy): the reader detects the format from
+  // the lines it has buffered.
+  const Trajectory tr = path == "-" ? ReadTrajectory(in, "-") : ReadTrajectory(path);
   std::vector<Query> q;
   char buf[32];
   for (size_t i = 0; i < tr.poses.size(); ++i) {
