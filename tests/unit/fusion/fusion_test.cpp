@@ -138,6 +138,7 @@ double SegmentDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
   return (p - (a + t * (b - a))).norm();
 }
 double EdgeDistance(const Scene& s, const Eigen::Vector3d& p) {
+  if (s.boxes.empty() && s.planes.size() == 1) return kInf;          // the wall
   if (s.boxes.empty()) return std::hypot(p.x() - 3.0, p.y() - 1.5);  // the road
   const Box& b = s.boxes[0];
   double best = kInf;
@@ -290,6 +291,189 @@ TEST(Fusion, BoxOnGround) {
   }
   EXPECT_GT(outward, m.faces.size() * 999 / 1000) << "of " << m.faces.size();
   EXPECT_TRUE(m.has_normals());
+}
+
+// The volume used directly gives FuseDepthViews' mesh; reports the time per 613×185 depth map.
+TEST(Fusion, VolumeMatchesFuseAndTiming) {
+  const Scene s = RoadScene();
+  const std::vector<DepthView> views = RoadViews(s, 6);
+  FusionOptions o;
+  o.tsdf.max_depth_spacings = 15;
+  const Mesh fused = FuseDepthViews(views, o);
+  std::vector<Image> filtered = FilterConsistentDepth(views, o.consistency);
+  TsdfVolume volume(MeanCameraCentre(views), 0.1 * MedianCameraSpacing(views), 3);
+  const auto t0 = std::chrono::steady_clock::now();
+  for (size_t i = 0; i < views.size(); ++i) {
+    volume.Integrate({views[i].camera, views[i].world_to_camera, filtered[i], {}}, 15.0);
+  }
+  const auto t1 = std::chrono::steady_clock::now();
+  const Mesh m = volume.ExtractMesh();
+  const auto t2 = std::chrono::steady_clock::now();
+  const double ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
+  std::printf("  integrate %.1f ms per 613x185 depth map, %zu active voxels, mesh %.1f ms\n",
+              ms / static_cast<double>(views.size()), volume.ActiveVoxels(),
+              std::chrono::duration<double, std::milli>(t2 - t1).count());
+  EXPECT_EQ(m.vertices.size(), fused.vertices.size());
+  EXPECT_EQ(m.faces, fused.faces);
+  EXPECT_GT(volume.ActiveVoxels(), m.vertices.size());
+}
+
+// A slightly tilted wall 6 ahead of cameras 0.5 apart along x, 160×120.
+Scene WallScene() { return {{{Eigen::Vector3d(0.1, 0, 1).normalized(), 6.0}}, {}}; }
+std::vector<DepthView> WallViews(const Scene& s, int n) {
+  std::vector<DepthView> views;
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d c(0.5 * i, 0, 0);
+    views.push_back(Render(s, MakeCamera(160, 120, 120), LookAt(c, c + Eigen::Vector3d(0, 0, 1))));
+  }
+  return views;
+}
+
+// Where pixel (x, y) of view i lands in view j, written out from the pose (not via Camera).
+Eigen::Vector2d Reproject(const std::vector<DepthView>& v, size_t i, size_t j, int x, int y) {
+  const Camera& c = v[i].camera;
+  const double z = v[i].depth.at(x, y);
+  const Eigen::Vector3d xi((x + 0.5 - c.params[2]) / c.params[0] * z,
+                           (y + 0.5 - c.params[3]) / c.params[1] * z, z);
+  const Eigen::Vector3d xw = v[i].world_to_camera.Inverse() * xi;
+  const Eigen::Vector3d xj = v[j].world_to_camera * xw;
+  const Camera& cj = v[j].camera;
+  return {cj.params[0] * xj.x() / xj.z() + cj.params[2],
+          cj.params[1] * xj.y() / xj.z() + cj.params[3]};
+}
+// 1 inside view j's image by more than a pixel, 0 outside by more than a pixel, -1 in between.
+int Inside(const DepthView& j, const Eigen::Vector2d& p) {
+  const double w = j.depth.width, h = j.depth.height;
+  if (p.x() > 1 && p.y() > 1 && p.x() < w - 1 && p.y() < h - 1) return 1;
+  if (p.x() < -1 || p.y() < -1 || p.x() > w + 1 || p.y() > h + 1) return 0;
+  return -1;
+}
+
+TEST(Consistency, KeepsWhatThreeViewsSeeAndDropsTheRest) {
+  const Scene s = WallScene();
+  const std::vector<DepthView> views = WallViews(s, 3);
+  const std::vector<Image> f = FilterConsistentDepth(views, {});
+  size_t kept = 0, dropped = 0;
+  for (int y = 0; y < 120; ++y) {
+    for (int x = 0; x < 160; ++x) {
+      const int a = Inside(views[2], Reproject(views, 0, 2, x, y));
+      const int b = Inside(views[1], Reproject(views, 0, 1, x, y));
+      if (a < 0 || b < 0) continue;
+      const bool seen_by_three = a == 1 && b == 1;
+      EXPECT_EQ(std::isfinite(f[0].at(x, y)), seen_by_three) << x << "," << y;
+      EXPECT_TRUE(!std::isfinite(f[0].at(x, y)) || f[0].at(x, y) == views[0].depth.at(x, y));
+      (seen_by_three ? kept : dropped)++;
+    }
+  }
+  EXPECT_GT(kept, 5000u);
+  EXPECT_GT(dropped, 1000u);
+}
+
+TEST(Consistency, RemovesAnOutlierPatch) {
+  const Scene s = WallScene();
+  std::vector<DepthView> views = WallViews(s, 4);
+  for (int y = 40; y < 60; ++y) {
+    for (int x = 30; x < 50; ++x) views[0].depth.at(x, y) *= 0.9f;
+  }
+  const std::vector<Image> f = FilterConsistentDepth(views, {});
+  for (int y = 40; y < 60; ++y) {
+    for (int x = 30; x < 50; ++x) EXPECT_FALSE(std::isfinite(f[0].at(x, y))) << x << "," << y;
+  }
+  // The clean views keep every pixel the two other clean views see, the patch's area included.
+  size_t kept = 0;
+  for (int y = 0; y < 120; ++y) {
+    for (int x = 0; x < 160; ++x) {
+      if (Inside(views[2], Reproject(views, 1, 2, x, y)) == 1 &&
+          Inside(views[3], Reproject(views, 1, 3, x, y)) == 1) {
+        EXPECT_TRUE(std::isfinite(f[1].at(x, y))) << x << "," << y;
+        ++kept;
+      }
+    }
+  }
+  EXPECT_GT(kept, 5000u);
+  // Fused, the patch leaves no surface in front of the wall.
+  FusionOptions o;
+  o.tsdf.voxel_per_spacing = 0.1;
+  const Mesh m = FuseDepthViews(views, o);
+  ASSERT_FALSE(m.vertices.empty());
+  EXPECT_LT(MeshDistances(s, m, 0.05).max, kCellDiagonal);
+  o.filter = false;
+  EXPECT_GT(MeshDistances(s, FuseDepthViews(views, o), 0.05).max, 5.0);
+}
+
+// The box scene under x ↦ 0.2·x + (451000, 5410000, 120) fuses to the same mesh mapped alike.
+// Tolerance: depth maps are float (relative rounding 6e-8 of a depth of ~100 voxels: 6e-6 voxel)
+// and OpenVDB returns float vertices in index space (|index| < 300: 2e-5 voxel); world
+// coordinates are double (5.4e6 · 1.1e-16 = 6e-10, 1e-7 voxel). Allowed: 1e-3 voxel.
+TEST(Fusion, InvariantUnderSimilarity) {
+  const double k = 0.2;
+  const Eigen::Vector3d off(451000, 5410000, 120);
+  const Scene a = BoxScene();
+  Scene b = a;
+  for (Plane& p : b.planes) p.d = k * p.d + p.n.dot(off);
+  for (Box& x : b.boxes) x = {k * x.lo + off, k * x.hi + off};
+  const std::vector<DepthView> va = BoxViews(a);
+  std::vector<DepthView> vb;
+  for (const DepthView& v : va) {
+    const Eigen::Vector3d c = k * v.world_to_camera.Centre() + off;
+    Rigid3d pose(v.world_to_camera.q, -(v.world_to_camera.q * c));
+    vb.push_back(Render(b, v.camera, pose));
+  }
+  FusionOptions o;
+  o.tsdf.voxel_per_spacing = 0.03;
+  o.tsdf.max_depth_spacings = 5;
+  const Mesh ma = FuseDepthViews(va, o), mb = FuseDepthViews(vb, o);
+  const double voxel_b = 0.03 * MedianCameraSpacing(vb);
+  // Camera centres at 5.4e6 carry ~1e-9 absolute error on a spacing of ~0.3.
+  EXPECT_NEAR(voxel_b / (k * 0.03 * MedianCameraSpacing(va)), 1.0, 1e-8);
+  ASSERT_GT(ma.vertices.size(), 1000u);
+  ASSERT_EQ(ma.vertices.size(), mb.vertices.size());
+  EXPECT_EQ(ma.faces, mb.faces);
+  double worst = 0;
+  for (size_t i = 0; i < ma.vertices.size(); ++i) {
+    worst = std::max(worst, ((k * ma.vertices[i] + off) - mb.vertices[i]).norm() / voxel_b);
+  }
+  std::printf("  similarity: worst vertex difference %.2e voxels\n", worst);
+  EXPECT_LT(worst, 1e-3);
+}
+
+TEST(Fusion, EmptyInputGivesAnEmptyMesh) {
+  EXPECT_TRUE(FuseDepthViews({}, {}).vertices.empty());
+  EXPECT_TRUE(FilterConsistentDepth({}, {}).empty());
+  std::vector<DepthView> views = WallViews(WallScene(), 3);
+  for (DepthView& v : views) {
+    std::fill(v.depth.data.begin(), v.depth.data.end(), std::numeric_limits<float>::infinity());
+  }
+  const Mesh m = FuseDepthViews(views, {});
+  EXPECT_TRUE(m.vertices.empty());
+  EXPECT_TRUE(m.faces.empty());
+  TsdfVolume volume(Eigen::Vector3d(451000, 5410000, 120), 0.01, 3);
+  volume.Integrate(views[0]);
+  EXPECT_EQ(volume.ActiveVoxels(), 0u);
+  EXPECT_TRUE(volume.ExtractMesh().faces.empty());
+}
+
+TEST(Fusion, RejectsBadInputAndOptions) {
+  std::vector<DepthView> views = WallViews(WallScene(), 3);
+  FusionOptions o;
+  o.tsdf.truncation_voxels = 0.5;
+  EXPECT_THROW(FuseDepthViews(views, o), UsageError);
+  o = {};
+  o.consistency.relative_tolerance = 0;
+  EXPECT_THROW(FuseDepthViews(views, o), UsageError);
+  o = {};
+  views[1].camera = views[1].camera.Scaled(80, 60);
+  EXPECT_THROW(FuseDepthViews(views, o), Error);
+  views = WallViews(WallScene(), 3);
+  views[2].confidence = Image(10, 10, 1, 32);
+  EXPECT_THROW(FilterConsistentDepth(views, {}), Error);
+  // One camera: no spacing to derive a voxel from, unless it is given.
+  views.resize(1);
+  views[0].confidence = {};
+  EXPECT_THROW(FuseDepthViews(views, {}), Error);
+  o.filter = false;
+  o.tsdf.voxel_size = 0.05;
+  EXPECT_FALSE(FuseDepthViews(views, o).faces.empty());
 }
 
 }  // namespace mvtm
