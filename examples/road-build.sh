@@ -10,11 +10,15 @@
 #               --camera "PINHOLE W H fx fy cx cy", or --orb-settings TUM1.yaml [--frames rgb.txt]
 # environment: MVTM_BIN (default build/bin), HOLDOUT (every Nth frame scored, default 5),
 #              LATERAL (lane change in metres for the final render, default 1.5),
-#              MATCH_OVERLAP (COLMAP sequential matching overlap, default 5)
+#              MATCH_OVERLAP (COLMAP sequential matching overlap, default 5),
+#              MESH (dense | corridor: the mesh where COLMAP has no CUDA, default dense),
+#              HOLDOUT_STRICT (1: also score a strict hold-out: a second workspace without the
+#              held-out photos builds the mesh, its colours and the projectors; they take part in
+#              nothing that is scored, as in novel-view benchmarks)
 #
 # Steps: orb2colmap (poses as priors) → COLMAP feature_extractor / sequential_matcher /
 # point_triangulator / bundle_adjuster / image_undistorter (CPU) → mesh (COLMAP dense MVS +
-# poisson_mesher when COLMAP has CUDA, else roadmesh) → segtrack (when OUT/ws/labels exists) →
+# poisson_mesher when COLMAP has CUDA, else densify + roadmesh --dense, or roadmesh alone) → segtrack (when OUT/ws/labels exists) →
 # pickview --partners (when the names carry several passes, A_0000.png …) → bakedepth →
 # inpaint3d (when there are masks) → ptmrender (held-out poses and a lane change) → ssim.
 set -euo pipefail
@@ -51,6 +55,16 @@ if [ ! -d "$ws/sparse" ]; then
 fi
 colmap model_analyzer --path "$ws/sparse" 2>&1 | grep -E "Registered images|Points:|Mean reprojection" >&2 || true
 
+# The mesh of a workspace where COLMAP has no CUDA: dense plane-sweep stereo fused on a sparse
+# signed-distance volume, closed by the corridor's ground (MESH=dense), or the corridor alone.
+cpu_mesh() {
+  if [ "${MESH:-dense}" = dense ]; then
+    "$bin/densify" "$1" && "$bin/roadmesh" --dense "$1"
+  else
+    "$bin/roadmesh" "$1"
+  fi
+}
+
 log "3. mesh"
 if [ ! -f "$ws/mesh.ply" ] && [ ! -f "$ws/meshed-poisson.ply" ]; then
   if colmap -h 2>&1 | grep -q "with CUDA"; then
@@ -58,9 +72,9 @@ if [ ! -f "$ws/mesh.ply" ] && [ ! -f "$ws/meshed-poisson.ply" ]; then
     colmap_log colmap stereo_fusion --workspace_path "$ws" --output_path "$ws/fused.ply"
     colmap_log colmap poisson_mesher --input_path "$ws/fused.ply" --output_path "$ws/meshed-poisson.ply"
     # poisson_mesher can write an empty mesh and still exit 0.
-    grep -aq "element face [1-9]" "$ws/meshed-poisson.ply" || { rm -f "$ws/meshed-poisson.ply"; "$bin/roadmesh" "$ws"; }
+    grep -aq "element face [1-9]" "$ws/meshed-poisson.ply" || { rm -f "$ws/meshed-poisson.ply"; cpu_mesh "$ws"; }
   else
-    "$bin/roadmesh" "$ws"
+    cpu_mesh "$ws"
   fi
 fi
 
@@ -92,3 +106,29 @@ for r in vertex ptm1 ptm; do "$bin/ssim" "$out/heldout_$r" "$out/heldout_truth" 
 paste "$out/ssim_vertex.tsv" "$out/ssim_ptm1.tsv" "$out/ssim_ptm.tsv" |
   awk -F'\t' 'NR == 1 { printf "%-12s %10s %10s %14s\n", "frame", "vertex", "PTM 1 proj", "PTM all effects"; next }
               { printf "%-12s %10s %10s %14s\n", $1, $2, $6, $10 }'
+
+if [ "${HOLDOUT_STRICT:-0}" = 1 ]; then
+  log "8. strict hold-out: mesh, colours and projectors from a workspace without the held-out photos"
+  train=$out/train
+  for i in "${sel[@]}"; do ls "$ws/images" | sed -n "$((i + 1))p"; done > "$out/heldout_names.txt"
+  if [ ! -d "$train/sparse" ]; then
+    mkdir -p "$train/sparse" "$out/full_txt"
+    colmap_log colmap image_deleter --input_path "$ws/sparse" --output_path "$train/sparse" \
+      --image_names_path "$out/heldout_names.txt"
+    ln -s "$ws/images" "$train/images"
+  fi
+  # The held-out poses of record (images.txt lines of the full model) as ptmrender's trajectory.
+  colmap_log colmap model_converter --input_path "$ws/sparse" --output_path "$out/full_txt" --output_type TXT
+  awk 'NR == FNR { keep[$1] = 1; next } /^#/ { next }
+       ++n % 2 == 1 { ok = ($10 in keep); if (ok) print; next } ok { print "" }' \
+    "$out/heldout_names.txt" "$out/full_txt/images.txt" > "$out/heldout_poses.txt"
+  [ -f "$train/mesh.ply" ] || cpu_mesh "$train"
+  "$bin/bakedepth" -q "$train"
+  "$bin/ptmrender" -q --mode vertex --poses "$out/heldout_poses.txt" "$train" "$out/strict_vertex"
+  "$bin/ptmrender" -q --poses "$out/heldout_poses.txt" "$train" "$out/strict_ptm"
+  for r in vertex ptm; do "$bin/ssim" "$out/strict_$r" "$out/heldout_truth" > "$out/ssim_strict_$r.tsv"; done
+  echo "strict hold-out (held-out photos in nothing scored) beside leave-one-out:" >&2
+  paste "$out/ssim_vertex.tsv" "$out/ssim_strict_vertex.tsv" "$out/ssim_ptm.tsv" "$out/ssim_strict_ptm.tsv" |
+    awk -F'\t' 'NR == 1 { printf "%-12s %10s %12s %10s %12s\n", "frame", "vertex", "vertex strict", "PTM", "PTM strict"; next }
+                { printf "%-12s %10s %12s %10s %12s\n", $1, $2, $6, $10, $14 }'
+fi

@@ -86,6 +86,9 @@ std::vector<std::string> Workspace::Missing(const std::vector<WsItem>& needs) co
       case WsItem::kTracks:
         if (!fs::exists(TracksPath())) out.push_back("tracks.tsv (run segtrack)");
         break;
+      case WsItem::kStereo:
+        if (!fs::is_directory(StereoDir())) out.push_back("stereo/ (run densify)");
+        break;
       case WsItem::kPartners:
         if (!fs::exists(PartnersPath())) out.push_back("partners.tsv (run pickview --partners)");
         break;

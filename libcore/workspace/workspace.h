@@ -29,7 +29,7 @@ namespace mvtm {
 
 namespace fs = std::filesystem;
 
-enum class WsItem { kSparse, kImages, kMesh, kLabels, kMasks, kTracks, kPartners, kDepth, kTextures };
+enum class WsItem { kSparse, kImages, kMesh, kLabels, kMasks, kTracks, kPartners, kDepth, kTextures, kStereo };
 
 class Workspace {
  public:

@@ -13,7 +13,7 @@
 #include "io/mesh_io.h"
 #include "io/partners.h"
 #include "render/context.h"
-#include "render/projector_sources.h"
+#include "workspace/projector_sources.h"
 #include "workspace/workspace.h"
 
 namespace mvtm {

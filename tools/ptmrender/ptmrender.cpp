@@ -18,7 +18,7 @@
 #include "io/trajectory.h"
 #include "render/context.h"
 #include "render/effects_plan.h"
-#include "render/projector_sources.h"
+#include "workspace/projector_sources.h"
 #include "workspace/workspace.h"
 
 namespace mvtm {

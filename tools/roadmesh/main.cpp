@@ -27,6 +27,15 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("--no-colours", o.no_colours,
                "Write no vertex colours (no images, no OpenGL needed)");
+  app.add_flag("--dense", o.dense,
+               "Fuse densify's depth maps (stereo/) into the mesh on a sparse signed-distance volume; the "
+               "corridor's ground only where they leave holes");
+  app.add_option("--voxel", o.voxel, "--dense: voxel size as a fraction of the median camera spacing")
+      ->capture_default_str();
+  app.add_option("--max-depth", o.max_depth, "--dense: depth used, in median camera spacings")
+      ->capture_default_str();
+  app.add_option("--min-agree", o.min_agree, "--dense: other views that must confirm a depth pixel")
+      ->capture_default_str();
   app.add_flag("--force", o.force, "Replace an existing mesh");
   mvtm::AddChoiceOption(app, "--gl", o.gl, mvtm::GlBackendNames(), "OpenGL backend");
   mvtm::AddQuietOption(app, o.quiet);
@@ -42,6 +51,9 @@ int main(int argc, char** argv) {
           r.ground_points ? (std::to_string(r.ground_points) + " points").c_str() : "default",
           r.left_wall, r.right_wall, r.refined_vertices, r.coloured, r.vertices,
           r.gl.empty() ? "" : "; ", r.gl.c_str());
+    if (!o.quiet && o.dense)
+      std::fprintf(stderr, "roadmesh: dense: %zu depth maps fused into %zu triangles; %zu corridor ground triangles close its holes\n",
+                   r.dense_views, r.dense_faces, r.corridor_faces);
     return 0;
   });
 }

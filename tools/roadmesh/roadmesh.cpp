@@ -7,9 +7,12 @@
 #include "image/image.h"
 #include "io/colmap_model.h"
 #include "io/mesh_io.h"
+#include "fusion/fusion.h"
 #include "mesh/corridor.h"
+#include "mesh/merge.h"
 #include "mesh/vertex_colours.h"
 #include "render/context.h"
+#include "stereo/neighbours.h"
 #include "workspace/workspace.h"
 
 namespace mvtm {
@@ -20,6 +23,7 @@ namespace {
 // new mesh goes. mesh.ply is the first name Workspace::MeshPath() looks for, so the new mesh wins.
 fs::path PrepareWorkspace(const Workspace& ws, const RoadMeshOptions& o) {
   std::vector<WsItem> needs = {WsItem::kSparse};
+  if (o.dense) needs.push_back(WsItem::kStereo);
   if (!o.no_colours) needs.push_back(WsItem::kImages);
   ws.Require("roadmesh", needs);
   const fs::path existing = ws.MeshPath();
@@ -45,6 +49,48 @@ void BakeColours(const Workspace& ws, const Reconstruction& rec, const RoadMeshO
   rep.coloured = baker.Finish(mesh);
 }
 
+// densify's depth maps with the cameras scaled to their size, in name order.
+std::vector<DepthView> LoadStereoViews(const Workspace& ws, const Reconstruction& rec) {
+  std::vector<DepthView> views;
+  for (const ImageRecord* im : rec.ImagesByName()) {
+    const fs::path d = ws.StereoDepthPath(im->name), c = ws.StereoConfidencePath(im->name);
+    if (!fs::exists(d)) continue;
+    DepthView v;
+    v.depth = ReadImage(d.string());
+    if (fs::exists(c)) v.confidence = ReadImage(c.string());
+    const Camera& cam = rec.cameras.at(im->camera_id);
+    cam.RequireUndistorted();
+    v.camera = cam.Scaled(uint64_t(v.depth.width), uint64_t(v.depth.height));
+    v.world_to_camera = im->world_to_camera;
+    CheckDepthView(v, views.size());
+    views.push_back(std::move(v));
+  }
+  if (views.empty()) throw Error(ws.StereoDir().string(), 0, "no depth maps of the model's images (run densify)");
+  return views;
+}
+
+// The fused surface of the stereo depth maps, closed by the corridor's ground where it has holes.
+Mesh DenseMesh(const Workspace& ws, const Reconstruction& rec, const RoadMeshOptions& o, const Mesh& corridor,
+               RoadMeshReport& rep) {
+  const std::vector<DepthView> views = LoadStereoViews(ws, rec);
+  FusionOptions fo;
+  fo.consistency.min_agree = o.min_agree;
+  fo.tsdf.voxel_per_spacing = o.voxel;
+  fo.tsdf.max_depth_spacings = o.max_depth;
+  const Mesh dense = FuseDepthViews(views, fo);
+  std::vector<Rigid3d> w2c;
+  for (const auto& v : views) w2c.push_back(v.world_to_camera);
+  Eigen::Vector3d down, side;
+  DriveAxes(w2c, down, side);
+  MergeReport mr;
+  const double voxel = o.voxel * MedianCameraSpacing(views);
+  Mesh out = MergeGroundWhereMissing(dense, corridor, -down, 3 * voxel, &mr);
+  rep.dense_views = views.size();
+  rep.dense_faces = dense.faces.size();
+  rep.corridor_faces = mr.proxy_faces_kept;
+  return out;
+}
+
 void WriteRoadMeshProvenance(const Workspace& ws, const RoadMeshOptions& o,
                              const RoadMeshReport& rep) {
   std::vector<fs::path> inputs;
@@ -56,6 +102,10 @@ void WriteRoadMeshProvenance(const Workspace& ws, const RoadMeshOptions& o,
                          {"wall_height", o.wall_height},
                          {"resolution", o.resolution},
                          {"no_colours", o.no_colours},
+                         {"dense", o.dense},
+                         {"voxel", o.voxel},
+                         {"max_depth", o.max_depth},
+                         {"min_agree", o.min_agree},
                          {"gl", rep.gl},
                          {"camera_height", rep.camera_height},
                          {"ground_points", rep.ground_points},
@@ -72,6 +122,9 @@ void RoadMeshOptions::Check() const {
     throw UsageError("--wall-height: must be in (0, 200] metres");
   if (!(resolution >= 0.05 && resolution <= 5))
     throw UsageError("--resolution: must be in [0.05, 5] metres");
+  if (!(voxel > 0 && voxel <= 10)) throw UsageError("--voxel: must be in (0, 10] camera spacings");
+  if (!(max_depth > 0 && max_depth <= 1000)) throw UsageError("--max-depth: must be in (0, 1000] camera spacings");
+  if (min_agree < 1 || min_agree > 16) throw UsageError("--min-agree: must be 1..16");
   ParseGlBackend(gl);
 }
 
@@ -87,6 +140,7 @@ RoadMeshReport RunRoadMesh(const RoadMeshOptions& o) {
     throw Error(ws.SparseDir().string(), 0, "need at least two registered images to follow a path");
 
   Corridor corridor = BuildCorridor(rec, {o.width, o.wall_height, o.resolution});
+  if (o.dense) corridor.mesh = DenseMesh(ws, rec, o, corridor.mesh, rep);
   Mesh& mesh = corridor.mesh;
   rep.stations = corridor.stations;
   rep.path_length = corridor.path_length;

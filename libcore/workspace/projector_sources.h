@@ -1,4 +1,5 @@
-// mvtm — loading a workspace's images as projectors: colour image, depth map, mask.
+// mvtm — loading a workspace's images as projectors: colour image, depth map, mask (the
+// workspace side of rendering: libcore/render itself knows no folders).
 //
 // Shared by ptmrender and inpaint3d. Images are looked up by their index in a list of the
 // model's images (ImagesByName order). Depth maps come from the workspace's baked depth/ (resized
@@ -11,7 +12,7 @@
 #include <map>
 #include <vector>
 
-#include "io/colmap_model.h"
+#include "scene/reconstruction.h"
 #include "render/renderer.h"
 #include "workspace/workspace.h"
 

@@ -1,4 +1,4 @@
-#include "render/projector_sources.h"
+#include "workspace/projector_sources.h"
 
 #include "image/mask.h"
 
