@@ -1,52 +1,35 @@
 #include "mesh/merge.h"
 
 #include <cmath>
-#include <unordered_set>
+#include <map>
+
+#include <Eigen/Geometry>
 
 #include "base/error.h"
 
 namespace mvtm {
 
-namespace {
-
-// Integer cell of a point on a grid of `cell` spacing, hashed into 64 bits.
-struct CellHash {
-  double cell;
-  uint64_t Key(const Eigen::Vector3d& p) const {
-    const auto c = [&](double v) { return uint64_t(int64_t(std::floor(v / cell)) & 0x1FFFFF); };
-    return c(p.x()) << 42 | c(p.y()) << 21 | c(p.z());
-  }
-};
-
-bool NearDense(const std::unordered_set<uint64_t>& cells, const CellHash& h, const Eigen::Vector3d& p) {
-  for (int dx = -1; dx <= 1; ++dx)
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dz = -1; dz <= 1; ++dz)
-        if (cells.count(h.Key(p + h.cell * Eigen::Vector3d(dx, dy, dz)))) return true;
-  return false;
-}
-
-}  // namespace
-
-Mesh MergeGroundWhereMissing(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3d& up, double radius,
-                             MergeReport* report) {
-  if (!(radius > 0) || !std::isfinite(radius)) throw Error("merge: the radius must be a positive length");
-  const CellHash h{radius};
-  std::unordered_set<uint64_t> cells;
-  for (const auto& v : dense.vertices) cells.insert(h.Key(v));
+Mesh MergeGroundBeneath(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3d& up, double depth_below,
+                        MergeReport* report) {
+  if (!(depth_below >= 0) || !std::isfinite(depth_below)) throw Error("merge: depth_below must be a length >= 0");
+  if (!(up.norm() > 0)) throw Error("merge: the up direction is zero");
+  const Eigen::Vector3d u = up.normalized();
   Mesh out;
   out.vertices = dense.vertices;
   out.faces = dense.faces;
-  const Eigen::Vector3d u = up.normalized();
+  std::map<uint32_t, uint32_t> index;  // proxy vertex → output vertex (ground vertices are shared)
+  auto vertex = [&](uint32_t v) {
+    auto it = index.find(v);
+    if (it != index.end()) return it->second;
+    out.vertices.push_back(proxy.vertices[v] - depth_below * u);
+    return index[v] = static_cast<uint32_t>(out.vertices.size() - 1);
+  };
   size_t kept = 0;
   for (const auto& f : proxy.faces) {
-    const Eigen::Vector3d a = proxy.vertices[f[0]], b = proxy.vertices[f[1]], c = proxy.vertices[f[2]];
-    const Eigen::Vector3d n = (b - a).cross(c - a);
+    const Eigen::Vector3d n =
+        (proxy.vertices[f[1]] - proxy.vertices[f[0]]).cross(proxy.vertices[f[2]] - proxy.vertices[f[0]]);
     if (n.norm() == 0 || n.normalized().dot(u) < std::cos(M_PI / 4)) continue;  // not ground
-    if (NearDense(cells, h, (a + b + c) / 3.0)) continue;
-    const uint32_t base = static_cast<uint32_t>(out.vertices.size());
-    out.vertices.insert(out.vertices.end(), {a, b, c});
-    out.faces.push_back({base, base + 1, base + 2});
+    out.faces.push_back({vertex(f[0]), vertex(f[1]), vertex(f[2])});
     ++kept;
   }
   out.ComputeNormals();

@@ -1,11 +1,13 @@
-// mvtm — closing a dense mesh with a proxy: the proxy's ground where the dense surface is missing.
+// mvtm — closing a dense mesh with a proxy: the proxy's ground laid just beneath the dense surface.
 //
-// Dense stereo leaves holes where the photos give no match (textureless asphalt, sky edges,
-// moving vehicles); the road must stay closed for rendering. The corridor's ground faces (face
-// normal within 45° of `up`) whose centroid has no dense vertex within `radius` are appended to
-// the dense mesh; everything else of the proxy (its walls) is dropped, since the dense surface
-// replaces them. Lengths in the model's own unit. Normals are recomputed; colours dropped (bake
-// them afterwards). Thread safety: pure function.
+// Dense stereo leaves holes where the photos give no match (dark, textureless asphalt, sky edges,
+// moving vehicles) and fragments between them; the road must stay closed for rendering. Every
+// ground face of the proxy (face normal within 45° of `up`) is appended to the dense mesh moved
+// down by `depth_below` along `up`: where the dense road exists it hides the proxy (the depth
+// test keeps the nearer surface), where it has holes the proxy shows. No face is dropped by a
+// proximity test, so fragments of dense road never punch holes. The proxy's walls are dropped:
+// the dense surface replaces them. Lengths in the model's own unit. Normals are recomputed;
+// colours dropped (bake them afterwards). Thread safety: pure function.
 #pragma once
 
 #include <cstddef>
@@ -20,7 +22,7 @@ struct MergeReport {
   size_t proxy_faces_kept = 0;  // ground faces of the proxy appended
 };
 
-Mesh MergeGroundWhereMissing(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3d& up, double radius,
-                             MergeReport* report = nullptr);
+Mesh MergeGroundBeneath(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3d& up, double depth_below,
+                        MergeReport* report = nullptr);
 
 }  // namespace mvtm

@@ -36,6 +36,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--min-agree", o.min_agree, "--dense: other views that must confirm a depth pixel")
       ->capture_default_str();
+  app.add_option("--ground-below", o.ground_below,
+                 "--dense: lower the corridor ground by this many voxels under the fused surface (0: at its fitted height)")
+      ->capture_default_str();
   app.add_flag("--force", o.force, "Replace an existing mesh");
   mvtm::AddChoiceOption(app, "--gl", o.gl, mvtm::GlBackendNames(), "OpenGL backend");
   mvtm::AddQuietOption(app, o.quiet);

@@ -84,7 +84,7 @@ Mesh DenseMesh(const Workspace& ws, const Reconstruction& rec, const RoadMeshOpt
   DriveAxes(w2c, down, side);
   MergeReport mr;
   const double voxel = o.voxel * MedianCameraSpacing(views);
-  Mesh out = MergeGroundWhereMissing(dense, corridor, -down, 3 * voxel, &mr);
+  Mesh out = MergeGroundBeneath(dense, corridor, -down, o.ground_below * voxel, &mr);
   rep.dense_views = views.size();
   rep.dense_faces = dense.faces.size();
   rep.corridor_faces = mr.proxy_faces_kept;
@@ -106,6 +106,7 @@ void WriteRoadMeshProvenance(const Workspace& ws, const RoadMeshOptions& o,
                          {"voxel", o.voxel},
                          {"max_depth", o.max_depth},
                          {"min_agree", o.min_agree},
+                         {"ground_below", o.ground_below},
                          {"gl", rep.gl},
                          {"camera_height", rep.camera_height},
                          {"ground_points", rep.ground_points},
@@ -125,6 +126,7 @@ void RoadMeshOptions::Check() const {
   if (!(voxel > 0 && voxel <= 10)) throw UsageError("--voxel: must be in (0, 10] camera spacings");
   if (!(max_depth > 0 && max_depth <= 1000)) throw UsageError("--max-depth: must be in (0, 1000] camera spacings");
   if (min_agree < 1 || min_agree > 16) throw UsageError("--min-agree: must be 1..16");
+  if (!(ground_below >= 0 && ground_below <= 100)) throw UsageError("--ground-below: must be in [0, 100] voxels");
   ParseGlBackend(gl);
 }
 

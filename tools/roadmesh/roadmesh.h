@@ -23,6 +23,7 @@ struct RoadMeshOptions {
   double voxel = 0.1;         // --dense: voxel size as a fraction of the median camera spacing, (0, 10]
   double max_depth = 40;      // --dense: depth used, in median camera spacings, (0, 1000]
   int min_agree = 2;          // --dense: other views that must confirm a depth pixel, 1..16
+  double ground_below = 0;    // --dense: corridor ground lowered by this many voxels (0: at its fitted height), [0, 100]
   bool force = false;         // replace an existing mesh
   std::string gl = "auto";    // auto | egl | osmesa (depth maps for the colour visibility test)
   bool quiet = false;
