@@ -16,7 +16,9 @@ namespace mvtm {
 namespace {
 std::atomic<unsigned> g_counter{0};
 
-bool ProcessAlive(long pid) { return pid > 0 && (kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM); }
+bool ProcessAlive(long pid) {
+  return pid > 0 && (kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM);
+}
 }  // namespace
 
 AtomicFile::AtomicFile(const fs::path& final_path) : final_(final_path) {

@@ -53,7 +53,10 @@ void Camera::RequireUndistorted() const {
                 "SIMPLE_PINHOLE); run colmap image_undistorter first");
 }
 
-double Camera::fx() const { RequireUndistorted(); return params.at(0); }
+double Camera::fx() const {
+  RequireUndistorted();
+  return params.at(0);
+}
 double Camera::fy() const {
   RequireUndistorted();
   return model == CameraModel::kSimplePinhole ? params.at(0) : params.at(1);
@@ -122,8 +125,10 @@ Camera ParseCameraSpec(const std::string& spec) {
   }
   c.width = static_cast<uint64_t>(ParseIntArg(tok[1], "--camera width"));
   c.height = static_cast<uint64_t>(ParseIntArg(tok[2], "--camera height"));
-  if (c.width == 0 || c.height == 0) throw UsageError("--camera: width and height must be positive");
-  for (size_t i = 3; i < tok.size(); ++i) c.params.push_back(ParseDoubleArg(tok[i], "--camera parameter"));
+  if (c.width == 0 || c.height == 0)
+    throw UsageError("--camera: width and height must be positive");
+  for (size_t i = 3; i < tok.size(); ++i)
+    c.params.push_back(ParseDoubleArg(tok[i], "--camera parameter"));
   if (static_cast<int>(c.params.size()) != CameraModelNumParams(c.model))
     throw UsageError("--camera: " + std::string(tok[0]) + " takes " +
                      std::to_string(CameraModelNumParams(c.model)) + " parameters, got " +

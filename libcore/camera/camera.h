@@ -11,11 +11,10 @@
 //    z backward); the axis flip from camera to eye coordinates happens only in libcore/render.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace mvtm {
 

@@ -13,7 +13,8 @@ void ConfigureApp(CLI::App& app, const std::string& tool, const std::string& des
   app.name(tool);
   app.description(description);
   app.set_version_flag("--version", std::string(tool) + " (mvtm) " + kVersion);
-  app.footer("See man " + tool + " for details. Exit status: 0 success, 1 data or I/O error, 2 usage error.");
+  app.footer("See man " + tool +
+             " for details. Exit status: 0 success, 1 data or I/O error, 2 usage error.");
   app.get_formatter()->column_width(34);
 }
 

@@ -14,8 +14,8 @@ namespace mvtm {
 //   items:      what is selected, plural ("poses", "images", "label frames")
 //   order:      the documented order of the items ("in pose order", "by name order")
 //   force_help: what --force redoes for this tool
-void AddWorkOptions(CLI::App& app, WorkOptions& work, const std::string& items, const std::string& order,
-                    const std::string& force_help);
+void AddWorkOptions(CLI::App& app, WorkOptions& work, const std::string& items,
+                    const std::string& order, const std::string& force_help);
 
 // -q/--quiet alone, for tools without a work list.
 void AddQuietOption(CLI::App& app, bool& quiet);

@@ -9,7 +9,9 @@ namespace mvtm {
 bool StderrIsTerminal() { return isatty(2) == 1; }
 
 Progress::Progress(std::string label, size_t total, bool quiet)
-    : label_(std::move(label)), total_(total), enabled_(!quiet && total > 0 && StderrIsTerminal()) {}
+    : label_(std::move(label)),
+      total_(total),
+      enabled_(!quiet && total > 0 && StderrIsTerminal()) {}
 
 Progress::~Progress() {
   if (enabled_ && last_percent_ >= 0) std::fputs("\n", stderr);

@@ -13,9 +13,9 @@
 namespace mvtm {
 
 struct Selection {
-  long begin = 0;          // range start (may be negative: from the end)
-  long end = 0;            // range end, exclusive
-  bool has_end = false;    // false: to the end
+  long begin = 0;        // range start (may be negative: from the end)
+  long end = 0;          // range end, exclusive
+  bool has_end = false;  // false: to the end
   int shard_index = 0;
   int shard_count = 1;
 

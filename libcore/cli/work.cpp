@@ -29,11 +29,13 @@ ImageSize ParseImageSize(const std::string& spec, const std::string& option) {
   const int64_t w = ParseIntArg(spec.substr(0, x), option + " width");
   const int64_t h = ParseIntArg(spec.substr(x + 1), option + " height");
   if (w <= 0 || h <= 0 || w > kMaxImageSide || h > kMaxImageSide)
-    throw UsageError(option + ": '" + spec + "' must be 1.." + std::to_string(kMaxImageSide) + " on each side");
+    throw UsageError(option + ": '" + spec + "' must be 1.." + std::to_string(kMaxImageSide) +
+                     " on each side");
   return {static_cast<uint64_t>(w), static_cast<uint64_t>(h)};
 }
 
-void CheckChoice(const std::string& value, const std::vector<std::string>& choices, const std::string& option) {
+void CheckChoice(const std::string& value, const std::vector<std::string>& choices,
+                 const std::string& option) {
   if (std::find(choices.begin(), choices.end(), value) != choices.end()) return;
   std::string list;
   for (const auto& c : choices) list += (list.empty() ? "" : ", ") + c;

@@ -4,9 +4,8 @@
 // for monocular SLAM whose scale is arbitrary. Errors are computed on camera centres.
 #pragma once
 
-#include <vector>
-
 #include <Eigen/Core>
+#include <vector>
 
 namespace mvtm {
 

@@ -26,7 +26,8 @@ std::vector<std::string> ListImageFiles(const fs::path& dir, const std::vector<s
     const std::string name = e.path().filename().string();
     if (name.empty() || name[0] == '.' || !e.is_regular_file(ec)) continue;
     std::string ext = e.path().extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
     if (std::find(accept.begin(), accept.end(), ext) != accept.end()) names.push_back(name);
   }
   std::sort(names.begin(), names.end());

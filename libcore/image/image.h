@@ -24,8 +24,7 @@ struct Image {
 
   Image() = default;
   Image(int w, int h, int c, int b = 8, float fill = 0.f)
-      : width(w), height(h), channels(c), bits(b),
-        data(static_cast<size_t>(w) * h * c, fill) {}
+      : width(w), height(h), channels(c), bits(b), data(static_cast<size_t>(w) * h * c, fill) {}
 
   float& at(int x, int y, int c = 0) {
     return data[(static_cast<size_t>(y) * width + x) * channels + c];

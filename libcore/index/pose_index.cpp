@@ -1,16 +1,16 @@
 #include "index/pose_index.h"
 
+#include <flann/algorithms/dist.h>
+#include <flann/algorithms/kdtree_index.h>
+#include <flann/algorithms/kdtree_single_index.h>
+#include <flann/general.h>
+#include <flann/util/random.h>
+
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <unordered_map>
-
-#include <Eigen/Eigenvalues>
-#include <flann/general.h>
-#include <flann/algorithms/dist.h>
-#include <flann/algorithms/kdtree_index.h>
-#include <flann/algorithms/kdtree_single_index.h>
-#include <flann/util/random.h>
 
 #include "base/error.h"
 
@@ -43,10 +43,14 @@ class TopK {
 
 const char* SearchMethodName(SearchMethod m) {
   switch (m) {
-    case SearchMethod::kKdTree: return "kdtree";
-    case SearchMethod::kBrute: return "brute";
-    case SearchMethod::kFlann: return "flann";
-    case SearchMethod::kGrid9: return "grid9";
+    case SearchMethod::kKdTree:
+      return "kdtree";
+    case SearchMethod::kBrute:
+      return "brute";
+    case SearchMethod::kFlann:
+      return "flann";
+    case SearchMethod::kGrid9:
+      return "grid9";
   }
   return "?";
 }
@@ -54,7 +58,8 @@ const char* SearchMethodName(SearchMethod m) {
 std::vector<std::string> SearchMethodNames() { return {"kdtree", "brute", "flann", "grid9"}; }
 
 SearchMethod ParseSearchMethod(const std::string& name) {
-  for (SearchMethod m : {SearchMethod::kKdTree, SearchMethod::kBrute, SearchMethod::kFlann, SearchMethod::kGrid9})
+  for (SearchMethod m :
+       {SearchMethod::kKdTree, SearchMethod::kBrute, SearchMethod::kFlann, SearchMethod::kGrid9})
     if (name == SearchMethodName(m)) return m;
   throw UsageError("--method: '" + name + "' is not one of kdtree, brute, flann, grid9");
 }
@@ -71,7 +76,8 @@ struct PoseIndex::Impl {
   std::unique_ptr<flann::KDTreeIndex<Dist>> forest;
   // grid9
   Eigen::Vector3d up_sum = Eigen::Vector3d::Zero();  // Σ camera up vectors (world)
-  Eigen::Vector3d axis_u = Eigen::Vector3d::UnitX(), axis_w = Eigen::Vector3d::UnitZ(), origin = Eigen::Vector3d::Zero();
+  Eigen::Vector3d axis_u = Eigen::Vector3d::UnitX(), axis_w = Eigen::Vector3d::UnitZ(),
+                  origin = Eigen::Vector3d::Zero();
   double cell = 0;
   std::unordered_map<uint64_t, std::vector<uint32_t>> cells;
   mutable bool cache_valid = false;
@@ -79,7 +85,8 @@ struct PoseIndex::Impl {
   mutable std::vector<uint32_t> cache;
 
   // Scores candidate i for the query and offers it.
-  void Offer(const Eigen::Vector3d& C, const Eigen::Vector3d& v, size_t i, size_t exclude, TopK& top) const {
+  void Offer(const Eigen::Vector3d& C, const Eigen::Vector3d& v, size_t i, size_t exclude,
+             TopK& top) const {
     if (i == exclude) return;
     Candidate c;
     if (ScoreCandidate(C, v, centre[i], view[i], sel, cos_gate, i, c, false)) top.Offer(c);
@@ -104,7 +111,8 @@ struct PoseIndex::Impl {
 template <class Index>  // PoseIndex::Impl (private, hence a template)
 class GatedResultSet : public flann::ResultSet<double> {
  public:
-  GatedResultSet(const Index& idx, const Eigen::Vector3d& C, const Eigen::Vector3d& v, size_t exclude)
+  GatedResultSet(const Index& idx, const Eigen::Vector3d& C, const Eigen::Vector3d& v,
+                 size_t exclude)
       : idx_(idx), C_(C), v_(v), exclude_(exclude), top_(idx.sel.k) {}
   bool full() const override { return top_.full(); }
   void addPoint(double dist_sq, size_t i) override {
@@ -180,7 +188,8 @@ PoseIndex::PoseIndex(const std::vector<Rigid3d>& cands, const ViewSelectionOptio
   m.opt = options;
   m.cos_gate = HeadingGateCosine(selection);
   if (selection.k < 1) throw UsageError("k must be at least 1");
-  if (cands.size() > std::numeric_limits<uint32_t>::max()) throw Error("too many candidate poses to index");
+  if (cands.size() > std::numeric_limits<uint32_t>::max())
+    throw Error("too many candidate poses to index");
   const size_t n = cands.size();
   m.centre.resize(n);
   m.view.resize(n);
@@ -199,7 +208,8 @@ PoseIndex::PoseIndex(const std::vector<Rigid3d>& cands, const ViewSelectionOptio
   m.extent = n ? (hi - lo).norm() : 0;
   if (n == 0) return;
   switch (options.method) {
-    case SearchMethod::kBrute: break;
+    case SearchMethod::kBrute:
+      break;
     case SearchMethod::kKdTree: {
       flann::Matrix<double> data(m.flat.data(), n, 3);
       m.kdtree = std::make_unique<flann::KDTreeSingleIndex<Impl::Dist>>(
@@ -211,7 +221,8 @@ PoseIndex::PoseIndex(const std::vector<Rigid3d>& cands, const ViewSelectionOptio
       if (options.checks < 1) throw UsageError("--checks: must be at least 1");
       flann::seed_random(options.seed);
       flann::Matrix<double> data(m.flat.data(), n, 3);
-      m.forest = std::make_unique<flann::KDTreeIndex<Impl::Dist>>(data, flann::KDTreeIndexParams(std::max(1, options.trees)));
+      m.forest = std::make_unique<flann::KDTreeIndex<Impl::Dist>>(
+          data, flann::KDTreeIndexParams(std::max(1, options.trees)));
       m.forest->buildIndex();
       break;
     }
@@ -266,7 +277,8 @@ std::vector<Candidate> PoseIndex::Select(const Rigid3d& q, size_t exclude) const
         for (int64_t dx = -1; dx <= 1; ++dx)
           for (int64_t dy = -1; dy <= 1; ++dy) {
             auto it = m.cells.find(m.CellKey(ix + dx, iy + dy));
-            if (it != m.cells.end()) m.cache.insert(m.cache.end(), it->second.begin(), it->second.end());
+            if (it != m.cells.end())
+              m.cache.insert(m.cache.end(), it->second.begin(), it->second.end());
           }
         m.cache_key = key;
         m.cache_valid = true;
@@ -285,7 +297,8 @@ void SelectionDiff::Add(const std::vector<Candidate>& exact, const std::vector<C
   ++queries;
   slots += exact.size();
   for (size_t r = 0; r < exact.size(); ++r) {
-    bool found = std::any_of(approx.begin(), approx.end(), [&](const Candidate& c) { return c.index == exact[r].index; });
+    bool found = std::any_of(approx.begin(), approx.end(),
+                             [&](const Candidate& c) { return c.index == exact[r].index; });
     misses += !found;
     if (r >= approx.size() || approx[r].index != exact[r].index) ++wrong_rank;
     if (r < approx.size()) {

@@ -47,15 +47,17 @@ const char* SearchMethodName(SearchMethod m);
 std::vector<std::string> SearchMethodNames();
 // Throws UsageError naming the bad value and the choices.
 SearchMethod ParseSearchMethod(const std::string& name);
-inline bool IsExact(SearchMethod m) { return m == SearchMethod::kKdTree || m == SearchMethod::kBrute; }
+inline bool IsExact(SearchMethod m) {
+  return m == SearchMethod::kKdTree || m == SearchMethod::kBrute;
+}
 
 struct PoseIndexOptions {
   SearchMethod method = SearchMethod::kKdTree;
-  int checks = 32;         // flann: leaves visited per query (more: slower, fewer misses)
-  int trees = 4;           // flann: randomised trees
-  int leaf_size = 8;       // kdtree: centres per leaf
-  double grid_cell = 0;    // grid9: cell side in the poses' length unit; 0 = automatic
-  unsigned seed = 1;       // flann: tree randomisation seed
+  int checks = 32;       // flann: leaves visited per query (more: slower, fewer misses)
+  int trees = 4;         // flann: randomised trees
+  int leaf_size = 8;     // kdtree: centres per leaf
+  double grid_cell = 0;  // grid9: cell side in the poses' length unit; 0 = automatic
+  unsigned seed = 1;     // flann: tree randomisation seed
 };
 
 class PoseIndex {
@@ -72,7 +74,8 @@ class PoseIndex {
   double grid_cell() const;  // grid9: the cell side in use (0 for other methods)
 
   // The best min(K, admissible) candidates for a query, best first; `exclude` is left out.
-  std::vector<Candidate> Select(const Rigid3d& query_w2c, size_t exclude = static_cast<size_t>(-1)) const;
+  std::vector<Candidate> Select(const Rigid3d& query_w2c,
+                                size_t exclude = static_cast<size_t>(-1)) const;
 
  private:
   struct Impl;
@@ -89,7 +92,9 @@ struct SelectionDiff {
   size_t filled = 0;      // slots both lists fill
 
   void Add(const std::vector<Candidate>& exact, const std::vector<Candidate>& approx);
-  double MissRate() const { return slots ? static_cast<double>(misses) / static_cast<double>(slots) : 0; }
+  double MissRate() const {
+    return slots ? static_cast<double>(misses) / static_cast<double>(slots) : 0;
+  }
   double MeanExtraCost() const { return filled ? extra_cost / static_cast<double>(filled) : 0; }
 };
 

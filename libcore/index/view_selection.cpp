@@ -10,7 +10,8 @@ std::vector<Candidate> SelectViews(const Rigid3d& q, const std::vector<Rigid3d>&
   Candidate c;
   for (size_t i = 0; i < cands.size(); ++i) {
     if (i == exclude) continue;
-    if (ScoreCandidate(C, v, cands[i].Centre(), cands[i].ViewDirection(), o, cos_gate, i, c)) out.push_back(c);
+    if (ScoreCandidate(C, v, cands[i].Centre(), cands[i].ViewDirection(), o, cos_gate, i, c))
+      out.push_back(c);
   }
   std::sort(out.begin(), out.end(), CandidateBefore);
   if (out.size() > o.k) out.resize(o.k);

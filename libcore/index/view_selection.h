@@ -32,16 +32,18 @@ struct ViewSelectionOptions {
 };
 
 struct Candidate {
-  size_t index;   // into the candidate list
-  double cost;    // the ranking cost (metres)
+  size_t index;  // into the candidate list
+  double cost;   // the ranking cost (metres)
   double distance;
   double heading_deg;
 };
 
 // The best min(k, admissible) candidates, best first. `exclude` (optional, may be SIZE_MAX) is
 // left out (a held-out image itself).
-std::vector<Candidate> SelectViews(const Rigid3d& query_w2c, const std::vector<Rigid3d>& candidates_w2c,
-                                   const ViewSelectionOptions& options, size_t exclude = static_cast<size_t>(-1));
+std::vector<Candidate> SelectViews(const Rigid3d& query_w2c,
+                                   const std::vector<Rigid3d>& candidates_w2c,
+                                   const ViewSelectionOptions& options,
+                                   size_t exclude = static_cast<size_t>(-1));
 
 // The ranking order: cost, then index.
 inline bool CandidateBefore(const Candidate& a, const Candidate& b) {
@@ -57,9 +59,10 @@ inline double HeadingGateCosine(const ViewSelectionOptions& o) {
 // direction v). Returns false when it fails the heading gate. With `need_angle` false and
 // heading_weight 0, the angle (an atan2) is skipped and heading_deg left NaN: the cost is the
 // same bits either way (dist + 0·angle == dist); FinishCandidate() fills it in later.
-inline bool ScoreCandidate(const Eigen::Vector3d& C, const Eigen::Vector3d& v, const Eigen::Vector3d& Ck,
-                           const Eigen::Vector3d& vk, const ViewSelectionOptions& o, double cos_gate,
-                           size_t index, Candidate& out, bool need_angle = true) {
+inline bool ScoreCandidate(const Eigen::Vector3d& C, const Eigen::Vector3d& v,
+                           const Eigen::Vector3d& Ck, const Eigen::Vector3d& vk,
+                           const ViewSelectionOptions& o, double cos_gate, size_t index,
+                           Candidate& out, bool need_angle = true) {
   double c = std::clamp(v.dot(vk), -1.0, 1.0);
   if (c < cos_gate - 1e-12) return false;
   Eigen::Vector3d d = Ck - C;
@@ -76,7 +79,8 @@ inline bool ScoreCandidate(const Eigen::Vector3d& C, const Eigen::Vector3d& v, c
 
 // Fills heading_deg of a candidate scored with need_angle = false.
 inline void FinishCandidate(const Eigen::Vector3d& v, const Eigen::Vector3d& vk, Candidate& c) {
-  if (std::isnan(c.heading_deg)) c.heading_deg = std::atan2(v.cross(vk).norm(), v.dot(vk)) * 180.0 / M_PI;
+  if (std::isnan(c.heading_deg))
+    c.heading_deg = std::atan2(v.cross(vk).norm(), v.dot(vk)) * 180.0 / M_PI;
 }
 
 }  // namespace mvtm

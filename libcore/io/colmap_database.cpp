@@ -64,27 +64,37 @@ std::map<std::string, std::pair<uint32_t, uint32_t>> ColmapDatabase::Images() co
 }
 
 uint32_t ColmapDatabase::AddCamera(const Camera& c) {
-  Stmt st(db_, "INSERT INTO cameras(model, width, height, params, prior_focal_length) VALUES(?,?,?,?,1);", path_);
+  Stmt st(
+      db_,
+      "INSERT INTO cameras(model, width, height, params, prior_focal_length) VALUES(?,?,?,?,1);",
+      path_);
   sqlite3_bind_int64(st.s, 1, static_cast<int>(c.model));
   sqlite3_bind_int64(st.s, 2, static_cast<sqlite3_int64>(c.width));
   sqlite3_bind_int64(st.s, 3, static_cast<sqlite3_int64>(c.height));
-  sqlite3_bind_blob(st.s, 4, c.params.data(), static_cast<int>(c.params.size() * sizeof(double)), SQLITE_TRANSIENT);
-  if (sqlite3_step(st.s) != SQLITE_DONE) throw Error(path_, 0, std::string("database: ") + sqlite3_errmsg(db_));
+  sqlite3_bind_blob(st.s, 4, c.params.data(), static_cast<int>(c.params.size() * sizeof(double)),
+                    SQLITE_TRANSIENT);
+  if (sqlite3_step(st.s) != SQLITE_DONE)
+    throw Error(path_, 0, std::string("database: ") + sqlite3_errmsg(db_));
   return static_cast<uint32_t>(sqlite3_last_insert_rowid(db_));
 }
 
 void ColmapDatabase::UpdateCamera(uint32_t id, const Camera& c) {
-  Stmt st(db_, "UPDATE cameras SET model=?, width=?, height=?, params=?, prior_focal_length=1 WHERE camera_id=?;", path_);
+  Stmt st(db_,
+          "UPDATE cameras SET model=?, width=?, height=?, params=?, prior_focal_length=1 WHERE "
+          "camera_id=?;",
+          path_);
   sqlite3_bind_int64(st.s, 1, static_cast<int>(c.model));
   sqlite3_bind_int64(st.s, 2, static_cast<sqlite3_int64>(c.width));
   sqlite3_bind_int64(st.s, 3, static_cast<sqlite3_int64>(c.height));
-  sqlite3_bind_blob(st.s, 4, c.params.data(), static_cast<int>(c.params.size() * sizeof(double)), SQLITE_TRANSIENT);
+  sqlite3_bind_blob(st.s, 4, c.params.data(), static_cast<int>(c.params.size() * sizeof(double)),
+                    SQLITE_TRANSIENT);
   sqlite3_bind_int64(st.s, 5, id);
-  if (sqlite3_step(st.s) != SQLITE_DONE) throw Error(path_, 0, std::string("database: ") + sqlite3_errmsg(db_));
+  if (sqlite3_step(st.s) != SQLITE_DONE)
+    throw Error(path_, 0, std::string("database: ") + sqlite3_errmsg(db_));
 }
 
-uint32_t ColmapDatabase::UpsertImage(const std::string& name, uint32_t wanted_id, uint32_t camera_id,
-                                     const Rigid3d& w2c) {
+uint32_t ColmapDatabase::UpsertImage(const std::string& name, uint32_t wanted_id,
+                                     uint32_t camera_id, const Rigid3d& w2c) {
   if (!cache_loaded_) {
     cache_ = Images();
     cache_loaded_ = true;
@@ -93,15 +103,22 @@ uint32_t ColmapDatabase::UpsertImage(const std::string& name, uint32_t wanted_id
   const auto& q = w2c.q;
   const auto& t = w2c.t;
   if (it != cache_.end()) {
-    Stmt st(db_, "UPDATE images SET camera_id=?, prior_qw=?, prior_qx=?, prior_qy=?, prior_qz=?, prior_tx=?, prior_ty=?, prior_tz=? WHERE image_id=?;", path_);
+    Stmt st(db_,
+            "UPDATE images SET camera_id=?, prior_qw=?, prior_qx=?, prior_qy=?, prior_qz=?, "
+            "prior_tx=?, prior_ty=?, prior_tz=? WHERE image_id=?;",
+            path_);
     sqlite3_bind_int64(st.s, 1, camera_id);
     double v[7] = {q.w(), q.x(), q.y(), q.z(), t.x(), t.y(), t.z()};
     for (int i = 0; i < 7; ++i) sqlite3_bind_double(st.s, 2 + i, v[i]);
     sqlite3_bind_int64(st.s, 9, it->second.first);
-    if (sqlite3_step(st.s) != SQLITE_DONE) throw Error(path_, 0, std::string("database: ") + sqlite3_errmsg(db_));
+    if (sqlite3_step(st.s) != SQLITE_DONE)
+      throw Error(path_, 0, std::string("database: ") + sqlite3_errmsg(db_));
     return it->second.first;
   }
-  Stmt st(db_, "INSERT INTO images(image_id, name, camera_id, prior_qw, prior_qx, prior_qy, prior_qz, prior_tx, prior_ty, prior_tz) VALUES(?,?,?,?,?,?,?,?,?,?);", path_);
+  Stmt st(db_,
+          "INSERT INTO images(image_id, name, camera_id, prior_qw, prior_qx, prior_qy, prior_qz, "
+          "prior_tx, prior_ty, prior_tz) VALUES(?,?,?,?,?,?,?,?,?,?);",
+          path_);
   sqlite3_bind_int64(st.s, 1, wanted_id);
   sqlite3_bind_text(st.s, 2, name.c_str(), -1, SQLITE_TRANSIENT);
   sqlite3_bind_int64(st.s, 3, camera_id);

@@ -180,7 +180,8 @@ void ForEachColmapImageText(std::istream& stream, const std::string& name,
   }
 }
 
-std::map<uint32_t, ImageRecord> ReadColmapImagesText(std::istream& stream, const std::string& name) {
+std::map<uint32_t, ImageRecord> ReadColmapImagesText(std::istream& stream,
+                                                     const std::string& name) {
   std::map<uint32_t, ImageRecord> images;
   ForEachColmapImageText(stream, name, [&](ImageRecord&& im, long line) {
     const uint32_t id = im.id;
@@ -212,7 +213,8 @@ std::map<uint64_t, Point3D> ReadColmapPoints3DText(std::istream& stream, const s
     p.error = ParseDouble(tok[7], in, "ERROR");
     for (size_t i = 8; i < tok.size(); i += 2) {
       int64_t iid = ParseInt(tok[i], in, "IMAGE_ID"), idx = ParseInt(tok[i + 1], in, "POINT2D_IDX");
-      if (iid < 0 || iid > UINT32_MAX || idx < 0 || idx > UINT32_MAX) in.Fail("track element out of range");
+      if (iid < 0 || iid > UINT32_MAX || idx < 0 || idx > UINT32_MAX)
+        in.Fail("track element out of range");
       p.track.push_back({static_cast<uint32_t>(iid), static_cast<uint32_t>(idx)});
     }
     if (!points.emplace(p.id, std::move(p)).second)
@@ -426,8 +428,10 @@ Reconstruction ReadColmapBinary(const std::string& dir) {
       }
       c.width = in.Get<uint64_t>("WIDTH");
       c.height = in.Get<uint64_t>("HEIGHT");
-      for (int k = 0; k < CameraModelNumParams(c.model); ++k) c.params.push_back(in.Get<double>("PARAMS"));
-      if (!r.cameras.emplace(c.id, c).second) in.Fail("duplicate CAMERA_ID " + std::to_string(c.id));
+      for (int k = 0; k < CameraModelNumParams(c.model); ++k)
+        c.params.push_back(in.Get<double>("PARAMS"));
+      if (!r.cameras.emplace(c.id, c).second)
+        in.Fail("duplicate CAMERA_ID " + std::to_string(c.id));
     }
     in.ExpectEnd();
   }
@@ -455,7 +459,8 @@ Reconstruction ReadColmapBinary(const std::string& dir) {
         p.point3D_id = in.Get<uint64_t>("POINT3D_ID");
       }
       uint32_t id = im.id;
-      if (!r.images.emplace(id, std::move(im)).second) in.Fail("duplicate IMAGE_ID " + std::to_string(id));
+      if (!r.images.emplace(id, std::move(im)).second)
+        in.Fail("duplicate IMAGE_ID " + std::to_string(id));
     }
     in.ExpectEnd();
   }
@@ -477,7 +482,8 @@ Reconstruction ReadColmapBinary(const std::string& dir) {
         el.point2D_idx = in.Get<uint32_t>("POINT2D_IDX");
       }
       uint64_t id = p.id;
-      if (!r.points3D.emplace(id, std::move(p)).second) in.Fail("duplicate POINT3D_ID " + std::to_string(id));
+      if (!r.points3D.emplace(id, std::move(p)).second)
+        in.Fail("duplicate POINT3D_ID " + std::to_string(id));
     }
     in.ExpectEnd();
   }

@@ -15,14 +15,13 @@
 // Thread safety: functions are reentrant.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <functional>
 #include <istream>
 #include <map>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "scene/reconstruction.h"
 

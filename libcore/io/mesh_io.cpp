@@ -1,20 +1,19 @@
 // PLY through OpenMesh (http://paulbourke.net/dataformats/ply/).
 // GCC 12 reports a false maybe-uninitialized inside OpenMesh's property templates.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#include <OpenMesh/Core/IO/MeshIO.hh>
-#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
-
-#include <filesystem>
-#include <cstring>
-#include <fstream>
-#include <sstream>
-#include <limits>
+#include "io/mesh_io.h"
 
 #include <Eigen/Geometry>
+#include <OpenMesh/Core/IO/MeshIO.hh>
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
 
 #include "base/atomic_file.h"
 #include "base/error.h"
-#include "io/mesh_io.h"
 
 namespace mvtm {
 
@@ -71,7 +70,8 @@ PlyHeader ReadPlyHeader(std::istream& in, const std::string& path) {
       ls >> p.type;
       if (p.type == "list") ls >> p.list_count_type >> p.type;
       ls >> p.name;
-      if (h.elements.back().name == "vertex" && p.name == "x" && (p.type == "double" || p.type == "float64"))
+      if (h.elements.back().name == "vertex" && p.name == "x" &&
+          (p.type == "double" || p.type == "float64"))
         h.double_positions = true;
       h.elements.back().props.push_back(p);
     } else if (key == "end_header") {
@@ -86,7 +86,8 @@ PlyHeader ReadPlyHeader(std::istream& in, const std::string& path) {
 size_t PlySize(const std::string& t) {
   if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
   if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
-  if (t == "int" || t == "uint" || t == "float" || t == "int32" || t == "uint32" || t == "float32") return 4;
+  if (t == "int" || t == "uint" || t == "float" || t == "int32" || t == "uint32" || t == "float32")
+    return 4;
   if (t == "double" || t == "float64") return 8;
   return 0;
 }
@@ -104,8 +105,12 @@ double PlyValue(std::istream& in, const std::string& t, bool ascii, const std::s
   unsigned char b[8];
   size_t n = PlySize(t);
   if (!n) throw Error(path, 0, "unsupported PLY property type '" + t + "'");
-  if (!in.read(reinterpret_cast<char*>(b), static_cast<std::streamsize>(n))) throw Error(path, 0, "truncated PLY body");
-  auto get = [&](auto v) { std::memcpy(&v, b, sizeof v); return static_cast<double>(v); };
+  if (!in.read(reinterpret_cast<char*>(b), static_cast<std::streamsize>(n)))
+    throw Error(path, 0, "truncated PLY body");
+  auto get = [&](auto v) {
+    std::memcpy(&v, b, sizeof v);
+    return static_cast<double>(v);
+  };
   if (t == "char" || t == "int8") return get(int8_t{});
   if (t == "uchar" || t == "uint8") return get(uint8_t{});
   if (t == "short" || t == "int16") return get(int16_t{});
@@ -150,15 +155,24 @@ Mesh ReadPlyDouble(std::istream& in, const PlyHeader& h, const std::string& path
         }
         double d = PlyValue(in, p.type, ascii, path);
         if (!is_v) continue;
-        if (p.name == "x") v.x() = d;
-        else if (p.name == "y") v.y() = d;
-        else if (p.name == "z") v.z() = d;
-        else if (p.name == "nx") nrm.x() = static_cast<float>(d);
-        else if (p.name == "ny") nrm.y() = static_cast<float>(d);
-        else if (p.name == "nz") nrm.z() = static_cast<float>(d);
-        else if (p.name == "red") col[0] = static_cast<uint8_t>(d);
-        else if (p.name == "green") col[1] = static_cast<uint8_t>(d);
-        else if (p.name == "blue") col[2] = static_cast<uint8_t>(d);
+        if (p.name == "x")
+          v.x() = d;
+        else if (p.name == "y")
+          v.y() = d;
+        else if (p.name == "z")
+          v.z() = d;
+        else if (p.name == "nx")
+          nrm.x() = static_cast<float>(d);
+        else if (p.name == "ny")
+          nrm.y() = static_cast<float>(d);
+        else if (p.name == "nz")
+          nrm.z() = static_cast<float>(d);
+        else if (p.name == "red")
+          col[0] = static_cast<uint8_t>(d);
+        else if (p.name == "green")
+          col[1] = static_cast<uint8_t>(d);
+        else if (p.name == "blue")
+          col[2] = static_cast<uint8_t>(d);
       }
       if (is_v) {
         if (!v.allFinite()) throw Error(path, 0, "vertex " + std::to_string(i) + " is not finite");
@@ -174,7 +188,8 @@ Mesh ReadPlyDouble(std::istream& in, const PlyHeader& h, const std::string& path
   }
   for (const auto& f : m.faces)
     for (uint32_t i : f)
-      if (i >= m.vertices.size()) throw Error(path, 0, "face index " + std::to_string(i) + " out of range");
+      if (i >= m.vertices.size())
+        throw Error(path, 0, "face index " + std::to_string(i) + " out of range");
   if (m.faces.empty()) m.missing.push_back("faces");
   return m;
 }
@@ -192,14 +207,17 @@ Mesh ReadMesh(const std::string& path) {
   omerr().disable();  // OpenMesh's own chatter; failures become Errors below
   omlog().disable();
   OMesh om;
-  OpenMesh::IO::Options opt = OpenMesh::IO::Options::VertexColor | OpenMesh::IO::Options::VertexNormal;
-  if (!OpenMesh::IO::read_mesh(om, path, opt)) throw Error(path, 0, "cannot read mesh (not a valid PLY/OBJ/OFF?)");
+  OpenMesh::IO::Options opt =
+      OpenMesh::IO::Options::VertexColor | OpenMesh::IO::Options::VertexNormal;
+  if (!OpenMesh::IO::read_mesh(om, path, opt))
+    throw Error(path, 0, "cannot read mesh (not a valid PLY/OBJ/OFF?)");
   Mesh m;
   m.vertices.reserve(om.n_vertices());
   for (auto vh : om.vertices()) {
     const auto& p = om.point(vh);
     Eigen::Vector3d v(p[0], p[1], p[2]);
-    if (!v.allFinite()) throw Error(path, 0, "vertex " + std::to_string(vh.idx()) + " is not finite");
+    if (!v.allFinite())
+      throw Error(path, 0, "vertex " + std::to_string(vh.idx()) + " is not finite");
     m.vertices.push_back(v);
   }
   if (opt.check(OpenMesh::IO::Options::VertexNormal)) {
@@ -237,10 +255,12 @@ Mesh ReadMesh(const std::string& path) {
 void WriteMesh(const std::string& path, const Mesh& mesh, bool ascii) {
   for (const auto& f : mesh.faces)
     for (uint32_t i : f)
-      if (i >= mesh.vertices.size()) throw Error(path, 0, "face index " + std::to_string(i) + " out of range");
+      if (i >= mesh.vertices.size())
+        throw Error(path, 0, "face index " + std::to_string(i) + " out of range");
   Eigen::Vector3d lo, hi;
   mesh.Bounds(lo, hi);
-  const bool dbl = !mesh.vertices.empty() && std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff()) > 1e5;
+  const bool dbl =
+      !mesh.vertices.empty() && std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff()) > 1e5;
   const bool normals = mesh.has_normals(), colours = mesh.has_colors();
   WriteBinaryAtomic(path, [&](std::ostream& o) {
     o << "ply\nformat " << (ascii ? "ascii" : "binary_little_endian") << " 1.0\n"
@@ -249,20 +269,27 @@ void WriteMesh(const std::string& path, const Mesh& mesh, bool ascii) {
     o << "property " << pt << " x\nproperty " << pt << " y\nproperty " << pt << " z\n";
     if (normals) o << "property float nx\nproperty float ny\nproperty float nz\n";
     if (colours) o << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
-    o << "element face " << mesh.faces.size() << "\nproperty list uchar int vertex_indices\nend_header\n";
+    o << "element face " << mesh.faces.size()
+      << "\nproperty list uchar int vertex_indices\nend_header\n";
     auto put = [&](auto v) { o.write(reinterpret_cast<const char*>(&v), sizeof v); };
     for (size_t i = 0; i < mesh.vertices.size(); ++i) {
       const auto& v = mesh.vertices[i];
       if (ascii) {
         o << v.x() << ' ' << v.y() << ' ' << v.z();
-        if (normals) o << ' ' << mesh.normals[i].x() << ' ' << mesh.normals[i].y() << ' ' << mesh.normals[i].z();
-        if (colours) o << ' ' << int(mesh.colors[i][0]) << ' ' << int(mesh.colors[i][1]) << ' ' << int(mesh.colors[i][2]);
+        if (normals)
+          o << ' ' << mesh.normals[i].x() << ' ' << mesh.normals[i].y() << ' '
+            << mesh.normals[i].z();
+        if (colours)
+          o << ' ' << int(mesh.colors[i][0]) << ' ' << int(mesh.colors[i][1]) << ' '
+            << int(mesh.colors[i][2]);
         o << '\n';
         continue;
       }
       for (int k = 0; k < 3; ++k) {
-        if (dbl) put(v[k]);
-        else put(static_cast<float>(v[k]));
+        if (dbl)
+          put(v[k]);
+        else
+          put(static_cast<float>(v[k]));
       }
       if (normals)
         for (int k = 0; k < 3; ++k) put(mesh.normals[i][k]);

@@ -13,6 +13,7 @@
 #pragma once
 
 #include <string>
+
 #include "scene/mesh.h"
 
 namespace mvtm {

@@ -14,7 +14,8 @@ namespace mvtm {
 
 namespace {
 
-constexpr const char* kHeader = "frame\tname\ttrack\tstate\tx\ty\tw\th\tcx\tcy\tarea\tscx\tscy\tsw\tsh";
+constexpr const char* kHeader =
+    "frame\tname\ttrack\tstate\tx\ty\tw\th\tcx\tcy\tarea\tscx\tscy\tsw\tsh";
 constexpr size_t kFields = 15;
 
 // "%.3f" without the C locale: to_chars is exact, like printf.
@@ -27,8 +28,8 @@ void AppendFixed(std::string& s, double v) {
 int ParseIntIn(std::string_view token, const LineReader& in, const char* field, int lo) {
   const int64_t v = ParseInt(token, in, field);
   if (v < lo || v > INT_MAX)
-    in.Fail(std::string(field) + ": " + std::to_string(v) + " is out of range " + std::to_string(lo) +
-            ".." + std::to_string(INT_MAX));
+    in.Fail(std::string(field) + ": " + std::to_string(v) + " is out of range " +
+            std::to_string(lo) + ".." + std::to_string(INT_MAX));
   return static_cast<int>(v);
 }
 
@@ -72,7 +73,8 @@ void WriteTracksTsv(std::ostream& out, const std::vector<TracksTsvRow>& rows) {
   out << kHeader << '\n';
   for (const TracksTsvRow& tr : rows) {
     const TrackRow& r = tr.row;
-    line = std::to_string(r.frame) + '\t' + tr.name + '\t' + std::to_string(r.track) + '\t' + RowStateName(r.state);
+    line = std::to_string(r.frame) + '\t' + tr.name + '\t' + std::to_string(r.track) + '\t' +
+           RowStateName(r.state);
     for (int v : {r.x, r.y, r.w, r.h}) line += '\t' + std::to_string(v);
     for (double v : {r.cx, r.cy}) AppendFixed(line += '\t', v);
     line += '\t' + std::to_string(r.area);
@@ -91,15 +93,18 @@ std::vector<TracksTsvRow> ReadTracksTsv(std::istream& stream, const std::string&
   std::string line;
   if (!in.Next(line, false)) throw Error(name, 0, "no header line");
   if (line != kHeader)
-    in.Fail("not a tracks.tsv header: expected the tab-separated columns frame name track state x "
-            "y w h cx cy area scx scy sw sh");
+    in.Fail(
+        "not a tracks.tsv header: expected the tab-separated columns frame name track state x "
+        "y w h cx cy area scx scy sw sh");
   std::vector<TracksTsvRow> rows;
   while (in.Next(line, false)) {
     TracksTsvRow r = ParseRow(line, in);
-    if (!rows.empty() && std::tie(r.row.frame, r.row.track) <= std::tie(rows.back().row.frame, rows.back().row.track))
-      in.Fail("rows must be sorted by frame, then track: frame " + std::to_string(r.row.frame) + " track " +
-              std::to_string(r.row.track) + " follows frame " + std::to_string(rows.back().row.frame) +
-              " track " + std::to_string(rows.back().row.track));
+    if (!rows.empty() && std::tie(r.row.frame, r.row.track) <=
+                             std::tie(rows.back().row.frame, rows.back().row.track))
+      in.Fail("rows must be sorted by frame, then track: frame " + std::to_string(r.row.frame) +
+              " track " + std::to_string(r.row.track) + " follows frame " +
+              std::to_string(rows.back().row.frame) + " track " +
+              std::to_string(rows.back().row.track));
     rows.push_back(std::move(r));
   }
   return rows;

@@ -2,9 +2,9 @@
 
 #include <filesystem>
 #include <fstream>
-#include <streambuf>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
+#include <streambuf>
 
 #include "base/atomic_file.h"
 #include "base/error.h"
@@ -91,10 +91,14 @@ Trajectory ReadColmapImagesTrajectory(std::istream& stream, const std::string& n
 
 Trajectory ReadTrajectoryAs(std::istream& in, const std::string& name, TrajectoryFormat format) {
   switch (format) {
-    case TrajectoryFormat::kTum: return ReadTum(in, name);
-    case TrajectoryFormat::kKitti: return ReadKittiPoses(in, name);
-    case TrajectoryFormat::kColmap: return ReadColmapImagesTrajectory(in, name);
-    default: break;
+    case TrajectoryFormat::kTum:
+      return ReadTum(in, name);
+    case TrajectoryFormat::kKitti:
+      return ReadKittiPoses(in, name);
+    case TrajectoryFormat::kColmap:
+      return ReadColmapImagesTrajectory(in, name);
+    default:
+      break;
   }
   throw Error(name, 0, "unknown trajectory format");
 }
@@ -145,7 +149,8 @@ Trajectory ReadKittiPoses(std::istream& stream, const std::string& name) {
     Eigen::Matrix<double, 3, 4> m;
     for (int i = 0; i < 12; ++i) m(i / 4, i % 4) = ParseDouble(tok[i], in, "matrix entry");
     double det = m.leftCols<3>().determinant();
-    if (!(std::abs(det - 1) < 1e-3)) in.Fail("rotation part is not a rotation (det " + FormatDouble(det) + ")");
+    if (!(std::abs(det - 1) < 1e-3))
+      in.Fail("rotation part is not a rotation (det " + FormatDouble(det) + ")");
     StampedPose p;
     p.time = static_cast<double>(tr.poses.size());
     p.line = in.line();
@@ -216,7 +221,9 @@ std::vector<TimedName> ReadTimestamps(std::istream& stream, const std::string& n
   std::string line;
   while (in.Next(line)) {
     auto tok = SplitBlank(line);
-    if (tok.size() > 2) in.Fail("timestamp line needs 'timestamp [name]', found " + std::to_string(tok.size()) + " fields");
+    if (tok.size() > 2)
+      in.Fail("timestamp line needs 'timestamp [name]', found " + std::to_string(tok.size()) +
+              " fields");
     TimedName t;
     t.time = ParseDouble(tok[0], in, "timestamp");
     if (tok.size() == 2) t.name = std::string(tok[1]);
@@ -238,7 +245,8 @@ Camera ReadKittiCalib(const std::string& path, int cam_index, uint64_t width, ui
   while (in.Next(line)) {
     auto tok = SplitBlank(line);
     if (tok.empty() || tok[0] != key) continue;
-    if (tok.size() != 13) in.Fail(key + " needs 12 numbers, found " + std::to_string(tok.size() - 1));
+    if (tok.size() != 13)
+      in.Fail(key + " needs 12 numbers, found " + std::to_string(tok.size() - 1));
     double p[12];
     for (int i = 0; i < 12; ++i) p[i] = ParseDouble(tok[1 + i], in, "projection entry");
     if (!(p[0] > 0) || !(p[5] > 0)) in.Fail(key + " focal lengths must be positive");
@@ -319,9 +327,12 @@ NerfScene ReadNerfTransforms(const std::string& path) {
   double w = num(j, "w", "/"), h = num(j, "h", "/");
   double fx = num(j, "fl_x", "/");
   double fy = j.contains("fl_y") ? num(j, "fl_y", "/") : fx;
-  double cx = j.contains("cx") ? num(j, "cx", "/") : w / 2, cy = j.contains("cy") ? num(j, "cy", "/") : h / 2;
-  double k1 = j.contains("k1") ? num(j, "k1", "/") : 0, k2 = j.contains("k2") ? num(j, "k2", "/") : 0;
-  double p1 = j.contains("p1") ? num(j, "p1", "/") : 0, p2 = j.contains("p2") ? num(j, "p2", "/") : 0;
+  double cx = j.contains("cx") ? num(j, "cx", "/") : w / 2,
+         cy = j.contains("cy") ? num(j, "cy", "/") : h / 2;
+  double k1 = j.contains("k1") ? num(j, "k1", "/") : 0,
+         k2 = j.contains("k2") ? num(j, "k2", "/") : 0;
+  double p1 = j.contains("p1") ? num(j, "p1", "/") : 0,
+         p2 = j.contains("p2") ? num(j, "p2", "/") : 0;
   s.camera.width = static_cast<uint64_t>(w);
   s.camera.height = static_cast<uint64_t>(h);
   if (k1 == 0 && k2 == 0 && p1 == 0 && p2 == 0) {
@@ -341,11 +352,13 @@ NerfScene ReadNerfTransforms(const std::string& path) {
     if (!m.is_array() || m.size() < 3) throw Error(path, 0, where + "transform_matrix is not 4x4");
     Eigen::Matrix<double, 3, 4> c2w;
     for (int r = 0; r < 3; ++r) {
-      if (!m[r].is_array() || m[r].size() != 4) throw Error(path, 0, where + "transform_matrix is not 4x4");
+      if (!m[r].is_array() || m[r].size() != 4)
+        throw Error(path, 0, where + "transform_matrix is not 4x4");
       for (int c = 0; c < 4; ++c) {
         if (!m[r][c].is_number()) throw Error(path, 0, where + "transform_matrix has a non-number");
         c2w(r, c) = m[r][c].get<double>();
-        if (!std::isfinite(c2w(r, c))) throw Error(path, 0, where + "transform_matrix is not finite");
+        if (!std::isfinite(c2w(r, c)))
+          throw Error(path, 0, where + "transform_matrix is not finite");
       }
     }
     // OpenGL camera axes (y up, z backward) → camera axes (y down, z forward).

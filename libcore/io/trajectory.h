@@ -30,8 +30,8 @@ namespace mvtm {
 enum class TrajectoryFormat { kAuto, kTum, kKitti, kColmap };
 
 struct Trajectory {
-  std::vector<StampedPose> poses;   // camera-to-world; time = timestamp, or frame index for KITTI
-  std::vector<std::string> names;   // optional, parallel to poses (COLMAP images, NeRF frames)
+  std::vector<StampedPose> poses;  // camera-to-world; time = timestamp, or frame index for KITTI
+  std::vector<std::string> names;  // optional, parallel to poses (COLMAP images, NeRF frames)
 };
 
 // Detects TUM (8 fields), KITTI (12 fields) or a COLMAP images.txt (header comment or 10+ fields
@@ -44,7 +44,8 @@ Trajectory ReadKittiPoses(const std::string& path, const std::string& times_path
 Trajectory ReadKittiPoses(std::istream& in, const std::string& name);
 // kAuto: the format is detected as by DetectTrajectoryFormat. The stream version keeps the
 // lines read for detection and hands them to the reader, so it never seeks or reopens.
-Trajectory ReadTrajectory(const std::string& path, TrajectoryFormat format = TrajectoryFormat::kAuto);
+Trajectory ReadTrajectory(const std::string& path,
+                          TrajectoryFormat format = TrajectoryFormat::kAuto);
 Trajectory ReadTrajectory(std::istream& in, const std::string& name,
                           TrajectoryFormat format = TrajectoryFormat::kAuto);
 void WriteTum(const std::string& path, const std::vector<StampedPose>& c2w);

@@ -1,17 +1,17 @@
 #include "mesh/merge.h"
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <map>
-
-#include <Eigen/Geometry>
 
 #include "base/error.h"
 
 namespace mvtm {
 
-Mesh MergeGroundBeneath(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3d& up, double depth_below,
-                        MergeReport* report) {
-  if (!(depth_below >= 0) || !std::isfinite(depth_below)) throw Error("merge: depth_below must be a length >= 0");
+Mesh MergeGroundBeneath(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3d& up,
+                        double depth_below, MergeReport* report) {
+  if (!(depth_below >= 0) || !std::isfinite(depth_below))
+    throw Error("merge: depth_below must be a length >= 0");
   if (!(up.norm() > 0)) throw Error("merge: the up direction is zero");
   const Eigen::Vector3d u = up.normalized();
   Mesh out;
@@ -26,8 +26,8 @@ Mesh MergeGroundBeneath(const Mesh& dense, const Mesh& proxy, const Eigen::Vecto
   };
   size_t kept = 0;
   for (const auto& f : proxy.faces) {
-    const Eigen::Vector3d n =
-        (proxy.vertices[f[1]] - proxy.vertices[f[0]]).cross(proxy.vertices[f[2]] - proxy.vertices[f[0]]);
+    const Eigen::Vector3d n = (proxy.vertices[f[1]] - proxy.vertices[f[0]])
+                                  .cross(proxy.vertices[f[2]] - proxy.vertices[f[0]]);
     if (n.norm() == 0 || n.normalized().dot(u) < std::cos(M_PI / 4)) continue;  // not ground
     out.faces.push_back({vertex(f[0]), vertex(f[1]), vertex(f[2])});
     ++kept;

@@ -10,9 +10,8 @@
 // colours dropped (bake them afterwards). Thread safety: pure function.
 #pragma once
 
-#include <cstddef>
-
 #include <Eigen/Core>
+#include <cstddef>
 
 #include "scene/mesh.h"
 
@@ -22,7 +21,7 @@ struct MergeReport {
   size_t proxy_faces_kept = 0;  // ground faces of the proxy appended
 };
 
-Mesh MergeGroundBeneath(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3d& up, double depth_below,
-                        MergeReport* report = nullptr);
+Mesh MergeGroundBeneath(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3d& up,
+                        double depth_below, MergeReport* report = nullptr);
 
 }  // namespace mvtm

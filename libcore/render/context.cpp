@@ -68,12 +68,17 @@ class OsMesaContext : public GlContext {
   std::string what_;
 };
 
-GLADapiproc EglProc(const char* name) { return reinterpret_cast<GLADapiproc>(eglGetProcAddress(name)); }
-GLADapiproc OsMesaProc(const char* name) { return reinterpret_cast<GLADapiproc>(osmesa::GetProcAddress(name)); }
+GLADapiproc EglProc(const char* name) {
+  return reinterpret_cast<GLADapiproc>(eglGetProcAddress(name));
+}
+GLADapiproc OsMesaProc(const char* name) {
+  return reinterpret_cast<GLADapiproc>(osmesa::GetProcAddress(name));
+}
 
 // Initialises `display`, creates a 3.3 core context current without a surface. Empty on failure
 // (with the reason in `why`).
-std::unique_ptr<GlContext> TryEglDisplay(EGLDisplay display, const std::string& platform, std::string& why) {
+std::unique_ptr<GlContext> TryEglDisplay(EGLDisplay display, const std::string& platform,
+                                         std::string& why) {
   if (display == EGL_NO_DISPLAY) {
     why += platform + ": no display; ";
     return nullptr;
@@ -89,14 +94,29 @@ std::unique_ptr<GlContext> TryEglDisplay(EGLDisplay display, const std::string& 
     why += platform + ": no desktop OpenGL; ";
     return nullptr;
   }
-  const EGLint config_attribs[] = {EGL_SURFACE_TYPE, EGL_PBUFFER_BIT, EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT,
-                                   EGL_RED_SIZE, 8, EGL_GREEN_SIZE, 8, EGL_BLUE_SIZE, 8, EGL_NONE};
+  const EGLint config_attribs[] = {EGL_SURFACE_TYPE,
+                                   EGL_PBUFFER_BIT,
+                                   EGL_RENDERABLE_TYPE,
+                                   EGL_OPENGL_BIT,
+                                   EGL_RED_SIZE,
+                                   8,
+                                   EGL_GREEN_SIZE,
+                                   8,
+                                   EGL_BLUE_SIZE,
+                                   8,
+                                   EGL_NONE};
   EGLConfig config = nullptr;
   EGLint n = 0;
   if (!eglChooseConfig(display, config_attribs, &config, 1, &n) || n < 1) config = nullptr;
-  const EGLint ctx_attribs[] = {EGL_CONTEXT_MAJOR_VERSION, 3, EGL_CONTEXT_MINOR_VERSION, 3,
-                                EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
-  EGLContext ctx = eglCreateContext(display, config ? config : EGL_NO_CONFIG_KHR, EGL_NO_CONTEXT, ctx_attribs);
+  const EGLint ctx_attribs[] = {EGL_CONTEXT_MAJOR_VERSION,
+                                3,
+                                EGL_CONTEXT_MINOR_VERSION,
+                                3,
+                                EGL_CONTEXT_OPENGL_PROFILE_MASK,
+                                EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
+                                EGL_NONE};
+  EGLContext ctx =
+      eglCreateContext(display, config ? config : EGL_NO_CONFIG_KHR, EGL_NO_CONTEXT, ctx_attribs);
   if (ctx == EGL_NO_CONTEXT) {
     eglTerminate(display);
     why += platform + ": no GL 3.3 core context; ";
@@ -135,7 +155,8 @@ std::unique_ptr<GlContext> TryEgl(std::string& why) {
       }
   }
   if (GLAD_EGL_MESA_platform_surfaceless) {
-    EGLDisplay d = eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
+    EGLDisplay d =
+        eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
     if (auto c = TryEglDisplay(d, "surfaceless", why)) return c;
   }
   return nullptr;

@@ -4,8 +4,9 @@
 //   EGL, device platform (EGL_EXT_platform_device: a GPU, or Mesa's software device),
 //   EGL, surfaceless platform (EGL_MESA_platform_surfaceless),
 //   OSMesa (Mesa's off-screen renderer).
-// EGL is loaded at run time through a glad loader generated at build time (libEGL.so.1); OSMesa is linked.
-// No program links libGL. Rendering goes to framebuffer objects (no window, no pbuffer surface).
+// EGL is loaded at run time through a glad loader generated at build time (libEGL.so.1); OSMesa is
+// linked. No program links libGL. Rendering goes to framebuffer objects (no window, no pbuffer
+// surface).
 //
 // Thread safety: one context per process at a time, current on the creating thread (glad's
 // function pointers are global). A context can be created and destroyed repeatedly.

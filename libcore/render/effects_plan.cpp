@@ -38,7 +38,8 @@ ViewCoverage SurveyView(Renderer& renderer, const View& v, const View* first) {
       if (xp.z() <= 0) continue;
       const Eigen::Vector2d uv = first->camera.Project(xp);
       const Camera& pc = first->camera;
-      c.covered += uv.x() >= 0 && uv.y() >= 0 && uv.x() < double(pc.width) && uv.y() < double(pc.height);
+      c.covered +=
+          uv.x() >= 0 && uv.y() >= 0 && uv.x() < double(pc.width) && uv.y() < double(pc.height);
     }
   return c;
 }
@@ -85,32 +86,36 @@ nlohmann::json ExplainEffects(const SceneSurvey& s, const EffectsPlan& plan) {
   return {
       {"reverse_projection_rejection", Choice(s.ptm, always, vertex_mode)},
       {"clip_test", Choice(s.ptm, always, vertex_mode)},
-      {"occlusion",
-       Choice(plan.occlusion,
-              "projectors differ from the render poses, so the mesh can hide points from them; relative bias " +
-                  ShortDouble(s.bias),
-              !s.ptm            ? vertex_mode
-              : s.no_occlusion  ? "turned off by --no-occlusion"
-                                : "every projector is the render pose itself")},
-      {"several_projectors",
-       Choice(plan.projectors > 1,
-              "up to " + std::to_string(plan.projectors) +
-                  " projectors per pixel, nearest first, then vertex colours; the first projector covers as "
-                  "little as " + std::string(cov) + " of a view",
-              !s.ptm                           ? vertex_mode
-              : s.projectors_requested == 1    ? "--projectors 1 (vertex colours where it does not reach)"
-                                               : "no frame has more than one admissible projector")},
-      {"vertex_colour_fallback", Choice(true, s.ptm ? "where no projector reaches" : vertex_mode, "")},
+      {"occlusion", Choice(plan.occlusion,
+                           "projectors differ from the render poses, so the mesh can hide points "
+                           "from them; relative bias " +
+                               ShortDouble(s.bias),
+                           !s.ptm           ? vertex_mode
+                           : s.no_occlusion ? "turned off by --no-occlusion"
+                                            : "every projector is the render pose itself")},
+      {"several_projectors", Choice(plan.projectors > 1,
+                                    "up to " + std::to_string(plan.projectors) +
+                                        " projectors per pixel, nearest first, then vertex "
+                                        "colours; the first projector covers as "
+                                        "little as " +
+                                        std::string(cov) + " of a view",
+                                    !s.ptm ? vertex_mode
+                                    : s.projectors_requested == 1
+                                        ? "--projectors 1 (vertex colours where it does not reach)"
+                                        : "no frame has more than one admissible projector")},
+      {"vertex_colour_fallback",
+       Choice(true, s.ptm ? "where no projector reaches" : vertex_mode, "")},
       {"masks", Choice(plan.masks, "selected projector " + s.mask_example + " has masked pixels",
-                       !s.ptm        ? vertex_mode
-                       : s.no_masks  ? "turned off by --no-masks"
-                                     : "no selected projector has a non-empty mask")},
-      {"skybox", Choice(plan.skybox,
-                        std::to_string(s.frames_with_holes) + " of " + std::to_string(s.frames_surveyed) +
-                            " frames see no surface somewhere (e.g. " + s.hole_example + ")",
-                        !s.ptm         ? vertex_mode
-                        : s.no_skybox  ? "turned off by --no-skybox"
-                                       : "every pixel of every frame sees the mesh")}};
+                       !s.ptm       ? vertex_mode
+                       : s.no_masks ? "turned off by --no-masks"
+                                    : "no selected projector has a non-empty mask")},
+      {"skybox",
+       Choice(plan.skybox,
+              std::to_string(s.frames_with_holes) + " of " + std::to_string(s.frames_surveyed) +
+                  " frames see no surface somewhere (e.g. " + s.hole_example + ")",
+              !s.ptm        ? vertex_mode
+              : s.no_skybox ? "turned off by --no-skybox"
+                            : "every pixel of every frame sees the mesh")}};
 }
 
 }  // namespace mvtm

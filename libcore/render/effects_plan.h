@@ -14,21 +14,20 @@
 
 #include <array>
 #include <cstddef>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 namespace mvtm {
 
 // The effects a frame is rendered with (one shader variant per distinct plan).
 struct EffectsPlan {
-  bool ptm = true;          // false: vertex colours only
-  int projectors = 1;       // projectors tried in rank order (≥ 1)
-  bool occlusion = false;   // test against projector depth maps
-  bool masks = false;       // skip masked projector texels
-  bool skybox = false;      // background from projectors at infinity (else constant colour)
-  double bias = 0.005;      // relative occlusion bias: occluded when z > d·(1 + bias)
+  bool ptm = true;         // false: vertex colours only
+  int projectors = 1;      // projectors tried in rank order (≥ 1)
+  bool occlusion = false;  // test against projector depth maps
+  bool masks = false;      // skip masked projector texels
+  bool skybox = false;     // background from projectors at infinity (else constant colour)
+  double bias = 0.005;     // relative occlusion bias: occluded when z > d·(1 + bias)
   std::array<float, 3> background{0, 0, 0};  // 0..255
 
   // The shader's #define switches for this plan.
@@ -38,9 +37,9 @@ struct EffectsPlan {
 // What the inputs of a job say, and what the user asked for.
 struct SceneSurvey {
   // The request.
-  bool ptm = true;                 // false: vertex-colour mode
-  int projectors_requested = 4;    // K
-  double bias = 0.005;             // relative occlusion bias
+  bool ptm = true;                                                 // false: vertex-colour mode
+  int projectors_requested = 4;                                    // K
+  double bias = 0.005;                                             // relative occlusion bias
   bool no_occlusion = false, no_masks = false, no_skybox = false;  // the user's switches
   // The inputs.
   bool projector_differs = false;   // some selected projector is not the pose it serves

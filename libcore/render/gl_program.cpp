@@ -36,8 +36,8 @@ std::string Relocate(const std::string& log, const std::vector<std::string>& fil
     if (line.empty()) continue;
     // Mesa: "SOURCE:LINE(COLUMN): message"
     size_t colon = line.find(':'), paren = line.find('('), close = line.find("):");
-    bool mesa = colon != std::string::npos && paren != std::string::npos && close != std::string::npos &&
-                colon > 0 && colon < paren && paren < close &&
+    bool mesa = colon != std::string::npos && paren != std::string::npos &&
+                close != std::string::npos && colon > 0 && colon < paren && paren < close &&
                 line.find_first_not_of("0123456789") == colon &&
                 line.find_first_not_of("0123456789", colon + 1) == paren;
     if (mesa) {
@@ -45,15 +45,16 @@ std::string Relocate(const std::string& log, const std::vector<std::string>& fil
       std::string file = src >= 1 && src <= files.size() ? files[src - 1] : "?";
       std::string msg = line.substr(close + 2);
       size_t b = msg.find_first_not_of(' ');
-      return "shaders/" + file + ":" + line.substr(colon + 1, paren - colon - 1) + " " + variant + ": " +
-             (b == std::string::npos ? "" : msg.substr(b));
+      return "shaders/" + file + ":" + line.substr(colon + 1, paren - colon - 1) + " " + variant +
+             ": " + (b == std::string::npos ? "" : msg.substr(b));
     }
     if (out.empty()) out = line;
   }
   return files.back() + " " + variant + ": " + (out.empty() ? "compile failed" : out);
 }
 
-unsigned Compile(GLenum type, const std::vector<std::string>& files, const std::vector<std::string>& defines) {
+unsigned Compile(GLenum type, const std::vector<std::string>& files,
+                 const std::vector<std::string>& defines) {
   std::string src = "#version 330 core\n";
   for (const auto& d : defines) src += "#define " + d + "\n";
   for (size_t i = 0; i < files.size(); ++i)
@@ -102,7 +103,8 @@ unsigned BuildProgram(const std::string& vertex, const std::string& fragment,
     char log[2048] = {0};
     glGetProgramInfoLog(prog, sizeof log, nullptr, log);
     glDeleteProgram(prog);
-    throw Error("shaders/" + vertex + " + " + fragment + " " + Variant(defines) + ": link failed: " + log);
+    throw Error("shaders/" + vertex + " + " + fragment + " " + Variant(defines) +
+                ": link failed: " + log);
   }
   return prog;
 }

@@ -3,11 +3,11 @@
 #include <glad/gl.h>
 
 #include <algorithm>
-#include <numeric>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <map>
+#include <numeric>
 #include <unordered_map>
 
 #include "base/error.h"
@@ -30,7 +30,8 @@ struct Chunk {
 
 void CheckGlError(const char* where) {
   GLenum e = glGetError();
-  if (e != GL_NO_ERROR) throw Error(std::string("OpenGL error ") + std::to_string(e) + " in " + where);
+  if (e != GL_NO_ERROR)
+    throw Error(std::string("OpenGL error ") + std::to_string(e) + " in " + where);
 }
 
 // Camera coordinates (x right, y down, z forward) → clip: the GL projection of K applied to
@@ -85,7 +86,8 @@ struct Renderer::Impl {
     glDeleteVertexArrays(1, &sky_vao);
   }
 
-  GLuint Program(const std::string& vert, const std::string& frag, const std::vector<std::string>& defines,
+  GLuint Program(const std::string& vert, const std::string& frag,
+                 const std::vector<std::string>& defines,
                  const std::vector<std::string>& includes) {
     std::string key = vert + "|" + frag;
     for (const auto& d : defines) key += "|" + d;
@@ -134,7 +136,8 @@ struct Renderer::Impl {
   void Planes(const Eigen::Vector3d& centre, double& n, double& f) const {
     double far = 0;
     for (int i = 0; i < 8; ++i) {
-      Eigen::Vector3d corner((i & 1) ? hi.x() : lo.x(), (i & 2) ? hi.y() : lo.y(), (i & 4) ? hi.z() : lo.z());
+      Eigen::Vector3d corner((i & 1) ? hi.x() : lo.x(), (i & 2) ? hi.y() : lo.y(),
+                             (i & 4) ? hi.z() : lo.z());
       far = std::max(far, (corner - centre).norm());
     }
     f = std::max(1.0, far * 1.01);
@@ -189,7 +192,8 @@ struct Renderer::Impl {
       Eigen::Vector3f o = (ch->origin - C).cast<float>();
       glUniform3fv(off, 1, o.data());
       glDrawElementsBaseVertex(GL_TRIANGLES, static_cast<GLsizei>(ch->index_count), GL_UNSIGNED_INT,
-                               reinterpret_cast<void*>(ch->first_index * sizeof(uint32_t)), ch->base_vertex);
+                               reinterpret_cast<void*>(ch->first_index * sizeof(uint32_t)),
+                               ch->base_vertex);
       tris += ch->index_count / 3;
     }
     glFinish();
@@ -205,7 +209,8 @@ struct Renderer::Impl {
 
   // (Re)allocates the three texture arrays for `count` layers of w×h texels; forgets all layers.
   void AllocateLayers(int w, int h, int count) {
-    auto alloc = [&](GLuint& tex, GLenum unit, GLint internal, GLenum format, GLenum type, GLint filter) {
+    auto alloc = [&](GLuint& tex, GLenum unit, GLint internal, GLenum format, GLenum type,
+                     GLint filter) {
       if (!tex) glGenTextures(1, &tex);
       glActiveTexture(unit);
       glBindTexture(GL_TEXTURE_2D_ARRAY, tex);
@@ -233,13 +238,15 @@ struct Renderer::Impl {
       }
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D_ARRAY, images);
-    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, layer_w, layer_h, 1, GL_RGB, GL_UNSIGNED_BYTE, buf.data());
+    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, layer_w, layer_h, 1, GL_RGB,
+                    GL_UNSIGNED_BYTE, buf.data());
   }
 
   void UploadDepth(int layer, const Image& d) {
     glActiveTexture(GL_TEXTURE1);
     glBindTexture(GL_TEXTURE_2D_ARRAY, depths);
-    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, layer_w, layer_h, 1, GL_RED, GL_FLOAT, d.data.data());
+    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, layer_w, layer_h, 1, GL_RED, GL_FLOAT,
+                    d.data.data());
   }
 
   void UploadMask(int layer, const Image* m) {
@@ -248,24 +255,29 @@ struct Renderer::Impl {
       for (size_t p = 0; p < buf.size(); ++p) buf[p] = m->data[p * m->channels] > 0 ? 255 : 0;
     glActiveTexture(GL_TEXTURE2);
     glBindTexture(GL_TEXTURE_2D_ARRAY, masks);
-    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, layer_w, layer_h, 1, GL_RED, GL_UNSIGNED_BYTE, buf.data());
+    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, layer_w, layer_h, 1, GL_RED,
+                    GL_UNSIGNED_BYTE, buf.data());
   }
 
   // Puts the frame's projectors into layers (reusing those whose key is already resident) and
   // returns the layer of each, in rank order.
-  std::vector<int> PlaceProjectors(const std::vector<Projector>& ps, int n, bool need_depth, bool need_mask) {
+  std::vector<int> PlaceProjectors(const std::vector<Projector>& ps, int n, bool need_depth,
+                                   bool need_mask) {
     int w = ps[0].image->width, h = ps[0].image->height;
     for (int k = 0; k < n; ++k) {
       const Image* im = ps[k].image;
       if (im->width != w || im->height != h)
-        throw Error("projector images differ in size (" + std::to_string(w) + "x" + std::to_string(h) + " and " +
-                    std::to_string(im->width) + "x" + std::to_string(im->height) + ")");
+        throw Error("projector images differ in size (" + std::to_string(w) + "x" +
+                    std::to_string(h) + " and " + std::to_string(im->width) + "x" +
+                    std::to_string(im->height) + ")");
       for (const Image* other : {ps[k].depth, ps[k].mask})
         if (other && (other->width != w || other->height != h))
-          throw Error("projector depth maps and masks must match the image size (" + std::to_string(w) + "x" +
-                      std::to_string(h) + ", got " + std::to_string(other->width) + "x" + std::to_string(other->height) + ")");
+          throw Error("projector depth maps and masks must match the image size (" +
+                      std::to_string(w) + "x" + std::to_string(h) + ", got " +
+                      std::to_string(other->width) + "x" + std::to_string(other->height) + ")");
     }
-    if (w != layer_w || h != layer_h || layer_count < 2 * n) AllocateLayers(w, h, std::max(8, 2 * n));
+    if (w != layer_w || h != layer_h || layer_count < 2 * n)
+      AllocateLayers(w, h, std::max(8, 2 * n));
     ++tick;
     std::vector<int> out(static_cast<size_t>(n), -1);
     std::vector<bool> taken(layers.size(), false);
@@ -282,7 +294,8 @@ struct Renderer::Impl {
       if (out[k] < 0) {  // least recently used free layer
         size_t best = layers.size();
         for (size_t l = 0; l < layers.size(); ++l)
-          if (!taken[l] && (best == layers.size() || layers[l].last_used < layers[best].last_used)) best = l;
+          if (!taken[l] && (best == layers.size() || layers[l].last_used < layers[best].last_used))
+            best = l;
         taken[best] = true;
         out[k] = static_cast<int>(best);
         layers[best] = Layer();
@@ -306,8 +319,8 @@ struct Renderer::Impl {
   // Projector uniforms relative to the render camera centre, in double.
   void DrawSky(const View& view, const std::vector<Projector>& projectors, const EffectsPlan& plan,
                const std::vector<int>& layer_of);
-  void SetProjectors(GLuint prog, const View& v, const std::vector<Projector>& ps, const EffectsPlan& plan,
-                     const std::vector<int>& layer_of) {
+  void SetProjectors(GLuint prog, const View& v, const std::vector<Projector>& ps,
+                     const EffectsPlan& plan, const std::vector<int>& layer_of) {
     int n = std::min<int>(plan.projectors, static_cast<int>(ps.size()));
     glUniform1i(glGetUniformLocation(prog, "u_num_projectors"), n);
     Eigen::Vector3d C = v.world_to_camera.Centre();
@@ -316,15 +329,19 @@ struct Renderer::Impl {
       Eigen::Matrix3d Rk = pv.world_to_camera.R();
       Eigen::Matrix3f Rf = Rk.cast<float>();
       Eigen::Vector3f t = (Rk * (C - pv.world_to_camera.Centre())).cast<float>();
-      Eigen::Vector4f K(float(pv.camera.fx()), float(pv.camera.fy()), float(pv.camera.cx()), float(pv.camera.cy()));
+      Eigen::Vector4f K(float(pv.camera.fx()), float(pv.camera.fy()), float(pv.camera.cx()),
+                        float(pv.camera.cy()));
       std::string i = "[" + std::to_string(k) + "]";
-      glUniformMatrix3fv(glGetUniformLocation(prog, ("u_proj_R" + i).c_str()), 1, GL_FALSE, Rf.data());
+      glUniformMatrix3fv(glGetUniformLocation(prog, ("u_proj_R" + i).c_str()), 1, GL_FALSE,
+                         Rf.data());
       glUniform3fv(glGetUniformLocation(prog, ("u_proj_t" + i).c_str()), 1, t.data());
       glUniform4fv(glGetUniformLocation(prog, ("u_proj_K" + i).c_str()), 1, K.data());
-      glUniform1i(glGetUniformLocation(prog, ("u_proj_layer" + i).c_str()), layer_of[static_cast<size_t>(k)]);
+      glUniform1i(glGetUniformLocation(prog, ("u_proj_layer" + i).c_str()),
+                  layer_of[static_cast<size_t>(k)]);
     }
     if (n > 0) {
-      glUniform2f(glGetUniformLocation(prog, "u_proj_size"), float(ps[0].image->width), float(ps[0].image->height));
+      glUniform2f(glGetUniformLocation(prog, "u_proj_size"), float(ps[0].image->width),
+                  float(ps[0].image->height));
     }
     glUniform1i(glGetUniformLocation(prog, "u_images"), 0);
     glUniform1i(glGetUniformLocation(prog, "u_depths"), 1);
@@ -340,9 +357,12 @@ Renderer::Renderer(const Mesh& mesh, double chunk_size) : impl_(std::make_unique
   // Bin triangles by centroid into cubes of chunk_size metres.
   std::map<std::array<int64_t, 3>, std::vector<uint32_t>> bins;
   for (uint32_t f = 0; f < mesh.faces.size(); ++f) {
-    Eigen::Vector3d c = (mesh.vertices[mesh.faces[f][0]] + mesh.vertices[mesh.faces[f][1]] + mesh.vertices[mesh.faces[f][2]]) / 3;
+    Eigen::Vector3d c = (mesh.vertices[mesh.faces[f][0]] + mesh.vertices[mesh.faces[f][1]] +
+                         mesh.vertices[mesh.faces[f][2]]) /
+                        3;
     std::array<int64_t, 3> key;
-    for (int k = 0; k < 3; ++k) key[k] = static_cast<int64_t>(std::floor((c[k] - m.lo[k]) / chunk_size));
+    for (int k = 0; k < 3; ++k)
+      key[k] = static_cast<int64_t>(std::floor((c[k] - m.lo[k]) / chunk_size));
     bins[key].push_back(f);
   }
   std::vector<float> verts;  // x y z r g b
@@ -366,7 +386,8 @@ Renderer::Renderer(const Mesh& mesh, double chunk_size) : impl_(std::make_unique
       Eigen::Vector3d p = mesh.vertices[vi] - ch.origin;
       verts.insert(verts.end(), {float(p.x()), float(p.y()), float(p.z())});
       if (colours)
-        verts.insert(verts.end(), {mesh.colors[vi][0] / 255.f, mesh.colors[vi][1] / 255.f, mesh.colors[vi][2] / 255.f});
+        verts.insert(verts.end(), {mesh.colors[vi][0] / 255.f, mesh.colors[vi][1] / 255.f,
+                                   mesh.colors[vi][2] / 255.f});
       else
         verts.insert(verts.end(), {0.5f, 0.5f, 0.5f});
     }
@@ -381,14 +402,17 @@ Renderer::Renderer(const Mesh& mesh, double chunk_size) : impl_(std::make_unique
   glBindVertexArray(m.vao);
   glGenBuffers(1, &m.vbo);
   glBindBuffer(GL_ARRAY_BUFFER, m.vbo);
-  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(verts.size() * sizeof(float)), verts.data(), GL_STATIC_DRAW);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(verts.size() * sizeof(float)), verts.data(),
+               GL_STATIC_DRAW);
   glGenBuffers(1, &m.ebo);
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, m.ebo);
-  glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(uint32_t)), indices.data(), GL_STATIC_DRAW);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(uint32_t)),
+               indices.data(), GL_STATIC_DRAW);
   glEnableVertexAttribArray(0);
   glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
   glEnableVertexAttribArray(1);
-  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), reinterpret_cast<void*>(3 * sizeof(float)));
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float),
+                        reinterpret_cast<void*>(3 * sizeof(float)));
   glBindVertexArray(0);
   glGenVertexArrays(1, &m.sky_vao);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
@@ -434,10 +458,13 @@ void CheckProjectors(const std::vector<Projector>& projectors, const EffectsPlan
     const Projector& p = projectors[k];
     p.view.camera.RequireUndistorted();
     if (!p.image) throw Error("projector " + std::to_string(k) + " has no image");
-    if (p.image->width != static_cast<int>(p.view.camera.width) || p.image->height != static_cast<int>(p.view.camera.height))
-      throw Error("projector image is " + std::to_string(p.image->width) + "x" + std::to_string(p.image->height) +
-                  " but its camera is " + std::to_string(p.view.camera.width) + "x" + std::to_string(p.view.camera.height));
-    if ((plan.occlusion || plan.skybox) && !p.depth) throw Error("projector " + std::to_string(k) + " has no depth map");
+    if (p.image->width != static_cast<int>(p.view.camera.width) ||
+        p.image->height != static_cast<int>(p.view.camera.height))
+      throw Error("projector image is " + std::to_string(p.image->width) + "x" +
+                  std::to_string(p.image->height) + " but its camera is " +
+                  std::to_string(p.view.camera.width) + "x" + std::to_string(p.view.camera.height));
+    if ((plan.occlusion || plan.skybox) && !p.depth)
+      throw Error("projector " + std::to_string(k) + " has no depth map");
   }
 }
 
@@ -466,21 +493,22 @@ Renderer::Frame ReadFrame(int w, int h) {
 
 // The background behind the mesh: the full-screen sky triangle lies on the far plane and passes
 // the depth test only where no surface was drawn, so its shader runs only on the holes.
-void Renderer::Impl::DrawSky(const View& view, const std::vector<Projector>& projectors, const EffectsPlan& plan,
-                             const std::vector<int>& layer_of) {
+void Renderer::Impl::DrawSky(const View& view, const std::vector<Projector>& projectors,
+                             const EffectsPlan& plan, const std::vector<int>& layer_of) {
   std::vector<std::string> sky_inc;
   if (plan.skybox) sky_inc.push_back("ptm_common.glsl");
   GLuint sky = Program("sky.vert", "sky.frag", plan.Defines(), sky_inc);
   glUseProgram(sky);
   glDepthFunc(GL_LEQUAL);
   glDepthMask(GL_FALSE);
-  glUniform3f(glGetUniformLocation(sky, "u_background"), plan.background[0] / 255.f, plan.background[1] / 255.f,
-              plan.background[2] / 255.f);
+  glUniform3f(glGetUniformLocation(sky, "u_background"), plan.background[0] / 255.f,
+              plan.background[1] / 255.f, plan.background[2] / 255.f);
   Eigen::Matrix3f Rt = view.world_to_camera.R().transpose().cast<float>();
   glUniformMatrix3fv(glGetUniformLocation(sky, "u_Rt"), 1, GL_FALSE, Rt.data());
   glUniform4f(glGetUniformLocation(sky, "u_K"), float(view.camera.fx()), float(view.camera.fy()),
               float(view.camera.cx()), float(view.camera.cy()));
-  glUniform2f(glGetUniformLocation(sky, "u_size"), float(view.camera.width), float(view.camera.height));
+  glUniform2f(glGetUniformLocation(sky, "u_size"), float(view.camera.width),
+              float(view.camera.height));
   if (plan.skybox) SetProjectors(sky, view, projectors, plan, layer_of);
   glBindVertexArray(sky_vao);
   glDrawArrays(GL_TRIANGLES, 0, 3);
@@ -494,12 +522,14 @@ Renderer::Frame Renderer::Render(const View& view, const std::vector<Projector>&
   Impl& m = *impl_;
   EffectsPlan plan = plan_in;
   if (projectors.empty()) plan.ptm = plan.skybox = false;
-  plan.projectors = std::max(1, std::min<int>(plan.projectors, static_cast<int>(projectors.size())));
+  plan.projectors =
+      std::max(1, std::min<int>(plan.projectors, static_cast<int>(projectors.size())));
   const int w = static_cast<int>(view.camera.width), h = static_cast<int>(view.camera.height);
   std::vector<int> layer_of;
   if (plan.ptm || plan.skybox) {
     CheckProjectors(projectors, plan);
-    layer_of = m.PlaceProjectors(projectors, plan.projectors, plan.occlusion || plan.skybox, plan.masks);
+    layer_of =
+        m.PlaceProjectors(projectors, plan.projectors, plan.occlusion || plan.skybox, plan.masks);
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D_ARRAY, m.images);
     glActiveTexture(GL_TEXTURE1);

@@ -29,7 +29,7 @@
 namespace mvtm {
 
 struct View {
-  Camera camera;      // undistorted
+  Camera camera;  // undistorted
   Rigid3d world_to_camera;
 };
 

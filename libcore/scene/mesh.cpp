@@ -1,8 +1,7 @@
 #include "scene/mesh.h"
 
-#include <limits>
-
 #include <Eigen/Geometry>
+#include <limits>
 
 namespace mvtm {
 

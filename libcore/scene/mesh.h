@@ -8,21 +8,20 @@
 // Thread safety: a Mesh is a plain value.
 #pragma once
 
+#include <Eigen/Core>
 #include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
-
 namespace mvtm {
 
 struct Mesh {
   std::vector<Eigen::Vector3d> vertices;
-  std::vector<Eigen::Vector3f> normals;             // empty or one per vertex
-  std::vector<std::array<uint8_t, 3>> colors;       // empty or one per vertex
+  std::vector<Eigen::Vector3f> normals;        // empty or one per vertex
+  std::vector<std::array<uint8_t, 3>> colors;  // empty or one per vertex
   std::vector<std::array<uint32_t, 3>> faces;
-  std::vector<std::string> missing;                 // filled by ReadMesh: "normals", "colours", "faces"
+  std::vector<std::string> missing;  // filled by ReadMesh: "normals", "colours", "faces"
 
   bool has_normals() const { return !normals.empty() && normals.size() == vertices.size(); }
   bool has_colors() const { return !colors.empty() && colors.size() == vertices.size(); }

@@ -10,12 +10,11 @@
 // Thread safety: a Reconstruction is a plain value.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <map>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "camera/camera.h"
 #include "geometry/rigid.h"

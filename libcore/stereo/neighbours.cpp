@@ -1,9 +1,8 @@
 #include "stereo/neighbours.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
-
-#include <Eigen/Geometry>
 
 #include "base/error.h"
 
@@ -11,15 +10,19 @@ namespace mvtm {
 
 void NeighbourOptions::Check() const {
   if (count < 1 || count > 16) throw UsageError("--neighbours: must be 1..16");
-  if (!(min_baseline >= 0 && min_baseline < 10)) throw UsageError("--min-baseline: must be in [0, 10)");
-  if (!(max_angle_deg > 0 && max_angle_deg <= 90)) throw UsageError("--max-angle: must be in (0, 90]");
-  if (!(min_coverage >= 0 && min_coverage <= 1)) throw UsageError("--min-coverage: must be in [0, 1]");
+  if (!(min_baseline >= 0 && min_baseline < 10))
+    throw UsageError("--min-baseline: must be in [0, 10)");
+  if (!(max_angle_deg > 0 && max_angle_deg <= 90))
+    throw UsageError("--max-angle: must be in (0, 90]");
+  if (!(min_coverage >= 0 && min_coverage <= 1))
+    throw UsageError("--min-coverage: must be in [0, 1]");
   if (max_offset < 1) throw UsageError("--max-offset: must be >= 1");
 }
 
 double MedianSpacing(const std::vector<Rigid3d>& w2c) {
   std::vector<double> d;
-  for (size_t i = 1; i < w2c.size(); ++i) d.push_back((w2c[i].Centre() - w2c[i - 1].Centre()).norm());
+  for (size_t i = 1; i < w2c.size(); ++i)
+    d.push_back((w2c[i].Centre() - w2c[i - 1].Centre()).norm());
   if (d.empty()) return 0;
   std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
   return d[d.size() / 2];
@@ -47,8 +50,10 @@ double Percentile(std::vector<double> v, double q) {
 
 }  // namespace
 
-std::vector<size_t> SelectStereoNeighbours(const std::vector<Rigid3d>& w2c, const std::vector<Camera>& cameras, size_t i,
-                                           const std::vector<Eigen::Vector3d>& ref_points, const NeighbourOptions& o) {
+std::vector<size_t> SelectStereoNeighbours(const std::vector<Rigid3d>& w2c,
+                                           const std::vector<Camera>& cameras, size_t i,
+                                           const std::vector<Eigen::Vector3d>& ref_points,
+                                           const NeighbourOptions& o) {
   const double min_base = o.min_baseline * MedianSpacing(w2c);
   const Eigen::Vector3d ci = w2c[i].Centre(), zi = w2c[i].R().row(2).transpose();
   const double cos_max = std::cos(o.max_angle_deg * M_PI / 180.0);
@@ -61,7 +66,8 @@ std::vector<size_t> SelectStereoNeighbours(const std::vector<Rigid3d>& w2c, cons
       const double base = (p.Centre() - ci).norm();
       if (!(base > min_base) || base == 0) continue;  // no baseline: every plane maps alike
       if (p.R().row(2).dot(zi.transpose()) < cos_max) continue;
-      if (!ref_points.empty() && Coverage(p, cameras[size_t(j)], ref_points) < o.min_coverage) continue;
+      if (!ref_points.empty() && Coverage(p, cameras[size_t(j)], ref_points) < o.min_coverage)
+        continue;
       out.push_back(size_t(j));
     }
   return out;
@@ -75,13 +81,16 @@ void DriveAxes(const std::vector<Rigid3d>& w2c, Eigen::Vector3d& down, Eigen::Ve
   if (w2c.size() > 1) travel = w2c.back().Centre() - w2c.front().Centre();
   if (travel.norm() == 0 && !w2c.empty()) travel = w2c.front().R().row(2).transpose();  // forward
   side = down.cross(travel);
-  if (side.norm() < 1e-12) side = w2c.empty() ? Eigen::Vector3d::UnitX() : Eigen::Vector3d(w2c.front().R().row(0).transpose());
+  if (side.norm() < 1e-12)
+    side = w2c.empty() ? Eigen::Vector3d::UnitX()
+                       : Eigen::Vector3d(w2c.front().R().row(0).transpose());
   side.normalize();
 }
 
-std::vector<SweepFamily> SweepFamiliesFor(const Rigid3d& ref, const std::vector<Eigen::Vector3d>& pts,
-                                          const Eigen::Vector3d& down_world, const Eigen::Vector3d& side_world,
-                                          int planes) {
+std::vector<SweepFamily> SweepFamiliesFor(const Rigid3d& ref,
+                                          const std::vector<Eigen::Vector3d>& pts,
+                                          const Eigen::Vector3d& down_world,
+                                          const Eigen::Vector3d& side_world, int planes) {
   std::vector<double> z, g, s;
   const Eigen::Matrix3d R = ref.R();
   const Eigen::Vector3d n_ground = R * down_world, n_side = R * side_world;
@@ -98,7 +107,8 @@ std::vector<SweepFamily> SweepFamiliesFor(const Rigid3d& ref, const std::vector<
   out.push_back(MakeFrontoSweep(near_z, std::max(far_z, 1.01 * near_z), planes));
   // Ground planes lie below the camera: positive offsets along "down".
   const double g_hi = 1.2 * Percentile(g, 0.98), g_lo = std::max(0.2 * g_hi, Percentile(g, 0.5));
-  if (g_hi > 0 && g_hi > g_lo) out.push_back(MakeOffsetSweep("ground", n_ground, g_lo, g_hi, planes));
+  if (g_hi > 0 && g_hi > g_lo)
+    out.push_back(MakeOffsetSweep("ground", n_ground, g_lo, g_hi, planes));
   const double s_lo = 1.2 * Percentile(s, 0.02), s_hi = 1.2 * Percentile(s, 0.98);
   if (s_hi > s_lo) out.push_back(MakeOffsetSweep("facade", n_side, s_lo, s_hi, planes));
   return out;

@@ -8,10 +8,9 @@
 // Thread safety: pure functions.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstddef>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "camera/camera.h"
 #include "geometry/rigid.h"
@@ -20,11 +19,13 @@
 namespace mvtm {
 
 struct NeighbourOptions {
-  int count = 4;               // neighbours per image (--neighbours), taken alternately before/after in time
-  double min_baseline = 0.25;  // fraction of the median camera spacing below which a neighbour is too close
-  double max_angle_deg = 40;   // largest angle between the viewing directions
-  double min_coverage = 0.3;   // share of the reference's sparse points the neighbour must see (when it has any)
-  int max_offset = 12;         // furthest neighbour, in images along the drive
+  int count = 4;  // neighbours per image (--neighbours), taken alternately before/after in time
+  double min_baseline =
+      0.25;  // fraction of the median camera spacing below which a neighbour is too close
+  double max_angle_deg = 40;  // largest angle between the viewing directions
+  double min_coverage =
+      0.3;  // share of the reference's sparse points the neighbour must see (when it has any)
+  int max_offset = 12;  // furthest neighbour, in images along the drive
 
   void Check() const;  // throws UsageError naming the option
 };
@@ -36,16 +37,19 @@ double MedianSpacing(const std::vector<Rigid3d>& w2c);
 // too little baseline, too different a viewing direction, or (when `ref_points` is not empty)
 // seeing too few of the reference's points. Fewer than options.count (even none) when the drive
 // offers no more.
-std::vector<size_t> SelectStereoNeighbours(const std::vector<Rigid3d>& w2c, const std::vector<Camera>& cameras, size_t i,
-                                           const std::vector<Eigen::Vector3d>& ref_points, const NeighbourOptions& options);
+std::vector<size_t> SelectStereoNeighbours(const std::vector<Rigid3d>& w2c,
+                                           const std::vector<Camera>& cameras, size_t i,
+                                           const std::vector<Eigen::Vector3d>& ref_points,
+                                           const NeighbourOptions& options);
 
 // The sweep families for a reference view: fronto-parallel over the depths of its points,
 // ground-parallel (normal = the drive's "down") and facade-parallel (normal = the drive's
 // sideways direction) over its points' offsets along those normals. `down_world` and
 // `side_world` are unit world vectors (DriveAxes). No points: no families (nothing to sweep).
-std::vector<SweepFamily> SweepFamiliesFor(const Rigid3d& ref_w2c, const std::vector<Eigen::Vector3d>& ref_points,
-                                          const Eigen::Vector3d& down_world, const Eigen::Vector3d& side_world,
-                                          int planes);
+std::vector<SweepFamily> SweepFamiliesFor(const Rigid3d& ref_w2c,
+                                          const std::vector<Eigen::Vector3d>& ref_points,
+                                          const Eigen::Vector3d& down_world,
+                                          const Eigen::Vector3d& side_world, int planes);
 
 // The drive's world "down" (mean of the cameras' y axes: dashcams are level) and the sideways
 // direction (down × direction of travel), unit vectors.

@@ -1,10 +1,9 @@
 #include "stereo/plane_sweep.h"
 
-#include <opencv2/imgproc.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <opencv2/imgproc.hpp>
 
 #include "base/error.h"
 
@@ -74,23 +73,27 @@ cv::Matx33d ToOpenCv(const Eigen::Matrix3d& H) {
   S(0, 2) = S(1, 2) = -0.5;
   Si(0, 2) = Si(1, 2) = 0.5;
   const Eigen::Matrix3d G = S * H * Si;
-  return cv::Matx33d(G(0, 0), G(0, 1), G(0, 2), G(1, 0), G(1, 1), G(1, 2), G(2, 0), G(2, 1), G(2, 2));
+  return cv::Matx33d(G(0, 0), G(0, 1), G(0, 2), G(1, 0), G(1, 1), G(1, 2), G(2, 0), G(2, 1),
+                     G(2, 2));
 }
 
 // The neighbour's ZNCC with the reference on one plane; kNoScore where the neighbour does not
 // see the plane point in front of it, or the homography is singular (the plane passes through
 // the neighbour's centre).
-cv::Mat NeighbourScore(const StereoView& ref, const RefWindows& rw, const StereoView& nb, const Eigen::Vector3d& n,
-                       double d) {
+cv::Mat NeighbourScore(const StereoView& ref, const RefWindows& rw, const StereoView& nb,
+                       const Eigen::Vector3d& n, double d) {
   const Eigen::Matrix3d H = PlaneHomography(ref, nb, n, d);
   const double scale = H.norm();
-  if (!std::isfinite(scale) || scale == 0 || std::abs(H.determinant()) < 1e-12 * scale * scale * scale)
+  if (!std::isfinite(scale) || scale == 0 ||
+      std::abs(H.determinant()) < 1e-12 * scale * scale * scale)
     return cv::Mat(ref.grey.size(), CV_32F, cv::Scalar(kNoScore));
   const cv::Matx33d G = ToOpenCv(H);
   const cv::Mat ones(nb.grey.size(), CV_32F, cv::Scalar(1));
   cv::Mat J, seen;
-  cv::warpPerspective(nb.grey, J, G, ref.grey.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_CONSTANT, 0);
-  cv::warpPerspective(ones, seen, G, ref.grey.size(), cv::INTER_NEAREST | cv::WARP_INVERSE_MAP, cv::BORDER_CONSTANT, 0);
+  cv::warpPerspective(nb.grey, J, G, ref.grey.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP,
+                      cv::BORDER_CONSTANT, 0);
+  cv::warpPerspective(ones, seen, G, ref.grey.size(), cv::INTER_NEAREST | cv::WARP_INVERSE_MAP,
+                      cv::BORDER_CONSTANT, 0);
   // The point must lie in front of the neighbour: its depth there is z_ref · w, w the third
   // homogeneous coordinate (K's last row is 0 0 1), and z_ref > 0 is checked by the caller.
   for (int y = 0; y < seen.rows; ++y) {
@@ -119,8 +122,9 @@ cv::Mat BestK(const std::vector<cv::Mat>& scores, int k) {
 }
 
 // The aggregated score of every plane of a family (planes in parallel).
-std::vector<cv::Mat> FamilyScores(const StereoView& ref, const RefWindows& rw, const std::vector<StereoView>& nbs,
-                                  const SweepFamily& f, const cv::Mat& ray_dot, int k) {
+std::vector<cv::Mat> FamilyScores(const StereoView& ref, const RefWindows& rw,
+                                  const std::vector<StereoView>& nbs, const SweepFamily& f,
+                                  const cv::Mat& ray_dot, int k) {
   std::vector<cv::Mat> out(f.offsets.size());
   cv::parallel_for_(cv::Range(0, static_cast<int>(f.offsets.size())), [&](const cv::Range& range) {
     for (int p = range.start; p < range.end; ++p) {
@@ -128,7 +132,8 @@ std::vector<cv::Mat> FamilyScores(const StereoView& ref, const RefWindows& rw, c
       std::vector<cv::Mat> per;
       if (d != 0)
         for (const StereoView& nb : nbs) per.push_back(NeighbourScore(ref, rw, nb, f.normal, d));
-      cv::Mat s = per.empty() ? cv::Mat(ref.grey.size(), CV_32F, cv::Scalar(kNoScore)) : BestK(per, k);
+      cv::Mat s =
+          per.empty() ? cv::Mat(ref.grey.size(), CV_32F, cv::Scalar(kNoScore)) : BestK(per, k);
       // Only planes in front of the reference camera: z = d / (n·r) > 0.
       for (int y = 0; y < s.rows; ++y)
         for (int x = 0; x < s.cols; ++x)
@@ -141,10 +146,12 @@ std::vector<cv::Mat> FamilyScores(const StereoView& ref, const RefWindows& rw, c
 
 // Per pixel, the family's best plane refined by a parabola through its neighbours' scores; keeps
 // it where it beats `best` (depth and score of the best family so far).
-void TakeBest(const SweepFamily& f, const std::vector<cv::Mat>& scores, const cv::Mat& ray_dot, cv::Mat& best_z,
-              cv::Mat& best_s, cv::Mat& best_margin) {
+void TakeBest(const SweepFamily& f, const std::vector<cv::Mat>& scores, const cv::Mat& ray_dot,
+              cv::Mat& best_z, cv::Mat& best_s, cv::Mat& best_margin) {
   const int P = static_cast<int>(scores.size());
-  auto param = [&](int p) { return f.inverse_spacing ? 1.0 / f.offsets[size_t(p)] : f.offsets[size_t(p)]; };
+  auto param = [&](int p) {
+    return f.inverse_spacing ? 1.0 / f.offsets[size_t(p)] : f.offsets[size_t(p)];
+  };
   for (int y = 0; y < best_z.rows; ++y)
     for (int x = 0; x < best_z.cols; ++x) {
       int bp = -1, n = 0;
@@ -158,7 +165,8 @@ void TakeBest(const SweepFamily& f, const std::vector<cv::Mat>& scores, const cv
       if (bp < 0 || bs <= best_s.at<float>(y, x)) continue;
       double s = param(bp);
       if (bp > 0 && bp + 1 < P) {
-        const double a = scores[size_t(bp - 1)].at<float>(y, x), c = scores[size_t(bp + 1)].at<float>(y, x);
+        const double a = scores[size_t(bp - 1)].at<float>(y, x),
+                     c = scores[size_t(bp + 1)].at<float>(y, x);
         const double den = a - 2.0 * bs + c;
         if (a > kNoScore && c > kNoScore && den < 0) {
           const double delta = std::clamp(0.5 * (a - c) / den, -0.5, 0.5);
@@ -179,15 +187,18 @@ void TakeBest(const SweepFamily& f, const std::vector<cv::Mat>& scores, const cv
 }  // namespace
 
 void PlaneSweepOptions::Check() const {
-  if (window < 3 || window > 31 || window % 2 == 0) throw UsageError("--window: must be odd, 3..31");
+  if (window < 3 || window > 31 || window % 2 == 0)
+    throw UsageError("--window: must be odd, 3..31");
   if (best_k < 1) throw UsageError("--best-k: must be >= 1");
   if (!(min_score >= -1 && min_score <= 1)) throw UsageError("--min-score: must be in [-1, 1]");
-  if (!(min_texture >= 0 && std::isfinite(min_texture))) throw UsageError("--min-texture: must be >= 0");
+  if (!(min_texture >= 0 && std::isfinite(min_texture)))
+    throw UsageError("--min-texture: must be >= 0");
   if (!(min_margin >= 0 && min_margin <= 2)) throw UsageError("--min-margin: must be in [0, 2]");
 }
 
 SweepFamily MakeFrontoSweep(double near_z, double far_z, int planes) {
-  if (!(near_z > 0 && far_z > near_z && planes >= 2)) throw Error("fronto sweep: need 0 < near < far and >= 2 planes");
+  if (!(near_z > 0 && far_z > near_z && planes >= 2))
+    throw Error("fronto sweep: need 0 < near < far and >= 2 planes");
   SweepFamily f;
   f.name = "fronto";
   f.inverse_spacing = true;
@@ -199,7 +210,8 @@ SweepFamily MakeFrontoSweep(double near_z, double far_z, int planes) {
   return f;
 }
 
-SweepFamily MakeOffsetSweep(const std::string& name, const Eigen::Vector3d& normal, double lo, double hi, int planes) {
+SweepFamily MakeOffsetSweep(const std::string& name, const Eigen::Vector3d& normal, double lo,
+                            double hi, int planes) {
   if (!(hi > lo && planes >= 2 && std::abs(normal.norm() - 1) < 1e-9))
     throw Error(name + " sweep: need lo < hi, a unit normal and >= 2 planes");
   SweepFamily f;
@@ -209,7 +221,8 @@ SweepFamily MakeOffsetSweep(const std::string& name, const Eigen::Vector3d& norm
   return f;
 }
 
-Eigen::Matrix3d PlaneHomography(const StereoView& ref, const StereoView& nb, const Eigen::Vector3d& n, double d) {
+Eigen::Matrix3d PlaneHomography(const StereoView& ref, const StereoView& nb,
+                                const Eigen::Vector3d& n, double d) {
   const Eigen::Matrix3d Rr = ref.world_to_camera.R(), Rn = nb.world_to_camera.R();
   const Eigen::Matrix3d R = Rn * Rr.transpose();
   const Eigen::Vector3d t = nb.world_to_camera.t - R * ref.world_to_camera.t;
@@ -217,11 +230,12 @@ Eigen::Matrix3d PlaneHomography(const StereoView& ref, const StereoView& nb, con
   return nb.camera.K() * M * ref.camera.K().inverse();
 }
 
-DepthMap SweepDepth(const StereoView& ref, const std::vector<StereoView>& nbs, const std::vector<SweepFamily>& families,
-                    const PlaneSweepOptions& o) {
+DepthMap SweepDepth(const StereoView& ref, const std::vector<StereoView>& nbs,
+                    const std::vector<SweepFamily>& families, const PlaneSweepOptions& o) {
   o.Check();
   const int w = ref.grey.cols, h = ref.grey.rows;
-  if (w != int(ref.camera.width) || h != int(ref.camera.height)) throw Error("reference image and camera differ in size");
+  if (w != int(ref.camera.width) || h != int(ref.camera.height))
+    throw Error("reference image and camera differ in size");
   for (const auto& nb : nbs)
     if (nb.grey.cols != int(nb.camera.width) || nb.grey.rows != int(nb.camera.height))
       throw Error("neighbour image and camera differ in size");
@@ -240,7 +254,8 @@ DepthMap SweepDepth(const StereoView& ref, const std::vector<StereoView>& nbs, c
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       const float s = best_s.at<float>(y, x), margin = best_margin.at<float>(y, x);
-      if (s < o.min_score || margin < o.min_margin || rw.sd.at<float>(y, x) < o.min_texture) continue;
+      if (s < o.min_score || margin < o.min_margin || rw.sd.at<float>(y, x) < o.min_texture)
+        continue;
       out.depth.at(x, y) = best_z.at<float>(y, x);
       out.confidence.at(x, y) = std::clamp(std::min(s, margin), 0.f, 1.f);
     }

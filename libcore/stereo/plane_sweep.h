@@ -29,11 +29,10 @@
 // Thread safety: SweepDepth is reentrant; it parallelises over planes with OpenCV's pool.
 #pragma once
 
+#include <Eigen/Core>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "camera/camera.h"
 #include "geometry/rigid.h"
@@ -42,26 +41,28 @@
 namespace mvtm {
 
 struct StereoView {
-  Camera camera;             // undistorted, the size of `grey`
-  Rigid3d world_to_camera;   // the pose of record
-  cv::Mat grey;              // CV_32F
+  Camera camera;            // undistorted, the size of `grey`
+  Rigid3d world_to_camera;  // the pose of record
+  cv::Mat grey;             // CV_32F
 };
 
 // One sweeping direction: a unit normal in the reference camera's coordinates and the plane
 // offsets d to try, in increasing order (evenly spaced in `param`: see MakeSweep*).
 struct SweepFamily {
-  std::string name;                // "fronto", "ground", "facade"
+  std::string name;  // "fronto", "ground", "facade"
   Eigen::Vector3d normal{0, 0, 1};
-  std::vector<double> offsets;     // d of each plane
-  bool inverse_spacing = false;    // offsets evenly spaced in 1/d (fronto: inverse depth), else in d
+  std::vector<double> offsets;   // d of each plane
+  bool inverse_spacing = false;  // offsets evenly spaced in 1/d (fronto: inverse depth), else in d
 };
 
 struct PlaneSweepOptions {
-  int window = 7;            // ZNCC window side, odd, 3..31
-  int best_k = 2;            // neighbours aggregated per pixel (the best k of N), ≥ 1
-  double min_score = 0.5;    // aggregated ZNCC below which a pixel gets no depth, in [-1, 1]
-  double min_texture = 2.0;  // grey standard deviation (0..255 scale) below which a window is textureless
-  double min_margin = 0.2;   // best score minus the family's mean score below which the match is ambiguous
+  int window = 7;          // ZNCC window side, odd, 3..31
+  int best_k = 2;          // neighbours aggregated per pixel (the best k of N), ≥ 1
+  double min_score = 0.5;  // aggregated ZNCC below which a pixel gets no depth, in [-1, 1]
+  double min_texture =
+      2.0;  // grey standard deviation (0..255 scale) below which a window is textureless
+  double min_margin =
+      0.2;  // best score minus the family's mean score below which the match is ambiguous
 
   void Check() const;  // throws UsageError naming the option
 };
@@ -74,7 +75,8 @@ struct DepthMap {
 // Fronto-parallel planes (n = +z) at depths near..far, evenly spaced in inverse depth.
 SweepFamily MakeFrontoSweep(double near_z, double far_z, int planes);
 // Planes with normal n (unit, reference coordinates) at offsets lo..hi, evenly spaced.
-SweepFamily MakeOffsetSweep(const std::string& name, const Eigen::Vector3d& normal, double lo, double hi, int planes);
+SweepFamily MakeOffsetSweep(const std::string& name, const Eigen::Vector3d& normal, double lo,
+                            double hi, int planes);
 
 // The plane-sweep depth map of `ref` against `neighbours` over every family.
 DepthMap SweepDepth(const StereoView& ref, const std::vector<StereoView>& neighbours,
@@ -82,6 +84,7 @@ DepthMap SweepDepth(const StereoView& ref, const std::vector<StereoView>& neighb
 
 // The homography taking reference pixels (COLMAP pixel coordinates, homogeneous) to neighbour
 // pixels for the plane n·X = d of the reference frame. Exposed for tests.
-Eigen::Matrix3d PlaneHomography(const StereoView& ref, const StereoView& neighbour, const Eigen::Vector3d& n, double d);
+Eigen::Matrix3d PlaneHomography(const StereoView& ref, const StereoView& neighbour,
+                                const Eigen::Vector3d& n, double d);
 
 }  // namespace mvtm

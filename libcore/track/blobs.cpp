@@ -1,7 +1,6 @@
 #include "track/blobs.h"
 
 #include <algorithm>
-
 #include <opencv2/imgproc.hpp>
 
 namespace mvtm {
@@ -51,7 +50,8 @@ std::vector<Blob> BlobFinder::Find(const uint8_t* vehicle, int width, int height
   return blobs;
 }
 
-void PaintBlob(const Blob& blob, int x, int y, uint8_t value, uint8_t* image, int width, int height) {
+void PaintBlob(const Blob& blob, int x, int y, uint8_t value, uint8_t* image, int width,
+               int height) {
   const int c0 = std::max(0, -x), c1 = std::min(blob.w, width - x);
   const int r0 = std::max(0, -y), r1 = std::min(blob.h, height - y);
   for (int r = r0; r < r1; ++r) {

@@ -41,6 +41,7 @@ class BlobFinder {
 
 // Paints `blob` into a width*height byte image with its box moved to (x, y) — pixels that fall
 // outside the image are dropped — setting covered pixels to `value`.
-void PaintBlob(const Blob& blob, int x, int y, uint8_t value, uint8_t* image, int width, int height);
+void PaintBlob(const Blob& blob, int x, int y, uint8_t value, uint8_t* image, int width,
+               int height);
 
 }  // namespace mvtm

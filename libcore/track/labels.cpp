@@ -14,7 +14,8 @@ LabelDecoder LabelDecoder::ClassIds(const std::vector<int>& classes) {
   d.kind_ = Kind::kClassIds;
   d.lut_.assign(65536, 0);
   for (int c : classes) {
-    if (c < 0 || c > 65535) throw UsageError("classes: id " + std::to_string(c) + " is outside 0..65535");
+    if (c < 0 || c > 65535)
+      throw UsageError("classes: id " + std::to_string(c) + " is outside 0..65535");
     d.lut_[static_cast<size_t>(c)] = 1;
   }
   return d;
@@ -31,10 +32,11 @@ LabelDecoder LabelDecoder::Palette(const Image& palette, const std::string& pale
   d.kind_ = Kind::kPalette;
   for (int c : classes) {
     if (c < 0 || static_cast<size_t>(c) >= palette.pixels())
-      throw Error(palette_name + ": no colour for class " + std::to_string(c) + " (the palette has " +
-                  std::to_string(palette.pixels()) + ")");
+      throw Error(palette_name + ": no colour for class " + std::to_string(c) +
+                  " (the palette has " + std::to_string(palette.pixels()) + ")");
     const float* p = palette.data.data() + static_cast<size_t>(c) * palette.channels;
-    d.rgb_.push_back({static_cast<uint8_t>(p[0]), static_cast<uint8_t>(p[1]), static_cast<uint8_t>(p[2])});
+    d.rgb_.push_back(
+        {static_cast<uint8_t>(p[0]), static_cast<uint8_t>(p[1]), static_cast<uint8_t>(p[2])});
   }
   return d;
 }
@@ -58,7 +60,8 @@ std::vector<int> LabelDecoder::ParseClasses(const std::string& text) {
       used = 0;
     }
     if (item.empty() || used != item.size() || v < 0 || v > 65535)
-      throw UsageError("--classes: '" + item + "' is not a class id 0..65535 (want e.g. 8 or 8,10)");
+      throw UsageError("--classes: '" + item +
+                       "' is not a class id 0..65535 (want e.g. 8 or 8,10)");
     out.push_back(static_cast<int>(v));
   }
   if (out.empty() || (!text.empty() && text.back() == ','))
@@ -66,7 +69,8 @@ std::vector<int> LabelDecoder::ParseClasses(const std::string& text) {
   return out;
 }
 
-void LabelDecoder::Decode(const Image& label, const std::string& name, std::vector<uint8_t>& out) const {
+void LabelDecoder::Decode(const Image& label, const std::string& name,
+                          std::vector<uint8_t>& out) const {
   const size_t n = label.pixels();
   out.resize(n);
   const float* in = label.data.data();
@@ -74,9 +78,10 @@ void LabelDecoder::Decode(const Image& label, const std::string& name, std::vect
   switch (kind_) {
     case Kind::kClassIds: {
       if (ch != 1)
-        throw Error(name + ": class-id labels need 1 channel, this image has " + std::to_string(ch) +
-                    " (colour labels: use --palette; masks: --binary)");
-      if (label.bits == 32) throw Error(name + ": class-id labels must be 8- or 16-bit integers, not float");
+        throw Error(name + ": class-id labels need 1 channel, this image has " +
+                    std::to_string(ch) + " (colour labels: use --palette; masks: --binary)");
+      if (label.bits == 32)
+        throw Error(name + ": class-id labels must be 8- or 16-bit integers, not float");
       // 8/16-bit samples read as exact integers 0..65535; the table lookup needs no range check.
       const uint8_t* lut = lut_.data();
       for (size_t i = 0; i < n; ++i) out[i] = lut[static_cast<uint32_t>(in[i])];
@@ -84,7 +89,8 @@ void LabelDecoder::Decode(const Image& label, const std::string& name, std::vect
     }
     case Kind::kPalette: {
       if (ch < 3)
-        throw Error(name + ": palette labels need 3 or 4 channels (RGB), this image has " + std::to_string(ch));
+        throw Error(name + ": palette labels need 3 or 4 channels (RGB), this image has " +
+                    std::to_string(ch));
       if (label.bits != 8) throw Error(name + ": palette labels must be 8-bit");
       for (size_t i = 0; i < n; ++i) {
         const float* p = in + i * ch;

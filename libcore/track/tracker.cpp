@@ -3,9 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <tuple>
-
 #include <opencv2/imgproc.hpp>
+#include <tuple>
 
 #include "base/error.h"
 
@@ -50,14 +49,17 @@ struct Smoother {
 void TrackOptions::Check() const {
   if (!(max_jump > 0) || !std::isfinite(max_jump))
     throw UsageError("max-jump must be > 0 pixels, got " + Num(max_jump));
-  if (max_missed < 1) throw UsageError("max-missed must be >= 1 frame, got " + std::to_string(max_missed));
+  if (max_missed < 1)
+    throw UsageError("max-missed must be >= 1 frame, got " + std::to_string(max_missed));
   if (max_gap < 0) throw UsageError("max-gap must be >= 0 frames, got " + std::to_string(max_gap));
   if (!(smooth >= 0) || !std::isfinite(smooth))
     throw UsageError("smooth must be >= 0 frames, got " + Num(smooth));
-  if (min_life < 1) throw UsageError("min-life must be >= 1 frame, got " + std::to_string(min_life));
+  if (min_life < 1)
+    throw UsageError("min-life must be >= 1 frame, got " + std::to_string(min_life));
   if (!(min_ratio >= 0 && min_ratio <= 1))
     throw UsageError("min-ratio must be in 0..1, got " + Num(min_ratio));
-  if (dilate < 0 || dilate > 1000) throw UsageError("dilate must be in 0..1000 pixels, got " + std::to_string(dilate));
+  if (dilate < 0 || dilate > 1000)
+    throw UsageError("dilate must be in 0..1000 pixels, got " + std::to_string(dilate));
 }
 
 std::pair<size_t, size_t> TrackResult::FrameRows(int frame) const {
@@ -94,11 +96,13 @@ void Tracker::AddFrame(const uint8_t* vehicle) { AddBlobs(finder_.Find(vehicle, 
 void Tracker::AddBlobs(std::vector<Blob> blobs) {
   const int t = frames_++;
   // Tracks that have now missed max_missed frames in a row end.
-  live_.erase(std::remove_if(live_.begin(), live_.end(),
-                             [&](size_t k) { return t - tracks_[k].dets.back().frame > o_.max_missed; }),
-              live_.end());
+  live_.erase(
+      std::remove_if(live_.begin(), live_.end(),
+                     [&](size_t k) { return t - tracks_[k].dets.back().frame > o_.max_missed; }),
+      live_.end());
   // Candidate pairs within the gate, by distance to the constant-velocity prediction.
-  std::vector<std::tuple<double, int, size_t, size_t>> pairs;  // distance, track id, blob, live index
+  std::vector<std::tuple<double, int, size_t, size_t>>
+      pairs;  // distance, track id, blob, live index
   for (size_t li = 0; li < live_.size(); ++li) {
     const Track& tr = tracks_[live_[li]];
     const Blob& last = blobs_[tr.dets.back().blob];
@@ -177,7 +181,8 @@ void ClipDrawn(const Blob& d, int width, int height, TrackRow& r) {
 Tracker::Smoothed Tracker::Smooth(const Track& tr, const std::vector<Blob>& blobs) const {
   const size_t m = tr.dets.size();
   std::vector<double> f(m);
-  Smoothed s{std::vector<double>(m), std::vector<double>(m), std::vector<double>(m), std::vector<double>(m)};
+  Smoothed s{std::vector<double>(m), std::vector<double>(m), std::vector<double>(m),
+             std::vector<double>(m)};
   for (size_t i = 0; i < m; ++i) {
     const Blob& b = blobs[tr.dets[i].blob];
     f[i] = tr.dets[i].frame, s.cx[i] = b.cx, s.cy[i] = b.cy, s.w[i] = b.w, s.h[i] = b.h;
@@ -187,7 +192,8 @@ Tracker::Smoothed Tracker::Smooth(const Track& tr, const std::vector<Blob>& blob
   return s;
 }
 
-void Tracker::AddDetectedRows(const Track& tr, const Smoothed& s, bool rejected, TrackResult& res) const {
+void Tracker::AddDetectedRows(const Track& tr, const Smoothed& s, bool rejected,
+                              TrackResult& res) const {
   for (size_t i = 0; i < tr.dets.size(); ++i) {
     const Blob& b = res.blobs[tr.dets[i].blob];
     TrackRow r;
@@ -249,10 +255,11 @@ void Tracker::IndexFrames(TrackResult& res) const {
     return std::tie(a.frame, a.track) < std::tie(b.frame, b.track);
   });
   res.frame_begin_.assign(static_cast<size_t>(frames_) + 1, res.rows.size());
-  for (size_t i = res.rows.size(); i-- > 0;) res.frame_begin_[static_cast<size_t>(res.rows[i].frame)] = i;
+  for (size_t i = res.rows.size(); i-- > 0;)
+    res.frame_begin_[static_cast<size_t>(res.rows[i].frame)] = i;
   for (int fr = frames_ - 1; fr >= 0; --fr)  // frames without rows start where the next begins
-    res.frame_begin_[static_cast<size_t>(fr)] =
-        std::min(res.frame_begin_[static_cast<size_t>(fr)], res.frame_begin_[static_cast<size_t>(fr) + 1]);
+    res.frame_begin_[static_cast<size_t>(fr)] = std::min(
+        res.frame_begin_[static_cast<size_t>(fr)], res.frame_begin_[static_cast<size_t>(fr) + 1]);
 }
 
 TrackResult Tracker::Finish() {
@@ -266,7 +273,8 @@ TrackResult Tracker::Finish() {
   for (const Track& tr : tracks_) {
     const Smoothed s = Smooth(tr, res.blobs);
     const int span = tr.dets.back().frame - tr.dets.front().frame + 1;
-    const bool rejected = span < o_.min_life || static_cast<double>(tr.dets.size()) < o_.min_ratio * span;
+    const bool rejected =
+        span < o_.min_life || static_cast<double>(tr.dets.size()) < o_.min_ratio * span;
     rejected ? ++sum.rejected : ++sum.kept;
     AddDetectedRows(tr, s, rejected, res);
     if (!rejected) FillGaps(tr, s, res);

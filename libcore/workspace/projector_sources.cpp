@@ -1,10 +1,9 @@
 #include "workspace/projector_sources.h"
 
-#include "image/mask.h"
-
 #include <algorithm>
 
 #include "base/error.h"
+#include "image/mask.h"
 
 namespace mvtm {
 
@@ -23,7 +22,11 @@ Image ResizeNearest(const Image& d, int w, int h) {
 ProjectorSources::ProjectorSources(const Workspace& ws, const Reconstruction& rec,
                                    std::vector<const ImageRecord*> images, Renderer* renderer,
                                    bool prefer_textures, size_t capacity)
-    : ws_(ws), rec_(rec), images_(std::move(images)), renderer_(renderer), prefer_textures_(prefer_textures),
+    : ws_(ws),
+      rec_(rec),
+      images_(std::move(images)),
+      renderer_(renderer),
+      prefer_textures_(prefer_textures),
       capacity_(capacity) {}
 
 View ProjectorSources::ViewOf(size_t k) const {

@@ -4,16 +4,16 @@
 // Shared by ptmrender and inpaint3d. Images are looked up by their index in a list of the
 // model's images (ImagesByName order). Depth maps come from the workspace's baked depth/ (resized
 // to the image size, nearest neighbour, when baked at another --scale) or, when not baked, are
-// rendered with the Renderer given (Error when there is none). Everything is cached; Trim() empties the caches when they
-// hold more than `capacity` items and must only be called between frames, since the returned
-// references point into the caches.
+// rendered with the Renderer given (Error when there is none). Everything is cached; Trim() empties
+// the caches when they hold more than `capacity` items and must only be called between frames,
+// since the returned references point into the caches.
 #pragma once
 
 #include <map>
 #include <vector>
 
-#include "scene/reconstruction.h"
 #include "render/renderer.h"
+#include "scene/reconstruction.h"
 #include "workspace/workspace.h"
 
 namespace mvtm {
@@ -21,8 +21,9 @@ namespace mvtm {
 class ProjectorSources {
  public:
   // prefer_textures: read textures/NAME (vehicles removed) when it exists, else images/NAME.
-  ProjectorSources(const Workspace& ws, const Reconstruction& rec, std::vector<const ImageRecord*> images,
-                   Renderer* renderer, bool prefer_textures, size_t capacity = 32);
+  ProjectorSources(const Workspace& ws, const Reconstruction& rec,
+                   std::vector<const ImageRecord*> images, Renderer* renderer, bool prefer_textures,
+                   size_t capacity = 32);
   void SetRenderer(Renderer* renderer) { renderer_ = renderer; }
 
   const Image& ImageOf(size_t k);

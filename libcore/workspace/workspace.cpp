@@ -37,13 +37,21 @@ fs::path Workspace::MeshPath() const {
   return root_ / "mesh.ply";
 }
 fs::path Workspace::LabelsDir() const { return root_ / "labels"; }
-fs::path Workspace::LabelPath(const std::string& name) const { return Derived(LabelsDir(), name, ".png"); }
+fs::path Workspace::LabelPath(const std::string& name) const {
+  return Derived(LabelsDir(), name, ".png");
+}
 fs::path Workspace::MasksDir() const { return root_ / "masks"; }
-fs::path Workspace::MaskPath(const std::string& name) const { return Derived(MasksDir(), name, ".png"); }
+fs::path Workspace::MaskPath(const std::string& name) const {
+  return Derived(MasksDir(), name, ".png");
+}
 fs::path Workspace::DepthDir() const { return root_ / "depth"; }
-fs::path Workspace::DepthPath(const std::string& name) const { return Derived(DepthDir(), name, ".exr"); }
+fs::path Workspace::DepthPath(const std::string& name) const {
+  return Derived(DepthDir(), name, ".exr");
+}
 fs::path Workspace::StereoDir() const { return root_ / "stereo"; }
-fs::path Workspace::StereoDepthPath(const std::string& name) const { return Derived(StereoDir(), name, ".exr"); }
+fs::path Workspace::StereoDepthPath(const std::string& name) const {
+  return Derived(StereoDir(), name, ".exr");
+}
 fs::path Workspace::StereoConfidencePath(const std::string& name) const {
   return Derived(StereoDir(), name, ".conf.exr");
 }

@@ -20,16 +20,26 @@
 #pragma once
 
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 namespace mvtm {
 
 namespace fs = std::filesystem;
 
-enum class WsItem { kSparse, kImages, kMesh, kLabels, kMasks, kTracks, kPartners, kDepth, kTextures, kStereo };
+enum class WsItem {
+  kSparse,
+  kImages,
+  kMesh,
+  kLabels,
+  kMasks,
+  kTracks,
+  kPartners,
+  kDepth,
+  kTextures,
+  kStereo
+};
 
 class Workspace {
  public:
@@ -42,14 +52,16 @@ class Workspace {
   // textures/NAME when it exists, else images/NAME.
   fs::path SourceImagePath(const std::string& name) const;
   fs::path TexturePath(const std::string& name) const;
-  fs::path MeshPath() const;  // the first existing of mesh.ply, meshed-poisson.ply, meshed-delaunay.ply; else mesh.ply
+  fs::path MeshPath() const;  // the first existing of mesh.ply, meshed-poisson.ply,
+                              // meshed-delaunay.ply; else mesh.ply
   fs::path LabelPath(const std::string& name) const;
   fs::path LabelsDir() const;
   fs::path MaskPath(const std::string& name) const;
   fs::path MasksDir() const;
   fs::path DepthPath(const std::string& name) const;
   fs::path DepthDir() const;
-  // stereo/NAME.exr and stereo/NAME.conf.exr: dense depth from the photos and its confidence (densify).
+  // stereo/NAME.exr and stereo/NAME.conf.exr: dense depth from the photos and its confidence
+  // (densify).
   fs::path StereoDir() const;
   fs::path StereoDepthPath(const std::string& name) const;
   fs::path StereoConfidencePath(const std::string& name) const;

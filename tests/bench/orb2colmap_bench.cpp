@@ -7,9 +7,9 @@
 //   write binary  our images.bin writer                      vs  `colmap model_converter` BIN→BIN
 //   read text     our images.txt reader                      (same model_converter baseline)
 // usage: bench_orb2colmap [--frames N] [--repeat R] [--short]
-#include <chrono>
+#include <unistd.h>
 
-#include "bench_util.h"
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -18,8 +18,7 @@
 #include <random>
 #include <string>
 
-#include <unistd.h>
-
+#include "bench_util.h"
 #include "geometry/interpolate.h"
 #include "io/colmap_model.h"
 
@@ -33,9 +32,12 @@ int main(int argc, char** argv) {
   int repeat = 3;
   for (int i = 1; i < argc; ++i) {
     std::string a = argv[i];
-    if (a == "--frames" && i + 1 < argc) frames = std::stoul(argv[++i]);
-    else if (a == "--repeat" && i + 1 < argc) repeat = std::stoi(argv[++i]);
-    else if (a == "--short") frames = 2000, repeat = 1;
+    if (a == "--frames" && i + 1 < argc)
+      frames = std::stoul(argv[++i]);
+    else if (a == "--repeat" && i + 1 < argc)
+      repeat = std::stoi(argv[++i]);
+    else if (a == "--short")
+      frames = 2000, repeat = 1;
   }
   // A winding road: keyframes every 10th frame.
   std::mt19937 g(7);
@@ -86,14 +88,19 @@ int main(int argc, char** argv) {
     fs::create_directories(dir / "c");
     std::string base = "colmap model_converter --output_path " + (dir / "c").string();
     t_ctxt = BestOf(repeat, [&] {
-      (void)!std::system((base + " --input_path " + (dir / "txt").string() + " --output_type TXT >/dev/null 2>&1").c_str());
+      (void)!std::system(
+          (base + " --input_path " + (dir / "txt").string() + " --output_type TXT >/dev/null 2>&1")
+              .c_str());
     });
     t_cbin = BestOf(repeat, [&] {
-      (void)!std::system((base + " --input_path " + (dir / "bin").string() + " --output_type BIN >/dev/null 2>&1").c_str());
+      (void)!std::system(
+          (base + " --input_path " + (dir / "bin").string() + " --output_type BIN >/dev/null 2>&1")
+              .c_str());
     });
   }
   fs::remove_all(dir);
-  std::printf("orb2colmap benchmark: %zu frames from %zu keyframes, best of %d\n", frames, keys.size(), repeat);
+  std::printf("orb2colmap benchmark: %zu frames from %zu keyframes, best of %d\n", frames,
+              keys.size(), repeat);
   std::printf("%-34s %10s %12s\n", "stage", "ms", "us/frame");
   auto row = [&](const char* name, double s) {
     std::printf("%-34s %10.1f %12.3f\n", name, s * 1e3, s * 1e6 / static_cast<double>(frames));

@@ -14,8 +14,6 @@
 // against the others) and on 10^5 random poses. Exit status 1 when an exact method differs.
 // usage: bench_pickview [--candidates N] [--random N] [--repeat R] [--k K] [--short]
 #include <chrono>
-
-#include "bench_util.h"
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -24,6 +22,7 @@
 #include <random>
 #include <string>
 
+#include "bench_util.h"
 #include "index/pose_index.h"
 #include "io/trajectory.h"
 
@@ -43,7 +42,8 @@ bool Identical(const std::vector<Candidate>& a, const std::vector<Candidate>& b)
 }
 
 Rigid3d FromCentreYaw(const Eigen::Vector3d& C, double yaw, double pitch = 0) {
-  Eigen::Quaterniond c2w(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitX()));
+  Eigen::Quaterniond c2w(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY()) *
+                         Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitX()));
   Eigen::Quaterniond w2c = c2w.conjugate();
   return Rigid3d(w2c, -(w2c * C));
 }
@@ -74,13 +74,20 @@ int main(int argc, char** argv) {
   bool short_run = false;
   for (int i = 1; i < argc; ++i) {
     std::string a = argv[i];
-    if (a == "--candidates" && i + 1 < argc) n_cand = std::stoul(argv[++i]);
-    else if (a == "--random" && i + 1 < argc) n_random = std::stoul(argv[++i]);
-    else if (a == "--repeat" && i + 1 < argc) repeat = std::stoi(argv[++i]);
-    else if (a == "--k" && i + 1 < argc) k = std::stoul(argv[++i]);
-    else if (a == "--short") short_run = true, n_cand = 2000, n_random = 5000, n_random_queries = 200, repeat = 1;
+    if (a == "--candidates" && i + 1 < argc)
+      n_cand = std::stoul(argv[++i]);
+    else if (a == "--random" && i + 1 < argc)
+      n_random = std::stoul(argv[++i]);
+    else if (a == "--repeat" && i + 1 < argc)
+      repeat = std::stoi(argv[++i]);
+    else if (a == "--k" && i + 1 < argc)
+      k = std::stoul(argv[++i]);
+    else if (a == "--short")
+      short_run = true, n_cand = 2000, n_random = 5000, n_random_queries = 200, repeat = 1;
     else {
-      std::fprintf(stderr, "usage: bench_pickview [--candidates N] [--random N] [--repeat R] [--k K] [--short]\n");
+      std::fprintf(
+          stderr,
+          "usage: bench_pickview [--candidates N] [--random N] [--repeat R] [--k K] [--short]\n");
       return 2;
     }
   }
@@ -102,9 +109,11 @@ int main(int argc, char** argv) {
     cands.push_back(FromCentreYaw(C, yaw, 0.02 * nd(g)));
   }
   ViewSelectionOptions sel{k, 45, 0, 0};
-  std::printf("pickview benchmark: %zu candidates scattered around %s, %zu queries along it, K=%zu, gate ±45°, "
-              "best of %d\n\n",
-              cands.size(), source.c_str(), queries.size(), k, repeat);
+  std::printf(
+      "pickview benchmark: %zu candidates scattered around %s, %zu queries along it, K=%zu, gate "
+      "±45°, "
+      "best of %d\n\n",
+      cands.size(), source.c_str(), queries.size(), k, repeat);
 
   struct Row {
     std::string name;
@@ -123,8 +132,8 @@ int main(int argc, char** argv) {
     PoseIndex brute(cands, sel, {SearchMethod::kBrute});
     for (size_t i = 0; i < queries.size(); ++i) exact[i] = brute.Select(queries[i]);
   }
-  std::printf("%-18s %9s %10s %9s %10s %13s %10s\n", "method", "build_ms", "us/query", "speedup", "miss_rate",
-              "mean_extra_m", "identical");
+  std::printf("%-18s %9s %10s %9s %10s %13s %10s\n", "method", "build_ms", "us/query", "speedup",
+              "miss_rate", "mean_extra_m", "identical");
   double brute_s = 0, grid_cell = 0;
   int status = 0;
   for (const auto& row : rows) {
@@ -152,12 +161,13 @@ int main(int argc, char** argv) {
     if ((row.select_views || IsExact(row.opt.method)) && !same) status = 1;
     double us = s / static_cast<double>(queries.size()) * 1e6;
     std::printf("%-18s %9.2f %10.3f %9s %10.5f %13.6f %10s\n", row.name.c_str(), build_s * 1e3, us,
-                brute_s > 0 ? (std::to_string(brute_s / s).substr(0, 6) + "x").c_str() : "-", d.MissRate(),
-                d.MeanExtraCost(), same ? "yes" : "no");
+                brute_s > 0 ? (std::to_string(brute_s / s).substr(0, 6) + "x").c_str() : "-",
+                d.MissRate(), d.MeanExtraCost(), same ? "yes" : "no");
   }
-  std::printf("\n(speedup: brute-force time / method time, measured in this run; the thesis's Python grid "
-              "search took 189 us per query;\n grid9 cell side (automatic): %.3f m)\n\n",
-              grid_cell);
+  std::printf(
+      "\n(speedup: brute-force time / method time, measured in this run; the thesis's Python grid "
+      "search took 189 us per query;\n grid9 cell side (automatic): %.3f m)\n\n",
+      grid_cell);
 
   // Exactness on the ground truth itself: each pose against all the others.
   {
@@ -169,9 +179,11 @@ int main(int argc, char** argv) {
         differ += !Identical(e, kd.Select(gt[i], i)) + !Identical(e, brute.Select(gt[i], i));
       }
     }
-    std::printf("exact on %s (%zu poses, each against the others, 2 metrics): kdtree and brute %s SelectViews "
-                "(%zu differences)\n",
-                source.c_str(), gt.size(), differ ? "DIFFER FROM" : "equal", differ);
+    std::printf(
+        "exact on %s (%zu poses, each against the others, 2 metrics): kdtree and brute %s "
+        "SelectViews "
+        "(%zu differences)\n",
+        source.c_str(), gt.size(), differ ? "DIFFER FROM" : "equal", differ);
     if (differ) status = 1;
   }
   // Exactness on random poses (free orientations in a 1 km cube, and level cars on a plane).
@@ -182,7 +194,8 @@ int main(int argc, char** argv) {
       std::uniform_real_distribution<double> u(-500, 500), a(-M_PI, M_PI);
       std::vector<Rigid3d> rnd;
       auto random_pose = [&] {
-        if (level) return FromCentreYaw(Eigen::Vector3d(u(r), 0.1 * nd(r), u(r)), a(r), 0.05 * nd(r));
+        if (level)
+          return FromCentreYaw(Eigen::Vector3d(u(r), 0.1 * nd(r), u(r)), a(r), 0.05 * nd(r));
         Eigen::Quaterniond q = Eigen::Quaterniond(nd(r), nd(r), nd(r), nd(r)).normalized();
         Eigen::Vector3d C(u(r), u(r), u(r));
         return Rigid3d(q, -(q * C));
@@ -202,10 +215,12 @@ int main(int argc, char** argv) {
         differ += !Identical(e[i], kq[i]) + !Identical(e[i], SelectViews(qs[i], rnd, sel));
         ++checked;
       }
-      std::printf("exact on %zu random %s poses, %zu random queries: kdtree %s brute force (%.3f vs %.1f us/query)\n",
-                  n_random, level ? "level (car-like)" : "free-orientation", qs.size(),
-                  differ ? "DIFFERS FROM" : "equals", tk / static_cast<double>(qs.size()) * 1e6,
-                  tb / static_cast<double>(qs.size()) * 1e6);
+      std::printf(
+          "exact on %zu random %s poses, %zu random queries: kdtree %s brute force (%.3f vs %.1f "
+          "us/query)\n",
+          n_random, level ? "level (car-like)" : "free-orientation", qs.size(),
+          differ ? "DIFFERS FROM" : "equals", tk / static_cast<double>(qs.size()) * 1e6,
+          tb / static_cast<double>(qs.size()) * 1e6);
     }
     if (differ) status = 1;
   }

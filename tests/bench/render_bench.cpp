@@ -6,14 +6,14 @@
 // render of the same frames (one rasterisation of the mesh, no texturing), so the table holds on
 // a noisy shared machine. Projector images are synthetic (speed does not depend on content).
 // usage: bench_render [--frames N] [--short]
+#include <unistd.h>
+
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <functional>
 #include <string>
-
-#include <unistd.h>
 
 #include "image/image.h"
 #include "mkroad/mkroad.h"
@@ -25,7 +25,9 @@ using namespace mvtm;
 using Clock = std::chrono::steady_clock;
 namespace fs = std::filesystem;
 
-static double Ms(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
+static double Ms(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
 
 int main(int argc, char** argv) {
   int frames = 20;
@@ -38,7 +40,8 @@ int main(int argc, char** argv) {
   const int W = quick ? 320 : fixture::kKittiWidth, H = quick ? 96 : fixture::kKittiHeight;
   Camera cam = ParseCameraSpec("PINHOLE 1241 376 718.856 718.856 607.1928 185.2157").Scaled(W, H);
   auto ctx = GlContext::Create();
-  std::printf("render benchmark, %dx%d, %d frames per row, %s\n", W, H, frames, ctx->Describe().c_str());
+  std::printf("render benchmark, %dx%d, %d frames per row, %s\n", W, H, frames,
+              ctx->Describe().c_str());
   std::vector<double> cells = quick ? std::vector<double>{0.75} : std::vector<double>{0.28, 0.14};
   for (double cell : cells) {
     fixture::RoadScene scene = fixture::BuildRoadScene(1, cell);
@@ -59,10 +62,11 @@ int main(int argc, char** argv) {
     for (size_t k = 0; k < pb.size(); ++k) depth[k] = r.RenderDepth(pviews[k]);
     double bake_ms = Ms(t_bake, Clock::now()) / double(pb.size());
 
-    std::printf("\nmesh: %zu triangles in %zu chunks (cell %.2f m); baking one depth map: %.1f ms\n",
-                r.triangles(), r.chunks(), cell, bake_ms);
-    std::printf("%-30s %8s %8s %8s %8s %8s %8s %9s\n", "configuration", "cull", "draw", "readback", "depth", "total", "fps",
-                "x depth");
+    std::printf(
+        "\nmesh: %zu triangles in %zu chunks (cell %.2f m); baking one depth map: %.1f ms\n",
+        r.triangles(), r.chunks(), cell, bake_ms);
+    std::printf("%-30s %8s %8s %8s %8s %8s %8s %9s\n", "configuration", "cull", "draw", "readback",
+                "depth", "total", "fps", "x depth");
     double base_ms = 0;
     struct Cfg {
       const char* name;
@@ -111,7 +115,8 @@ int main(int argc, char** argv) {
         plan.skybox = cfg.ptm && cfg.occlusion;  // the skybox needs the projectors' depth maps
         Renderer::Frame fr = r.Render(v, ps, plan, &st);
         if (c == cfgs.size() - 1 && f < 3) {  // PNG encoding, measured on a few frames
-          fs::path p = fs::temp_directory_path() / ("mvtm-bench-" + std::to_string(getpid()) + ".png");
+          fs::path p =
+              fs::temp_directory_path() / ("mvtm-bench-" + std::to_string(getpid()) + ".png");
           auto te = Clock::now();
           WriteImage(p.string(), fr.colour);
           encode_ms += Ms(te, Clock::now()) / 3;
@@ -120,11 +125,14 @@ int main(int argc, char** argv) {
       }
       double total = Ms(t0, Clock::now()) / frames;
       if (c == 0) base_ms = total;
-      std::printf("%-30s %8.2f %8.2f %8.2f %8.2f %8.2f %8.1f %8.2fx\n", cfg.name, st.cull_ms / frames,
-                  st.draw_ms / frames, st.readback_ms / frames, depth_ms / frames, total, 1000 / total, total / base_ms);
+      std::printf("%-30s %8.2f %8.2f %8.2f %8.2f %8.2f %8.1f %8.2fx\n", cfg.name,
+                  st.cull_ms / frames, st.draw_ms / frames, st.readback_ms / frames,
+                  depth_ms / frames, total, 1000 / total, total / base_ms);
     }
-    std::printf("PNG encoding of one %dx%d frame: %.1f ms (overlapped with rendering by ptmrender's writer thread)\n",
-                W, H, encode_ms);
+    std::printf(
+        "PNG encoding of one %dx%d frame: %.1f ms (overlapped with rendering by ptmrender's writer "
+        "thread)\n",
+        W, H, encode_ms);
   }
   return 0;
 }

@@ -11,18 +11,16 @@
 // usage: bench_segtrack [--repeat R] [--short]
 #include <algorithm>
 #include <chrono>
-
-#include "bench_util.h"
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 #include <string>
 #include <vector>
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgproc.hpp>
-
+#include "bench_util.h"
 #include "image/image.h"
 #include "track/labels.h"
 #include "track/tracker.h"
@@ -36,14 +34,17 @@ int main(int argc, char** argv) {
   int repeat = 5;
   for (int i = 1; i < argc; ++i) {
     std::string a = argv[i];
-    if (a == "--repeat" && i + 1 < argc) repeat = std::max(1, std::atoi(argv[++i]));
-    else if (a == "--short") repeat = 1;
+    if (a == "--repeat" && i + 1 < argc)
+      repeat = std::max(1, std::atoi(argv[++i]));
+    else if (a == "--short")
+      repeat = 1;
   }
   cv::setNumThreads(1);
   const int W = 1241, H = 376;
   std::vector<Image> frames;
   const char* env = std::getenv("MVTM_DATA");
-  const fs::path dir = fs::path(env && *env ? env : MVTM_DATA_DEFAULT) / "camvid_0016E5_seg" / "labels";
+  const fs::path dir =
+      fs::path(env && *env ? env : MVTM_DATA_DEFAULT) / "camvid_0016E5_seg" / "labels";
   std::string source;
   if (fs::is_directory(dir)) {
     std::vector<fs::path> files;
@@ -62,7 +63,8 @@ int main(int argc, char** argv) {
     for (int f = 0; f < 60; ++f) {
       Image im(W, H, 1, 8, 3.f);
       for (int v = 0; v < 4; ++v) {
-        const int x0 = 100 + 250 * v + 6 * f * (v % 2 ? 1 : -1), y0 = 180 + 20 * v, w = 120 + 10 * v, h = 70;
+        const int x0 = 100 + 250 * v + 6 * f * (v % 2 ? 1 : -1), y0 = 180 + 20 * v,
+                  w = 120 + 10 * v, h = 70;
         for (int y = std::max(0, y0); y < std::min(H, y0 + h); ++y)
           for (int x = std::max(0, x0); x < std::min(W, x0 + w); ++x) im.at(x, y) = 8.f;
       }
@@ -100,16 +102,20 @@ int main(int argc, char** argv) {
     components = 0;
     for (size_t i = 0; i < n; ++i) {
       const cv::Mat in(H, W, CV_8U, binary[i].data());
-      components += static_cast<size_t>(cv::connectedComponentsWithStats(in, labels, stats, centroids, 8, CV_32S) - 1);
+      components += static_cast<size_t>(
+          cv::connectedComponentsWithStats(in, labels, stats, centroids, 8, CV_32S) - 1);
     }
   });
   const double fps = n / t_ours, base_fps = n / t_base;
-  std::printf("segtrack benchmark: %zu frames, %s, 1 thread, best of %d\n", n, source.c_str(), repeat);
-  std::printf("  %zu tracks (%d kept), %zu blobs, %zu mask pixels\n", static_cast<size_t>(summary.tracks),
-              summary.kept, components, kept_pixels);
+  std::printf("segtrack benchmark: %zu frames, %s, 1 thread, best of %d\n", n, source.c_str(),
+              repeat);
+  std::printf("  %zu tracks (%d kept), %zu blobs, %zu mask pixels\n",
+              static_cast<size_t>(summary.tracks), summary.kept, components, kept_pixels);
   std::printf("%-44s %10s %10s\n", "stage", "ms/frame", "frames/s");
-  std::printf("%-44s %10.3f %10.0f\n", "segtrack (decode+blobs+track+fill+masks)", 1e3 * t_ours / n, fps);
-  std::printf("%-44s %10.3f %10.0f\n", "baseline cv::connectedComponentsWithStats", 1e3 * t_base / n, base_fps);
+  std::printf("%-44s %10.3f %10.0f\n", "segtrack (decode+blobs+track+fill+masks)", 1e3 * t_ours / n,
+              fps);
+  std::printf("%-44s %10.3f %10.0f\n", "baseline cv::connectedComponentsWithStats",
+              1e3 * t_base / n, base_fps);
   std::printf("ratio segtrack/baseline frames/s: %.2f; target >= 500 fps: %s\n", fps / base_fps,
               fps >= 500 ? "met" : "NOT met");
   return 0;

@@ -4,8 +4,8 @@
 #include <cmath>
 
 #include "base/atomic_file.h"
-#include "cli/progress.h"
 #include "base/error.h"
+#include "cli/progress.h"
 #include "image/image.h"
 #include "io/colmap_model.h"
 #include "io/mesh_io.h"
@@ -53,8 +53,10 @@ BakeDepthReport RunBakeDepth(const BakeDepthOptions& o) {
     for (const ImageRecord* im : todo) {
       const Camera& cam = rec.cameras.at(im->camera_id);
       cam.RequireUndistorted();
-      uint64_t w = std::max<uint64_t>(1, static_cast<uint64_t>(std::lround(double(cam.width) * o.scale)));
-      uint64_t h = std::max<uint64_t>(1, static_cast<uint64_t>(std::lround(double(cam.height) * o.scale)));
+      uint64_t w =
+          std::max<uint64_t>(1, static_cast<uint64_t>(std::lround(double(cam.width) * o.scale)));
+      uint64_t h =
+          std::max<uint64_t>(1, static_cast<uint64_t>(std::lround(double(cam.height) * o.scale)));
       View v{o.scale == 1.0 ? cam : cam.Scaled(w, h), im->world_to_camera};
       auto t0 = std::chrono::steady_clock::now();
       Image depth = renderer.RenderDepth(v);
@@ -66,7 +68,8 @@ BakeDepthReport RunBakeDepth(const BakeDepthOptions& o) {
       ++rep.written;
       bar.Step();
     }
-    nlohmann::json opts = {{"scale", o.scale}, {"frames", o.frames}, {"shard", o.shard}, {"gl", rep.gl}};
+    nlohmann::json opts = {
+        {"scale", o.scale}, {"frames", o.frames}, {"shard", o.shard}, {"gl", rep.gl}};
     // Provenance is per run; with shards, each shard writes its own record.
     ws.WriteProvenance(o.ProvenanceName("bakedepth"), opts, inputs);
   }

@@ -11,8 +11,8 @@ namespace mvtm {
 // Work items: the workspace's images sorted by name (--frames/--shard select among them).
 struct BakeDepthOptions : WorkOptions {
   std::string workspace;
-  double scale = 1.0;          // depth map size = image size × scale (0 < scale ≤ 4)
-  std::string gl = "auto";     // one of GlBackendNames()
+  double scale = 1.0;       // depth map size = image size × scale (0 < scale ≤ 4)
+  std::string gl = "auto";  // one of GlBackendNames()
 
   void Check() const;
 };

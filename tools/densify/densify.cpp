@@ -1,9 +1,8 @@
 #include "densify.h"
 
-#include <opencv2/imgproc.hpp>
-
 #include <chrono>
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 
 #include "base/atomic_file.h"
 #include "base/error.h"
@@ -18,7 +17,8 @@ void DensifyOptions::Check() const {
   CheckWork();
   if (!(scale > 0 && scale <= 1)) throw UsageError("--scale: must be in (0, 1]");
   if (planes < 2 || planes > 512) throw UsageError("--planes: must be 2..512");
-  if (no_ground && no_facade && no_fronto) throw UsageError("--no-ground, --no-facade, --no-fronto: keep one direction");
+  if (no_ground && no_facade && no_fronto)
+    throw UsageError("--no-ground, --no-facade, --no-fronto: keep one direction");
   neighbours.Check();
   sweep.Check();
 }
@@ -31,7 +31,8 @@ using Clock = std::chrono::steady_clock;
 cv::Mat LoadGrey(const fs::path& path, const Camera& cam) {
   const Image im = ToGrey(ReadImage(path.string()));
   cv::Mat g;  // a copy: the Image's buffer dies with it
-  cv::Mat(im.height, im.width, CV_32F, const_cast<float*>(im.data.data())).convertTo(g, CV_32F, 255.0 / im.MaxValue());
+  cv::Mat(im.height, im.width, CV_32F, const_cast<float*>(im.data.data()))
+      .convertTo(g, CV_32F, 255.0 / im.MaxValue());
   if (g.cols != int(cam.width) || g.rows != int(cam.height))
     cv::resize(g, g, cv::Size(int(cam.width), int(cam.height)), 0, 0, cv::INTER_AREA);
   return g;
@@ -83,13 +84,16 @@ std::vector<SweepFamily> Families(const DensifyOptions& o, const DenseScene& s, 
 }
 
 // Sweeps image i and writes its depth and confidence maps (atomically). Returns the valid share.
-double DensifyOne(const DensifyOptions& o, const Workspace& ws, const DenseScene& s, size_t i, DensifyReport& rep) {
+double DensifyOne(const DensifyOptions& o, const Workspace& ws, const DenseScene& s, size_t i,
+                  DensifyReport& rep) {
   std::vector<Eigen::Vector3d> pts = PointsSeenBy(s.rec, *s.images[i]);
   const std::vector<size_t> nbs = SelectStereoNeighbours(s.w2c, s.cameras, i, pts, o.neighbours);
   if (nbs.empty()) ++rep.no_neighbours;
   StereoView ref{s.cameras[i], s.w2c[i], LoadGrey(ws.ImagePath(s.images[i]->name), s.cameras[i])};
   std::vector<StereoView> views;
-  for (size_t j : nbs) views.push_back({s.cameras[j], s.w2c[j], LoadGrey(ws.ImagePath(s.images[j]->name), s.cameras[j])});
+  for (size_t j : nbs)
+    views.push_back(
+        {s.cameras[j], s.w2c[j], LoadGrey(ws.ImagePath(s.images[j]->name), s.cameras[j])});
   const DepthMap dm = SweepDepth(ref, views, Families(o, s, i, pts), o.sweep);
   WriteImage(ws.StereoDepthPath(s.images[i]->name).string(), dm.depth);
   WriteImage(ws.StereoConfidencePath(s.images[i]->name).string(), dm.confidence);
@@ -111,9 +115,12 @@ DensifyReport RunDensify(const DensifyOptions& o) {
   const std::vector<fs::path> inputs = ws.SparseModelFiles();
   std::vector<size_t> todo;
   for (size_t i : chosen) {
-    const fs::path d = ws.StereoDepthPath(s.images[i]->name), c = ws.StereoConfidencePath(s.images[i]->name);
-    if (!o.force && IsUpToDate(d, inputs) && IsUpToDate(c, inputs)) ++rep.skipped;
-    else todo.push_back(i);
+    const fs::path d = ws.StereoDepthPath(s.images[i]->name),
+                   c = ws.StereoConfidencePath(s.images[i]->name);
+    if (!o.force && IsUpToDate(d, inputs) && IsUpToDate(c, inputs))
+      ++rep.skipped;
+    else
+      todo.push_back(i);
   }
   if (todo.empty()) return rep;
   fs::create_directories(ws.StereoDir());
@@ -126,12 +133,22 @@ DensifyReport RunDensify(const DensifyOptions& o) {
     ++rep.written;
     bar.Step();
   }
-  rep.ms_per_image = std::chrono::duration<double, std::milli>(Clock::now() - t0).count() / double(rep.written);
+  rep.ms_per_image =
+      std::chrono::duration<double, std::milli>(Clock::now() - t0).count() / double(rep.written);
   rep.valid_share = share / double(rep.written);
-  nlohmann::json opts = {{"scale", o.scale}, {"planes", o.planes}, {"neighbours", o.neighbours.count},
-                         {"window", o.sweep.window}, {"best_k", o.sweep.best_k}, {"min_score", o.sweep.min_score},
-                         {"min_texture", o.sweep.min_texture}, {"min_margin", o.sweep.min_margin}, {"no_ground", o.no_ground}, {"no_facade", o.no_facade},
-                         {"no_fronto", o.no_fronto}, {"frames", o.frames}, {"shard", o.shard}};
+  nlohmann::json opts = {{"scale", o.scale},
+                         {"planes", o.planes},
+                         {"neighbours", o.neighbours.count},
+                         {"window", o.sweep.window},
+                         {"best_k", o.sweep.best_k},
+                         {"min_score", o.sweep.min_score},
+                         {"min_texture", o.sweep.min_texture},
+                         {"min_margin", o.sweep.min_margin},
+                         {"no_ground", o.no_ground},
+                         {"no_facade", o.no_facade},
+                         {"no_fronto", o.no_fronto},
+                         {"frames", o.frames},
+                         {"shard", o.shard}};
   ws.WriteProvenance(o.ProvenanceName("densify"), opts, inputs);
   return rep;
 }

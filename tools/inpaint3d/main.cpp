@@ -3,8 +3,8 @@
 
 #include "cli/app.h"
 #include "cli/options.h"
-#include "render/context.h"
 #include "inpaint3d.h"
+#include "render/context.h"
 
 int main(int argc, char** argv) {
   mvtm::Inpaint3dOptions o;
@@ -18,9 +18,10 @@ int main(int argc, char** argv) {
                  "Workspace folder (sparse/, images/, masks/, partners.tsv, mesh.ply; depth/ used "
                  "when present)")
       ->required();
-  mvtm::AddChoiceOption(app, "--method", o.method, mvtm::kInpaintMethods,
-                        "3d: partners through the mesh; telea, ns: OpenCV inpainting; patch2d: thesis 5.2 "
-                        "templates");
+  mvtm::AddChoiceOption(
+      app, "--method", o.method, mvtm::kInpaintMethods,
+      "3d: partners through the mesh; telea, ns: OpenCV inpainting; patch2d: thesis 5.2 "
+      "templates");
   app.add_option("--partners", o.partners,
                  "N: partners used per image (ranks 1..N of partners.tsv)")
       ->check(CLI::Range(1, 16))

@@ -20,8 +20,7 @@ namespace fs = std::filesystem;
 
 void Orb2ColmapOptions::Check() const {
   int sources = !camera.empty() + !orb_settings.empty() + !kitti_calib.empty();
-  if (sources != 1)
-    throw UsageError("give exactly one of --camera, --orb-settings, --kitti-calib");
+  if (sources != 1) throw UsageError("give exactly one of --camera, --orb-settings, --kitti-calib");
   CheckChoice(outside, kOrbOutside, "--outside");
   CheckChoice(input_format, kOrbInputFormats, "--input-format");
   if (kitti_cam < 0 || kitti_cam > 3) throw UsageError("--kitti-cam: must be 0..3");
@@ -61,7 +60,8 @@ std::string Basename(const std::string& p) { return fs::path(p).filename().strin
 bool ModelIsUpToDate(const Orb2ColmapOptions& o) {
   const char* ext = o.binary ? ".bin" : ".txt";
   std::vector<fs::path> inputs;
-  for (const std::string& in : {o.trajectory, o.trajectory_times, o.frames, o.orb_settings, o.kitti_calib, o.images})
+  for (const std::string& in :
+       {o.trajectory, o.trajectory_times, o.frames, o.orb_settings, o.kitti_calib, o.images})
     if (!in.empty()) inputs.emplace_back(in);
   bool fresh = true;
   for (const char* f : {"cameras", "images", "points3D"})
@@ -83,14 +83,16 @@ Trajectory ReadInputTrajectory(const Orb2ColmapOptions& o, TrajectoryFormat* fmt
 // frame index (KITTI) or the timestamp. Named frames keep their base name.
 void NameFrames(const Orb2ColmapOptions& o, const std::vector<std::string>& image_files,
                 TrajectoryFormat fmt, std::vector<TimedName>& frames) {
-  bool named = std::all_of(frames.begin(), frames.end(), [](const TimedName& f) { return !f.name.empty(); });
+  bool named =
+      std::all_of(frames.begin(), frames.end(), [](const TimedName& f) { return !f.name.empty(); });
   if (named) {
     for (auto& f : frames) f.name = Basename(f.name);
   } else if (!image_files.empty()) {
     if (image_files.size() != frames.size())
       throw Error(o.images, 0,
-                  std::to_string(image_files.size()) + " images for " + std::to_string(frames.size()) +
-                      " frame timestamps" + (o.frames.empty() ? "" : " in " + o.frames));
+                  std::to_string(image_files.size()) + " images for " +
+                      std::to_string(frames.size()) + " frame timestamps" +
+                      (o.frames.empty() ? "" : " in " + o.frames));
     for (size_t i = 0; i < frames.size(); ++i) frames[i].name = image_files[i];
   } else {
     char buf[64];
@@ -113,7 +115,8 @@ void NameFrames(const Orb2ColmapOptions& o, const std::vector<std::string>& imag
 
 // The frames to write: --frames' timestamps, else every keyframe, named by NameFrames.
 std::vector<TimedName> ReadFrames(const Orb2ColmapOptions& o, const std::vector<StampedPose>& keys,
-                                  const std::vector<std::string>& image_files, TrajectoryFormat fmt) {
+                                  const std::vector<std::string>& image_files,
+                                  TrajectoryFormat fmt) {
   std::vector<TimedName> frames;
   if (!o.frames.empty()) {
     frames = ReadTimestamps(o.frames);
@@ -172,8 +175,10 @@ Reconstruction BuildModel(const Orb2ColmapOptions& o, Camera cam, const std::vec
       }
     }
     db->Begin();
-    if (cam_id) db->UpdateCamera(cam_id, cam);
-    else cam_id = db->AddCamera(cam);
+    if (cam_id)
+      db->UpdateCamera(cam_id, cam);
+    else
+      cam_id = db->AddCamera(cam);
     cam.id = cam_id;
   }
   Reconstruction model;
@@ -211,15 +216,18 @@ Orb2ColmapReport RunOrb2Colmap(const Orb2ColmapOptions& o) {
   rep.reordered = SortKeyframes(keys, o.trajectory);
   rep.keyframes = keys.size();
 
-  const std::vector<std::string> image_files = o.images.empty() ? std::vector<std::string>() : ListImageFiles(o.images);
+  const std::vector<std::string> image_files =
+      o.images.empty() ? std::vector<std::string>() : ListImageFiles(o.images);
   const std::vector<TimedName> frames = ReadFrames(o, keys, image_files, fmt);
   rep.frames = frames.size();
   const Camera cam = ResolveCamera(o, image_files);
   // Poses first, so that nothing is written (model or database) when the input is unusable.
   const std::vector<Posed> posed = PoseFrames(o, keys, frames, rep);
   const Reconstruction model = BuildModel(o, cam, posed);
-  if (o.binary) WriteColmapBinary(model, o.outdir);
-  else WriteColmapText(model, o.outdir);
+  if (o.binary)
+    WriteColmapBinary(model, o.outdir);
+  else
+    WriteColmapText(model, o.outdir);
   rep.written = model.images.size();
   return rep;
 }

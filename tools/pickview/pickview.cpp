@@ -1,5 +1,7 @@
 #include "pickview.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -9,11 +11,8 @@
 #include <iterator>
 #include <map>
 #include <memory>
-#include <optional>
-
-#include <unistd.h>
-
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "base/error.h"
 #include "base/text.h"
@@ -30,21 +29,26 @@ void PickViewOptions::Check() const {
   if (workspace.empty()) throw UsageError("WS: no workspace given");
   if (k < 1) throw UsageError("--k: " + std::to_string(k) + " is out of range (1 or more)");
   if (!(max_heading_deg > 0 && max_heading_deg <= 180))
-    throw UsageError("--max-heading: " + FormatDouble(max_heading_deg) + " is out of range (0, 180]");
+    throw UsageError("--max-heading: " + FormatDouble(max_heading_deg) +
+                     " is out of range (0, 180]");
   if (!(heading_weight >= 0 && std::isfinite(heading_weight)))
-    throw UsageError("--heading-weight: " + FormatDouble(heading_weight) + " must be finite and 0 or more");
+    throw UsageError("--heading-weight: " + FormatDouble(heading_weight) +
+                     " must be finite and 0 or more");
   if (!(ahead_weight >= 0 && std::isfinite(ahead_weight)))
-    throw UsageError("--ahead-weight: " + FormatDouble(ahead_weight) + " must be finite and 0 or more");
+    throw UsageError("--ahead-weight: " + FormatDouble(ahead_weight) +
+                     " must be finite and 0 or more");
   if (!(tie_margin >= 0 && std::isfinite(tie_margin)))
     throw UsageError("--tie-margin: " + FormatDouble(tie_margin) + " must be finite and 0 or more");
   ParseSearchMethod(method);
-  if (checks < 1) throw UsageError("--checks: " + std::to_string(checks) + " is out of range (1 or more)");
+  if (checks < 1)
+    throw UsageError("--checks: " + std::to_string(checks) + " is out of range (1 or more)");
   if (!partners && !other.empty()) throw UsageError("--other needs --partners");
   if (!partners && prefer_unmasked) throw UsageError("--prefer-unmasked needs --partners");
   if (partners && !queries.empty())
     throw UsageError("--partners takes no QUERIES: the queries are the images of WS");
   if (partners && exclude_self)
-    throw UsageError("--exclude-self does not apply to --partners: partners are always other passes");
+    throw UsageError(
+        "--exclude-self does not apply to --partners: partners are always other passes");
   if (exclude_self && !queries.empty())
     throw UsageError("--exclude-self needs the workspace's own images as queries (no QUERIES)");
 }
@@ -128,13 +132,16 @@ class Masks {
     return slot ? &*slot : nullptr;
   }
   // Pixels set in both; throws Error when the sizes differ.
-  static size_t Overlap(const Bits& a, const fs::path& a_path, const Bits& b, const fs::path& b_path) {
+  static size_t Overlap(const Bits& a, const fs::path& a_path, const Bits& b,
+                        const fs::path& b_path) {
     if (a.width != b.width || a.height != b.height)
       throw Error(b_path.string(), 0,
-                  "mask is " + std::to_string(b.width) + "x" + std::to_string(b.height) + " but " + a_path.string() +
-                      " is " + std::to_string(a.width) + "x" + std::to_string(a.height));
+                  "mask is " + std::to_string(b.width) + "x" + std::to_string(b.height) + " but " +
+                      a_path.string() + " is " + std::to_string(a.width) + "x" +
+                      std::to_string(a.height));
     size_t n = 0;
-    for (size_t i = 0; i < a.words.size(); ++i) n += static_cast<size_t>(__builtin_popcountll(a.words[i] & b.words[i]));
+    for (size_t i = 0; i < a.words.size(); ++i)
+      n += static_cast<size_t>(__builtin_popcountll(a.words[i] & b.words[i]));
     return n;
   }
 
@@ -143,7 +150,8 @@ class Masks {
 };
 
 // The selection as partners.tsv rows (io/partners.h), the table printed in every mode.
-std::vector<PartnerRow> Rows(const std::vector<Query>& queries, const std::vector<std::vector<Candidate>>& picks,
+std::vector<PartnerRow> Rows(const std::vector<Query>& queries,
+                             const std::vector<std::vector<Candidate>>& picks,
                              const std::vector<std::string>& names) {
   std::vector<PartnerRow> rows;
   for (size_t i = 0; i < queries.size(); ++i)
@@ -174,14 +182,16 @@ class Selector {
     PoseIndex idx(cands_.w2c, sel, po);
     grid_cell = idx.grid_cell();
     std::vector<std::vector<Candidate>> out(qs.size());
-    for (size_t i = 0; i < qs.size(); ++i) out[i] = idx.Select(qs[i].w2c, o_.exclude_self ? qs[i].self : kNone);
+    for (size_t i = 0; i < qs.size(); ++i)
+      out[i] = idx.Select(qs[i].w2c, o_.exclude_self ? qs[i].self : kNone);
     return out;
   }
 
   // Partners mode. `query_pass` is each query's pass ("" with --other: every group is eligible).
-  std::vector<std::vector<Candidate>> Partners(const std::vector<Query>& qs, const std::vector<std::string>& query_pass,
-                                               bool by_pass, const Workspace& query_ws, const Workspace& cand_ws,
-                                               double& grid_cell) {
+  std::vector<std::vector<Candidate>> Partners(const std::vector<Query>& qs,
+                                               const std::vector<std::string>& query_pass,
+                                               bool by_pass, const Workspace& query_ws,
+                                               const Workspace& cand_ws, double& grid_cell) {
     const size_t k = static_cast<size_t>(o_.k);
     const size_t pool = o_.prefer_unmasked ? 4 * k : k;
     std::map<std::string, Group> groups;
@@ -243,8 +253,8 @@ class Selector {
 
   // The best `limit` candidates of the eligible groups, by (cost, global index). `exhaustive`
   // is cleared when a group may hold more admissible candidates than it returned.
-  std::vector<Candidate> Merge(const std::vector<Group*>& groups, const Rigid3d& q, bool every, size_t limit,
-                               bool& exhaustive) {
+  std::vector<Candidate> Merge(const std::vector<Group*>& groups, const Rigid3d& q, bool every,
+                               size_t limit, bool& exhaustive) {
     std::vector<Candidate> merged;
     exhaustive = true;
     for (Group* g : groups) {
@@ -274,7 +284,8 @@ class Selector {
   // best remaining cost, take the one with the fewest mask pixels where the query's mask is set
   // (then cost, then name). nullopt when a window reaches the end of a non-exhaustive pool.
   template <class Overlap>
-  std::optional<std::vector<Candidate>> Greedy(std::vector<Candidate> pool, bool exhaustive, Overlap&& overlap) {
+  std::optional<std::vector<Candidate>> Greedy(std::vector<Candidate> pool, bool exhaustive,
+                                               Overlap&& overlap) {
     const size_t k = static_cast<size_t>(o_.k);
     std::vector<Candidate> picked;
     std::map<size_t, size_t> ov;
@@ -302,13 +313,14 @@ std::vector<fs::path> ModelFiles(const Workspace& ws) {
   std::vector<fs::path> files;
   for (const char* f : {"cameras", "images", "points3D"})
     for (const char* ext : {".txt", ".bin"})
-      if (fs::exists(ws.SparseDir() / (std::string(f) + ext))) files.push_back(ws.SparseDir() / (std::string(f) + ext));
+      if (fs::exists(ws.SparseDir() / (std::string(f) + ext)))
+        files.push_back(ws.SparseDir() / (std::string(f) + ext));
   return files;
 }
 
 // Partners mode: WS/partners.tsv and the provenance record of the run.
-void WritePartnersAndProvenance(const PickViewOptions& o, const Workspace& ws, const Workspace* other_ws,
-                                const std::vector<PartnerRow>& rows) {
+void WritePartnersAndProvenance(const PickViewOptions& o, const Workspace& ws,
+                                const Workspace* other_ws, const std::vector<PartnerRow>& rows) {
   WritePartners(ws.PartnersPath().string(), rows);
   nlohmann::json opts = {{"k", o.k},
                          {"max_heading_deg", o.max_heading_deg},
@@ -354,13 +366,15 @@ PickViewReport RunPickView(const PickViewOptions& o, std::ostream& out, std::ist
       if (std::unique(passes.begin(), passes.end()) - passes.begin() < 2)
         throw Error(o.workspace, 0,
                     "all " + std::to_string(model.names.size()) +
-                        " images belong to one pass (passes are told apart by the name's prefix before '_', "
+                        " images belong to one pass (passes are told apart by the name's prefix "
+                        "before '_', "
                         "as in A_0000.png, B_0000.png); give the other pass with --other WS2");
     }
   } else {
     cands = model;
     if (o.queries.empty()) {
-      for (size_t i = 0; i < model.names.size(); ++i) queries.push_back({model.names[i], model.w2c[i], i});
+      for (size_t i = 0; i < model.names.size(); ++i)
+        queries.push_back({model.names[i], model.w2c[i], i});
     } else {
       queries = ReadQueries(o.queries, in);
     }
@@ -371,7 +385,8 @@ PickViewReport RunPickView(const PickViewOptions& o, std::ostream& out, std::ist
   auto compute = [&](SearchMethod m, double& grid_cell) {
     Selector s(o, cands, m);
     if (o.partners)
-      return s.Partners(queries, query_pass, o.other.empty(), ws, other_ws ? *other_ws : ws, grid_cell);
+      return s.Partners(queries, query_pass, o.other.empty(), ws, other_ws ? *other_ws : ws,
+                        grid_cell);
     return s.Queries(queries, grid_cell);
   };
   auto t0 = std::chrono::steady_clock::now();

@@ -16,20 +16,24 @@
 namespace mvtm {
 
 struct PickViewOptions {
-  std::string workspace;           // WS: the projectors are its images (sparse/)
-  std::string queries;             // trajectory file (TUM, KITTI, COLMAP images.txt), "-" = stdin; empty = WS's images
-  int64_t k = 4;                   // images per query, 1 or more
-  double max_heading_deg = 45;     // heading gate, degrees, (0, 180]
-  double heading_weight = 0;       // metres per radian of heading difference, >= 0
-  double ahead_weight = 0;         // metres per metre a projector is ahead of the query, >= 0 (0: thesis nearest pose)
-  std::string method = "kdtree";   // kdtree | brute | flann | grid9
-  int checks = 32;                 // flann: leaves visited per query, 1 or more
-  bool exclude_self = false;       // with WS's own images as queries: never select the image itself
-  bool partners = false;           // partners mode: images of the other passes (prefix before '_')
-  std::string other;               // partners: the other pass is this second workspace
-  bool prefer_unmasked = false;    // partners: near-ties go to partners masked less where the image is masked
-  double tie_margin = 1.0;         // partners: a near-tie is within this many metres of the best remaining cost
-  bool quiet = false;              // no summary on stderr
+  std::string workspace;  // WS: the projectors are its images (sparse/)
+  std::string
+      queries;  // trajectory file (TUM, KITTI, COLMAP images.txt), "-" = stdin; empty = WS's images
+  int64_t k = 4;                // images per query, 1 or more
+  double max_heading_deg = 45;  // heading gate, degrees, (0, 180]
+  double heading_weight = 0;    // metres per radian of heading difference, >= 0
+  double ahead_weight =
+      0;  // metres per metre a projector is ahead of the query, >= 0 (0: thesis nearest pose)
+  std::string method = "kdtree";  // kdtree | brute | flann | grid9
+  int checks = 32;                // flann: leaves visited per query, 1 or more
+  bool exclude_self = false;      // with WS's own images as queries: never select the image itself
+  bool partners = false;          // partners mode: images of the other passes (prefix before '_')
+  std::string other;              // partners: the other pass is this second workspace
+  bool prefer_unmasked =
+      false;  // partners: near-ties go to partners masked less where the image is masked
+  double tie_margin =
+      1.0;             // partners: a near-tie is within this many metres of the best remaining cost
+  bool quiet = false;  // no summary on stderr
 
   void Check() const;  // throws UsageError naming the bad value
 };
@@ -37,13 +41,13 @@ struct PickViewOptions {
 struct PickViewReport {
   size_t queries = 0, rows = 0, unmatched = 0;  // unmatched: queries with no admissible image
   size_t candidates = 0;
-  double us_per_query = 0;          // search time only
+  double us_per_query = 0;  // search time only
   std::string method;
-  bool compared = false;            // approximate method: compared with the exact search
-  size_t slots = 0, misses = 0;     // exact results, and those the approximate search missed
-  double mean_extra = 0;            // mean extra cost per rank slot against exact (metres)
-  double grid_cell = 0;             // grid9's cell side
-  std::string partners_path;        // written in partners mode
+  bool compared = false;         // approximate method: compared with the exact search
+  size_t slots = 0, misses = 0;  // exact results, and those the approximate search missed
+  double mean_extra = 0;         // mean extra cost per rank slot against exact (metres)
+  double grid_cell = 0;          // grid9's cell side
+  std::string partners_path;     // written in partners mode
 };
 
 // Writes the TSV to `out`; reads queries from `in` when options.queries is "-".

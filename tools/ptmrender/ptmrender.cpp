@@ -29,7 +29,8 @@ void PtmRenderOptions::Check() const {
   CheckChoice(mode, kPtmModes, "--mode");
   if (projectors < 1 || projectors > 16) throw UsageError("--projectors: must be 1..16");
   if (!(bias >= 0 && bias < 1)) throw UsageError("--bias: must be in [0, 1)");
-  if (!std::isfinite(lateral) || !std::isfinite(yaw)) throw UsageError("--lateral/--yaw must be finite");
+  if (!std::isfinite(lateral) || !std::isfinite(yaw))
+    throw UsageError("--lateral/--yaw must be finite");
   CheckWork();
   if (!(selection.ahead_weight >= 0 && std::isfinite(selection.ahead_weight)))
     throw UsageError("--ahead-weight: must be a finite number >= 0");
@@ -41,7 +42,9 @@ void PtmRenderOptions::Check() const {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double Ms(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
+double Ms(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
 
 constexpr size_t kNoImage = static_cast<size_t>(-1);
 
@@ -105,7 +108,8 @@ std::vector<RenderPose> LoadRenderPoses(const PtmRenderOptions& o, const Scene& 
     }
   } else {
     for (size_t i = 0; i < scene.images.size(); ++i)
-      poses.push_back({FrameName(scene.images[i]->name, o.exr), scene.images[i]->world_to_camera, i});
+      poses.push_back(
+          {FrameName(scene.images[i]->name, o.exr), scene.images[i]->world_to_camera, i});
   }
   if (o.lateral != 0 || o.yaw != 0)
     for (auto& p : poses) p.w2c = Offset(p.w2c, o.lateral, o.yaw);
@@ -124,18 +128,21 @@ Camera RenderCamera(const PtmRenderOptions& o, const Scene& scene) {
 }
 
 // Projectors for every pose (all poses: the plan must not depend on how the work is split).
-ProjectorPicks PickProjectors(const PtmRenderOptions& o, const Scene& scene, const std::vector<RenderPose>& poses) {
+ProjectorPicks PickProjectors(const PtmRenderOptions& o, const Scene& scene,
+                              const std::vector<RenderPose>& poses) {
   ProjectorPicks picks;
   picks.per_pose.resize(poses.size());
   if (o.mode != "ptm") return picks;
   ViewSelectionOptions so = o.selection;
   so.k = static_cast<size_t>(o.projectors);
   for (size_t i = 0; i < poses.size(); ++i) {
-    picks.per_pose[i] = SelectViews(poses[i].w2c, scene.candidates, so, o.exclude_self ? poses[i].self : kNoImage);
+    picks.per_pose[i] =
+        SelectViews(poses[i].w2c, scene.candidates, so, o.exclude_self ? poses[i].self : kNoImage);
     for (const auto& c : picks.per_pose[i]) {
       picks.used.insert(c.index);
       const Rigid3d& p = scene.candidates[c.index];
-      if ((p.t - poses[i].w2c.t).norm() > 0 || p.q.coeffs() != poses[i].w2c.q.coeffs()) picks.differs = true;
+      if ((p.t - poses[i].w2c.t).norm() > 0 || p.q.coeffs() != poses[i].w2c.q.coeffs())
+        picks.differs = true;
     }
     picks.several |= picks.per_pose[i].size() > 1;
   }
@@ -143,7 +150,8 @@ ProjectorPicks PickProjectors(const PtmRenderOptions& o, const Scene& scene, con
 }
 
 // The file name of the first used projector whose mask has a set pixel ("" when none).
-std::string FindMaskedProjector(const Workspace& ws, const Scene& scene, const std::set<size_t>& used) {
+std::string FindMaskedProjector(const Workspace& ws, const Scene& scene,
+                                const std::set<size_t>& used) {
   for (size_t i : used) {
     fs::path mp = ws.MaskPath(scene.images[i]->name);
     if (fs::exists(mp) && CountSet(ReadMask(mp.string())) > 0) return mp.filename().string();
@@ -151,7 +159,8 @@ std::string FindMaskedProjector(const Workspace& ws, const Scene& scene, const s
   return "";
 }
 
-SceneSurvey StartSurvey(const PtmRenderOptions& o, const Workspace& ws, const Scene& scene, const ProjectorPicks& picks) {
+SceneSurvey StartSurvey(const PtmRenderOptions& o, const Workspace& ws, const Scene& scene,
+                        const ProjectorPicks& picks) {
   SceneSurvey s;
   s.ptm = o.mode == "ptm";
   s.projectors_requested = o.projectors;
@@ -167,14 +176,16 @@ SceneSurvey StartSurvey(const PtmRenderOptions& o, const Workspace& ws, const Sc
 
 // Holes and coverage of the frames about to be rendered (a depth pass each).
 void SurveyFrames(SceneSurvey& s, Renderer& renderer, const Camera& cam, const Scene& scene,
-                  const std::vector<RenderPose>& poses, const ProjectorPicks& picks, const std::vector<size_t>& frames) {
+                  const std::vector<RenderPose>& poses, const ProjectorPicks& picks,
+                  const std::vector<size_t>& frames) {
   for (size_t i : frames) {
     std::optional<View> first;
     if (!picks.per_pose[i].empty()) {
       const ImageRecord* pk = scene.images[picks.per_pose[i][0].index];
       first = View{scene.rec.cameras.at(pk->camera_id), pk->world_to_camera};
     }
-    AddToSurvey(s, SurveyView(renderer, View{cam, poses[i].w2c}, first ? &*first : nullptr), poses[i].name);
+    AddToSurvey(s, SurveyView(renderer, View{cam, poses[i].w2c}, first ? &*first : nullptr),
+                poses[i].name);
   }
 }
 
@@ -182,14 +193,16 @@ void SurveyFrames(SceneSurvey& s, Renderer& renderer, const Camera& cam, const S
 // the workspace's first image), so every split of the work decides alike.
 bool GreySources(const Workspace& ws, const Scene& scene, const std::set<size_t>& used) {
   bool grey = true;
-  for (size_t k : used) grey = grey && ReadImageSpec(ws.SourceImagePath(scene.images[k]->name).string()).channels == 1;
-  if (used.empty()) grey = ReadImageSpec(ws.SourceImagePath(scene.images[0]->name).string()).channels == 1;
+  for (size_t k : used)
+    grey = grey && ReadImageSpec(ws.SourceImagePath(scene.images[k]->name).string()).channels == 1;
+  if (used.empty())
+    grey = ReadImageSpec(ws.SourceImagePath(scene.images[0]->name).string()).channels == 1;
   return grey;
 }
 
 std::vector<size_t> FramesToRender(const PtmRenderOptions& o, const std::vector<RenderPose>& poses,
-                                   const std::vector<size_t>& chosen, const std::vector<fs::path>& inputs,
-                                   PtmRenderReport& rep) {
+                                   const std::vector<size_t>& chosen,
+                                   const std::vector<fs::path>& inputs, PtmRenderReport& rep) {
   std::vector<size_t> todo;
   for (size_t i : chosen) {
     if (!o.explain && !o.force && IsUpToDate(fs::path(o.outdir) / poses[i].name, inputs)) {
@@ -224,7 +237,8 @@ struct FrameJob {
   const EffectsPlan& plan;
 };
 
-std::vector<Projector> FrameProjectors(const FrameJob& job, size_t i, ProjectorSources& sources, PtmRenderReport& rep) {
+std::vector<Projector> FrameProjectors(const FrameJob& job, size_t i, ProjectorSources& sources,
+                                       PtmRenderReport& rep) {
   std::vector<Projector> ps;
   for (const auto& c : job.picks.per_pose[i]) {
     Projector p;
@@ -242,9 +256,11 @@ std::vector<Projector> FrameProjectors(const FrameJob& job, size_t i, ProjectorS
   return ps;
 }
 
-void RenderFrames(const FrameJob& job, Renderer& renderer, const std::vector<size_t>& todo, PtmRenderReport& rep) {
+void RenderFrames(const FrameJob& job, Renderer& renderer, const std::vector<size_t>& todo,
+                  PtmRenderReport& rep) {
   const fs::path outdir(job.o.outdir);
-  ProjectorSources sources(job.ws, job.scene.rec, job.scene.images, &renderer, /*prefer_textures=*/true);
+  ProjectorSources sources(job.ws, job.scene.rec, job.scene.images, &renderer,
+                           /*prefer_textures=*/true);
   const bool grey = GreySources(job.ws, job.scene, job.picks.used);
   RemoveStaleTemporaries(outdir);
   if (job.o.provenance) RemoveStaleTemporaries(outdir / "provenance");
@@ -258,7 +274,8 @@ void RenderFrames(const FrameJob& job, Renderer& renderer, const std::vector<siz
     Renderer::Frame f = renderer.Render(View{job.cam, job.poses[i].w2c}, ps, job.plan);
     rep.load_ms += Ms(t0, t1);
     rep.render_ms += Ms(t1, Clock::now());
-    writer.Push((outdir / job.poses[i].name).string(), OutputImage(std::move(f.colour), grey, job.o.exr));
+    writer.Push((outdir / job.poses[i].name).string(),
+                OutputImage(std::move(f.colour), grey, job.o.exr));
     if (job.o.provenance) {
       fs::path pp = outdir / "provenance" / job.poses[i].name;
       pp.replace_extension(".png");
@@ -270,8 +287,8 @@ void RenderFrames(const FrameJob& job, Renderer& renderer, const std::vector<siz
   writer.Finish();
 }
 
-nlohmann::json PlanJson(const Camera& cam, size_t frames, const std::string& gl, const SceneSurvey& survey,
-                        const EffectsPlan& plan) {
+nlohmann::json PlanJson(const Camera& cam, size_t frames, const std::string& gl,
+                        const SceneSurvey& survey, const EffectsPlan& plan) {
   nlohmann::json j;
   j["frames"] = frames;
   j["render_size"] = {cam.width, cam.height};
@@ -281,13 +298,21 @@ nlohmann::json PlanJson(const Camera& cam, size_t frames, const std::string& gl,
   return j;
 }
 
-void WriteRunProvenance(const PtmRenderOptions& o, const Workspace& ws, const nlohmann::json& plan_json,
-                        const std::string& gl, const std::vector<fs::path>& inputs) {
+void WriteRunProvenance(const PtmRenderOptions& o, const Workspace& ws,
+                        const nlohmann::json& plan_json, const std::string& gl,
+                        const std::vector<fs::path>& inputs) {
   nlohmann::json opts = {{"poses", o.poses.empty() ? "workspace images" : o.poses},
-                         {"exclude_self", o.exclude_self}, {"lateral", o.lateral}, {"yaw", o.yaw},
-                         {"mode", o.mode}, {"projectors", o.projectors}, {"bias", o.bias},
-                         {"frames", o.frames}, {"shard", o.shard}, {"outdir", o.outdir},
-                         {"plan", plan_json["effects"]}, {"gl", gl}};
+                         {"exclude_self", o.exclude_self},
+                         {"lateral", o.lateral},
+                         {"yaw", o.yaw},
+                         {"mode", o.mode},
+                         {"projectors", o.projectors},
+                         {"bias", o.bias},
+                         {"frames", o.frames},
+                         {"shard", o.shard},
+                         {"outdir", o.outdir},
+                         {"plan", plan_json["effects"]},
+                         {"gl", gl}};
   ws.WriteProvenance(o.ProvenanceName("ptmrender"), opts, inputs);
 }
 

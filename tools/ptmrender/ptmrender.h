@@ -17,21 +17,21 @@ inline const std::vector<std::string> kPtmModes = {"ptm", "vertex"};
 // Work items: the render poses in order (--frames/--shard select among them).
 struct PtmRenderOptions : WorkOptions {
   std::string workspace, outdir;
-  std::string poses;             // trajectory file (COLMAP images.txt, TUM, KITTI); else --at-images
-  bool at_images = false;        // render at the workspace's own poses
-  bool exclude_self = false;     // never project an image onto its own pose
-  double lateral = 0;            // metres to the camera's left (+) or right (−): a lane change
-  double yaw = 0;                // degrees, turn left (+) or right (−) about the camera's up axis
-  std::string mode = "ptm";      // one of kPtmModes
-  int projectors = 4;            // K: projectors tried per pixel, nearest first
-  double bias = 0.005;           // relative occlusion bias
+  std::string poses;          // trajectory file (COLMAP images.txt, TUM, KITTI); else --at-images
+  bool at_images = false;     // render at the workspace's own poses
+  bool exclude_self = false;  // never project an image onto its own pose
+  double lateral = 0;         // metres to the camera's left (+) or right (−): a lane change
+  double yaw = 0;             // degrees, turn left (+) or right (−) about the camera's up axis
+  std::string mode = "ptm";   // one of kPtmModes
+  int projectors = 4;         // K: projectors tried per pixel, nearest first
+  double bias = 0.005;        // relative occlusion bias
   bool no_occlusion = false, no_skybox = false, no_masks = false;
-  std::string size;              // WxH render size (default: the camera's)
-  bool explain = false;          // print the effects plan as JSON and render nothing
-  bool provenance = false;       // also write OUTDIR/provenance/NAME.png (source of each pixel)
-  bool exr = false;              // write float EXR instead of PNG
+  std::string size;         // WxH render size (default: the camera's)
+  bool explain = false;     // print the effects plan as JSON and render nothing
+  bool provenance = false;  // also write OUTDIR/provenance/NAME.png (source of each pixel)
+  bool exr = false;         // write float EXR instead of PNG
   ViewSelectionOptions selection;
-  std::string gl = "auto";       // one of GlBackendNames()
+  std::string gl = "auto";  // one of GlBackendNames()
 
   void Check() const;
 };

@@ -16,7 +16,8 @@ int main(int argc, char** argv) {
       "sparse points, open sky) with normals and Lambertian vertex colours.");
   app.add_option("WS", o.workspace, "Workspace folder (sparse/, images/)")->required();
   app.add_option("--width", o.width,
-                 "Road width in metres (0 < M <= 50): ground points within M/4 (else M/2) of the path; walls "
+                 "Road width in metres (0 < M <= 50): ground points within M/4 (else M/2) of the "
+                 "path; walls "
                  "at least M/2 + 1 away")
       ->capture_default_str();
   app.add_option("--wall-height", o.wall_height,
@@ -27,17 +28,20 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("--no-colours", o.no_colours,
                "Write no vertex colours (no images, no OpenGL needed)");
-  app.add_flag("--dense", o.dense,
-               "Fuse densify's depth maps (stereo/) into the mesh on a sparse signed-distance volume; the "
-               "corridor's ground only where they leave holes");
-  app.add_option("--voxel", o.voxel, "--dense: voxel size as a fraction of the median camera spacing")
+  app.add_flag(
+      "--dense", o.dense,
+      "Fuse densify's depth maps (stereo/) into the mesh on a sparse signed-distance volume; the "
+      "corridor's ground only where they leave holes");
+  app.add_option("--voxel", o.voxel,
+                 "--dense: voxel size as a fraction of the median camera spacing")
       ->capture_default_str();
   app.add_option("--max-depth", o.max_depth, "--dense: depth used, in median camera spacings")
       ->capture_default_str();
   app.add_option("--min-agree", o.min_agree, "--dense: other views that must confirm a depth pixel")
       ->capture_default_str();
   app.add_option("--ground-below", o.ground_below,
-                 "--dense: lower the corridor ground by this many voxels under the fused surface (0: at its fitted height)")
+                 "--dense: lower the corridor ground by this many voxels under the fused surface "
+                 "(0: at its fitted height)")
       ->capture_default_str();
   app.add_flag("--force", o.force, "Replace an existing mesh");
   mvtm::AddChoiceOption(app, "--gl", o.gl, mvtm::GlBackendNames(), "OpenGL backend");
@@ -55,7 +59,9 @@ int main(int argc, char** argv) {
           r.left_wall, r.right_wall, r.refined_vertices, r.coloured, r.vertices,
           r.gl.empty() ? "" : "; ", r.gl.c_str());
     if (!o.quiet && o.dense)
-      std::fprintf(stderr, "roadmesh: dense: %zu depth maps fused into %zu triangles; %zu corridor ground triangles close its holes\n",
+      std::fprintf(stderr,
+                   "roadmesh: dense: %zu depth maps fused into %zu triangles; %zu corridor ground "
+                   "triangles close its holes\n",
                    r.dense_views, r.dense_faces, r.corridor_faces);
     return 0;
   });

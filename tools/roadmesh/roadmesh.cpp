@@ -4,10 +4,10 @@
 
 #include "base/error.h"
 #include "cli/progress.h"
+#include "fusion/fusion.h"
 #include "image/image.h"
 #include "io/colmap_model.h"
 #include "io/mesh_io.h"
-#include "fusion/fusion.h"
 #include "mesh/corridor.h"
 #include "mesh/merge.h"
 #include "mesh/vertex_colours.h"
@@ -65,13 +65,14 @@ std::vector<DepthView> LoadStereoViews(const Workspace& ws, const Reconstruction
     CheckDepthView(v, views.size());
     views.push_back(std::move(v));
   }
-  if (views.empty()) throw Error(ws.StereoDir().string(), 0, "no depth maps of the model's images (run densify)");
+  if (views.empty())
+    throw Error(ws.StereoDir().string(), 0, "no depth maps of the model's images (run densify)");
   return views;
 }
 
 // The fused surface of the stereo depth maps, closed by the corridor's ground where it has holes.
-Mesh DenseMesh(const Workspace& ws, const Reconstruction& rec, const RoadMeshOptions& o, const Mesh& corridor,
-               RoadMeshReport& rep) {
+Mesh DenseMesh(const Workspace& ws, const Reconstruction& rec, const RoadMeshOptions& o,
+               const Mesh& corridor, RoadMeshReport& rep) {
   const std::vector<DepthView> views = LoadStereoViews(ws, rec);
   FusionOptions fo;
   fo.consistency.min_agree = o.min_agree;
@@ -124,9 +125,11 @@ void RoadMeshOptions::Check() const {
   if (!(resolution >= 0.05 && resolution <= 5))
     throw UsageError("--resolution: must be in [0.05, 5] metres");
   if (!(voxel > 0 && voxel <= 10)) throw UsageError("--voxel: must be in (0, 10] camera spacings");
-  if (!(max_depth > 0 && max_depth <= 1000)) throw UsageError("--max-depth: must be in (0, 1000] camera spacings");
+  if (!(max_depth > 0 && max_depth <= 1000))
+    throw UsageError("--max-depth: must be in (0, 1000] camera spacings");
   if (min_agree < 1 || min_agree > 16) throw UsageError("--min-agree: must be 1..16");
-  if (!(ground_below >= 0 && ground_below <= 100)) throw UsageError("--ground-below: must be in [0, 100] voxels");
+  if (!(ground_below >= 0 && ground_below <= 100))
+    throw UsageError("--ground-below: must be in [0, 100] voxels");
   ParseGlBackend(gl);
 }
 

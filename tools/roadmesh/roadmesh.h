@@ -19,13 +19,15 @@ struct RoadMeshOptions {
   double wall_height = 10.0;  // wall height above the ground (m), (0, 200]
   double resolution = 0.5;    // grid spacing along and across (m), [0.05, 5]
   bool no_colours = false;    // write no vertex colours (and open no GL context)
-  bool dense = false;         // fuse densify's stereo/ depth maps; the corridor ground only where they leave holes
-  double voxel = 0.1;         // --dense: voxel size as a fraction of the median camera spacing, (0, 10]
-  double max_depth = 40;      // --dense: depth used, in median camera spacings, (0, 1000]
-  int min_agree = 2;          // --dense: other views that must confirm a depth pixel, 1..16
-  double ground_below = 0;    // --dense: corridor ground lowered by this many voxels (0: at its fitted height), [0, 100]
-  bool force = false;         // replace an existing mesh
-  std::string gl = "auto";    // auto | egl | osmesa (depth maps for the colour visibility test)
+  bool dense =
+      false;  // fuse densify's stereo/ depth maps; the corridor ground only where they leave holes
+  double voxel = 0.1;     // --dense: voxel size as a fraction of the median camera spacing, (0, 10]
+  double max_depth = 40;  // --dense: depth used, in median camera spacings, (0, 1000]
+  int min_agree = 2;      // --dense: other views that must confirm a depth pixel, 1..16
+  double ground_below = 0;  // --dense: corridor ground lowered by this many voxels (0: at its
+                            // fitted height), [0, 100]
+  bool force = false;       // replace an existing mesh
+  std::string gl = "auto";  // auto | egl | osmesa (depth maps for the colour visibility test)
   bool quiet = false;
 
   // Throws UsageError naming the bad value and the allowed range.
@@ -42,8 +44,9 @@ struct RoadMeshReport {
   double left_wall = 0, right_wall = 0;  // median wall distances (m)
   size_t refined_vertices = 0;           // ground vertices moved by the height field
   size_t coloured = 0;                   // vertices seen by at least one image
-  size_t dense_views = 0, dense_faces = 0;  // --dense: depth maps fused, triangles of the fused surface
-  size_t corridor_faces = 0;             // --dense: corridor ground triangles kept in the holes
+  size_t dense_views = 0,
+         dense_faces = 0;     // --dense: depth maps fused, triangles of the fused surface
+  size_t corridor_faces = 0;  // --dense: corridor ground triangles kept in the holes
   std::string gl;
   std::string mesh_path;
 };

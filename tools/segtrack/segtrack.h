@@ -12,12 +12,12 @@ namespace mvtm {
 
 struct SegtrackOptions {
   std::vector<std::string> paths;  // LABELDIR WS; with rank: LABELDIR...
-  std::string classes = "8";       // vehicle class ids, comma-separated (class-id or palette labels)
-  std::string palette;             // palette image: the labels are RGB colours of these classes
-  bool binary = false;             // the labels are masks: first channel non-zero = vehicle
-  TrackOptions track;              // association, gap filling, smoothing, rejection, dilation
-  bool rank = false;               // print the sequences ordered by total vehicle area instead
-  bool quiet = false;              // no progress bar, no summary
+  std::string classes = "8";  // vehicle class ids, comma-separated (class-id or palette labels)
+  std::string palette;        // palette image: the labels are RGB colours of these classes
+  bool binary = false;        // the labels are masks: first channel non-zero = vehicle
+  TrackOptions track;         // association, gap filling, smoothing, rejection, dilation
+  bool rank = false;          // print the sequences ordered by total vehicle area instead
+  bool quiet = false;         // no progress bar, no summary
 
   void Check() const;  // throws UsageError naming the bad value
 };
@@ -27,8 +27,8 @@ struct SegtrackReport {
   std::filesystem::path masks_dir, tracks;
 };
 
-// Tracks LABELDIR's label images (*.png, in byte order of their names) and writes WS/masks/NAME.png,
-// WS/tracks.tsv and WS/provenance/segtrack.json. Throws Error / UsageError.
+// Tracks LABELDIR's label images (*.png, in byte order of their names) and writes
+// WS/masks/NAME.png, WS/tracks.tsv and WS/provenance/segtrack.json. Throws Error / UsageError.
 SegtrackReport RunSegtrack(const SegtrackOptions& options);
 
 struct RankRow {

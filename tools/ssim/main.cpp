@@ -47,7 +47,8 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->type_name("grey|mean");
   return mvtm::RunMain(app, "ssim", argc, argv, [&] {
-    o.channels = channels == mvtm::ChannelModeNames()[1] ? mvtm::ChannelMode::kGrey : mvtm::ChannelMode::kMean;
+    o.channels = channels == mvtm::ChannelModeNames()[1] ? mvtm::ChannelMode::kGrey
+                                                         : mvtm::ChannelMode::kMean;
     try {
       return mvtm::RunSsim(o, std::cout);
     } catch (const mvtm::SizeMismatchError& e) {

@@ -1,16 +1,18 @@
 // Atomic outputs: nothing appears under the final name until Commit; stale temporaries go away.
+#include "base/atomic_file.h"
+
 #include <gtest/gtest.h>
 
 #include <fstream>
 
-#include "base/atomic_file.h"
 #include "base/error.h"
 
 namespace mvtm {
 namespace {
 
 fs::path TempDir(const char* name) {
-  fs::path d = fs::temp_directory_path() / ("mvtm-atomic-" + std::string(name) + std::to_string(getpid()));
+  fs::path d =
+      fs::temp_directory_path() / ("mvtm-atomic-" + std::string(name) + std::to_string(getpid()));
   fs::remove_all(d);
   fs::create_directories(d);
   return d;
@@ -62,7 +64,7 @@ TEST(AtomicFile, UpToDateComparesTimes) {
 
 TEST(AtomicFile, RemovesTemporariesOfDeadProcesses) {
   fs::path d = TempDir("stale");
-  std::ofstream(d / ".a.tmp-999999999-0.png") << "x";  // no such pid
+  std::ofstream(d / ".a.tmp-999999999-0.png") << "x";                           // no such pid
   std::ofstream(d / (".b.tmp-" + std::to_string(getpid()) + "-0.png")) << "x";  // alive: kept
   RemoveStaleTemporaries(d);
   EXPECT_FALSE(fs::exists(d / ".a.tmp-999999999-0.png"));

@@ -1,13 +1,14 @@
 // LineReader and number parsing: locale independence, FILE:LINE messages, non-finite values.
+#include "base/text.h"
+
 #include <gtest/gtest.h>
 
 #include <clocale>
 #include <locale>
 #include <sstream>
 
-#include "base/error.h"
-#include "base/text.h"
 #include "../io/comma_locale.h"
+#include "base/error.h"
 
 namespace mvtm {
 namespace {

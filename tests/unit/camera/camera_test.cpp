@@ -1,8 +1,9 @@
 // Camera models: projection round trips, the GL projection against the pinhole formula, errors.
+#include "camera/camera.h"
+
 #include <gtest/gtest.h>
 
 #include "base/error.h"
-#include "camera/camera.h"
 
 namespace mvtm {
 namespace {

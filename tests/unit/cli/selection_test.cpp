@@ -1,10 +1,11 @@
 // --frames / --shard: shards partition the items; ranges behave like Python slices.
+#include "cli/selection.h"
+
 #include <gtest/gtest.h>
 
 #include <set>
 
 #include "base/error.h"
-#include "cli/selection.h"
 
 namespace mvtm {
 namespace {
@@ -14,7 +15,8 @@ TEST(Selection, ShardsPartition) {
     for (int k : {1, 2, 3, 4, 9}) {
       std::multiset<size_t> all;
       for (int i = 0; i < k; ++i)
-        for (size_t x : Selection::Shard(std::to_string(i) + "/" + std::to_string(k)).Apply(n)) all.insert(x);
+        for (size_t x : Selection::Shard(std::to_string(i) + "/" + std::to_string(k)).Apply(n))
+          all.insert(x);
       ASSERT_EQ(all.size(), n);
       size_t expect = 0;
       for (size_t x : all) EXPECT_EQ(x, expect++);

@@ -1,13 +1,16 @@
 // Pose interpolation in time: exact keyframe hits, the short arc, drop/clamp, ordering rules.
+#include "geometry/interpolate.h"
+
 #include <gtest/gtest.h>
 
 #include "base/error.h"
-#include "geometry/interpolate.h"
 
 namespace mvtm {
 namespace {
 
-Eigen::Quaterniond Yaw(double a) { return Eigen::Quaterniond(Eigen::AngleAxisd(a, Eigen::Vector3d::UnitY())); }
+Eigen::Quaterniond Yaw(double a) {
+  return Eigen::Quaterniond(Eigen::AngleAxisd(a, Eigen::Vector3d::UnitY()));
+}
 
 std::vector<StampedPose> Keys() {
   return {{0.0, Rigid3d(Yaw(0.0), {0, 0, 0}), 1},

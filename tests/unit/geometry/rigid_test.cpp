@@ -1,5 +1,7 @@
 // Rigid transforms, SLERP and rotation angles, against Eigen's own implementations and closed
 // forms (rotation about one axis by a known angle).
+#include "geometry/rigid.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -7,7 +9,6 @@
 
 #include "base/error.h"
 #include "geometry/align.h"
-#include "geometry/rigid.h"
 
 namespace mvtm {
 namespace {

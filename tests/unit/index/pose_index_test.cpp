@@ -1,5 +1,7 @@
 // PoseIndex against brute force (and SelectViews against an independent re-statement of the
 // thesis metric): exact methods must return identical candidates, ties included.
+#include "index/pose_index.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,7 +10,6 @@
 #include <random>
 
 #include "base/error.h"
-#include "index/pose_index.h"
 #include "io/trajectory.h"
 
 using namespace mvtm;
@@ -16,8 +17,8 @@ using namespace mvtm;
 namespace {
 
 // The metric written out independently of view_selection.h (thesis appendix D + ahead term).
-std::vector<Candidate> Reference(const Rigid3d& q, const std::vector<Rigid3d>& cands, const ViewSelectionOptions& o,
-                                 size_t exclude) {
+std::vector<Candidate> Reference(const Rigid3d& q, const std::vector<Rigid3d>& cands,
+                                 const ViewSelectionOptions& o, size_t exclude) {
   Eigen::Matrix3d R = q.q.toRotationMatrix();
   Eigen::Vector3d C = -R.transpose() * q.t, v = R.row(2).transpose();
   std::vector<Candidate> all;
@@ -28,10 +29,12 @@ std::vector<Candidate> Reference(const Rigid3d& q, const std::vector<Rigid3d>& c
     double angle = std::acos(std::clamp(v.dot(vk), -1.0, 1.0));
     if (angle > o.max_heading_deg * M_PI / 180 + 1e-9) continue;
     double dist = (Ck - C).norm();
-    all.push_back({i, dist + o.heading_weight * angle + o.ahead_weight * std::max(0.0, (Ck - C).dot(v)), dist,
-                   angle * 180 / M_PI});
+    all.push_back(
+        {i, dist + o.heading_weight * angle + o.ahead_weight * std::max(0.0, (Ck - C).dot(v)), dist,
+         angle * 180 / M_PI});
   }
-  std::stable_sort(all.begin(), all.end(), [](const Candidate& a, const Candidate& b) { return a.cost < b.cost; });
+  std::stable_sort(all.begin(), all.end(),
+                   [](const Candidate& a, const Candidate& b) { return a.cost < b.cost; });
   if (all.size() > o.k) all.resize(o.k);
   return all;
 }
@@ -40,13 +43,17 @@ Rigid3d RandomPose(std::mt19937& g, double box, bool level) {
   std::uniform_real_distribution<double> u(-box, box), a(-M_PI, M_PI);
   std::normal_distribution<double> n(0, 1);
   Eigen::Quaterniond q;
-  if (level) q = Eigen::AngleAxisd(a(g), Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(0.05 * n(g), Eigen::Vector3d::UnitX());
-  else q = Eigen::Quaterniond(n(g), n(g), n(g), n(g)).normalized();
+  if (level)
+    q = Eigen::AngleAxisd(a(g), Eigen::Vector3d::UnitY()) *
+        Eigen::AngleAxisd(0.05 * n(g), Eigen::Vector3d::UnitX());
+  else
+    q = Eigen::Quaterniond(n(g), n(g), n(g), n(g)).normalized();
   Eigen::Vector3d C(u(g), level ? 0.1 * n(g) : u(g), u(g));
   return Rigid3d(q, -(q * C));  // world-to-camera with centre C
 }
 
-void ExpectSame(const std::vector<Candidate>& want, const std::vector<Candidate>& got, const std::string& what) {
+void ExpectSame(const std::vector<Candidate>& want, const std::vector<Candidate>& got,
+                const std::string& what) {
   ASSERT_EQ(want.size(), got.size()) << what;
   for (size_t r = 0; r < want.size(); ++r) {
     EXPECT_EQ(want[r].index, got[r].index) << what << " rank " << r;
@@ -136,7 +143,8 @@ TEST(PoseIndex, FewerAdmissibleThanKAndEmpty) {
     cands.emplace_back(q, -(q * Eigen::Vector3d(i, 0, 0)));
   }
   ViewSelectionOptions o{10, 45, 0, 0};
-  for (SearchMethod m : {SearchMethod::kKdTree, SearchMethod::kBrute, SearchMethod::kFlann, SearchMethod::kGrid9}) {
+  for (SearchMethod m :
+       {SearchMethod::kKdTree, SearchMethod::kBrute, SearchMethod::kFlann, SearchMethod::kGrid9}) {
     PoseIndex idx(cands, o, {m});
     auto got = idx.Select(cands[0], 0);
     ASSERT_EQ(got.size(), 2u) << SearchMethodName(m);
@@ -194,7 +202,8 @@ TEST(PoseIndex, ApproximateMethodsAreCloseAndConvergeToExact) {
 // KITTI 00 ground truth (4541 poses): every pose against all the others.
 TEST(PoseIndex, ExactOnKitti00GroundTruth) {
   const char* env = std::getenv("MVTM_DATA");
-  std::filesystem::path p = std::filesystem::path(env && *env ? env : MVTM_DATA_DIR) / "slam_trajectories/kitti00/KITTI_00_gt.txt";
+  std::filesystem::path p = std::filesystem::path(env && *env ? env : MVTM_DATA_DIR) /
+                            "slam_trajectories/kitti00/KITTI_00_gt.txt";
   if (!std::filesystem::exists(p)) GTEST_SKIP() << p << " not present";
   Trajectory tr = ReadTrajectory(p.string());
   ASSERT_EQ(tr.poses.size(), 4541u);

@@ -1,5 +1,7 @@
 // COLMAP model I/O: exact round trips (text and binary, under a comma-decimal locale) and
 // FILE:LINE errors for every kind of malformed input.
+#include "io/colmap_model.h"
+
 #include <gtest/gtest.h>
 
 #include <clocale>
@@ -8,7 +10,6 @@
 #include <sstream>
 
 #include "base/error.h"
-#include "io/colmap_model.h"
 #include "comma_locale.h"
 #include "test_util.h"
 
@@ -32,7 +33,8 @@ Reconstruction RandomModel(int n_images, int n_points, uint32_t seed) {
     im.name = "seq/" + std::to_string(i) + ".png";
     im.world_to_camera = Rigid3d(Eigen::Quaterniond(nd(g), nd(g), nd(g), nd(g)).normalized(),
                                  Eigen::Vector3d(nd(g), nd(g), nd(g)) * 5e6);
-    for (int k = 0; k < 5; ++k) im.points2D.push_back({Eigen::Vector2d(nd(g) * 100, nd(g) * 100), kInvalidPoint3DId});
+    for (int k = 0; k < 5; ++k)
+      im.points2D.push_back({Eigen::Vector2d(nd(g) * 100, nd(g) * 100), kInvalidPoint3DId});
     r.images[im.id] = im;
   }
   for (int p = 0; p < n_points; ++p) {
@@ -96,7 +98,11 @@ TEST(ColmapModel, TextRoundTripIsExactUnderCommaLocale) {
     EXPECT_EQ(test::ReadFile(d / f), test::ReadFile(d / "again" / f)) << f;
   // Under the comma locale, numbers are still written with a point.
   std::string cams = test::ReadFile(d / "cameras.txt");
-  EXPECT_NE(cams.find("3 PINHOLE 1241 376 718.85599999999999 718.85599999999999 607.19280000000003 185.2157\n"), std::string::npos) << cams;
+  EXPECT_NE(
+      cams.find(
+          "3 PINHOLE 1241 376 718.85599999999999 718.85599999999999 607.19280000000003 185.2157\n"),
+      std::string::npos)
+      << cams;
 }
 
 TEST(ColmapModel, BinaryRoundTripIsExact) {
@@ -142,7 +148,8 @@ TEST(ColmapModel, StreamReadersGiveWhatTheFileGives) {
   // File order and pose lines (after the 4 header lines, two lines per image).
   std::istringstream again(test::ReadFile(d / "images.txt"));
   std::vector<std::pair<uint32_t, long>> seen;
-  ForEachColmapImageText(again, "imgs", [&](ImageRecord&& im, long line) { seen.emplace_back(im.id, line); });
+  ForEachColmapImageText(again, "imgs",
+                         [&](ImageRecord&& im, long line) { seen.emplace_back(im.id, line); });
   ASSERT_EQ(seen.size(), r.images.size());
   long line = 5;
   auto it = r.images.begin();
@@ -179,19 +186,28 @@ TEST(ColmapModel, MalformedInputNamesFileAndLine) {
   const std::string img1 = "1 1 0 0 0 0 0 0 1 a.png\n\n";
   const std::string pts = "";
   std::vector<BadCase> cases = {
-      {"cameras.txt", "# c\n1 PINHOLE 100 50 80 80 50\n", "cameras.txt:2: PINHOLE takes 4 parameters, found 3"},
-      {"cameras.txt", cams + "1 PINHOLE 100 50 80 80 50 25\n", "cameras.txt:2: duplicate CAMERA_ID 1"},
+      {"cameras.txt", "# c\n1 PINHOLE 100 50 80 80 50\n",
+       "cameras.txt:2: PINHOLE takes 4 parameters, found 3"},
+      {"cameras.txt", cams + "1 PINHOLE 100 50 80 80 50 25\n",
+       "cameras.txt:2: duplicate CAMERA_ID 1"},
       {"cameras.txt", "1 NOPE 100 50 1\n", "cameras.txt:1: unknown camera model 'NOPE'"},
       {"images.txt", "1 0 0 0 0 0 0 0 1 a.png\n\n", "images.txt:1: quaternion has zero norm"},
       {"images.txt", "1 1 0 0 0 0 nan 0 1 a.png\n\n", "images.txt:1: TY: 'nan' is not finite"},
-      {"images.txt", "1 1 0 0 0 0 0 1 a.png\n\n", "images.txt:1: image line needs 10 fields (IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME), found 9"},
+      {"images.txt", "1 1 0 0 0 0 0 1 a.png\n\n",
+       "images.txt:1: image line needs 10 fields (IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME), "
+       "found 9"},
       {"images.txt", img1 + "1 1 0 0 0 0 0 0 1 b.png\n\n", "images.txt:3: duplicate IMAGE_ID 1"},
-      {"images.txt", "1 1 0 0 0 0 0 0 9 a.png\n\n", "images.txt: image 1 names camera 9 which does not exist"},
-      {"images.txt", "1 1 0 0 0 0 0 0 1 a.png\n1 2 5\n", "images.txt: image 1 observes 3-D point 5 which does not exist"},
-      {"images.txt", "1 1 0 0 0 0 0 0 1 a.png\n1 2\n", "images.txt:2: POINTS2D needs triples X Y POINT3D_ID"},
+      {"images.txt", "1 1 0 0 0 0 0 0 9 a.png\n\n",
+       "images.txt: image 1 names camera 9 which does not exist"},
+      {"images.txt", "1 1 0 0 0 0 0 0 1 a.png\n1 2 5\n",
+       "images.txt: image 1 observes 3-D point 5 which does not exist"},
+      {"images.txt", "1 1 0 0 0 0 0 0 1 a.png\n1 2\n",
+       "images.txt:2: POINTS2D needs triples X Y POINT3D_ID"},
       {"images.txt", "1 1 0 0 0 0 0 0 1 a.png\n", "images.txt:1: image 1 has no POINTS2D line"},
-      {"points3D.txt", "1 0 0 0 0 0 0 0.5 4 0\n", "points3D.txt: point 1 has a track element in image 4 which does not exist"},
-      {"points3D.txt", "1 0 0 0 0 0 0 0.5 1 3\n", "points3D.txt: point 1 names 2-D point 3 of image 1 which has only 0"},
+      {"points3D.txt", "1 0 0 0 0 0 0 0.5 4 0\n",
+       "points3D.txt: point 1 has a track element in image 4 which does not exist"},
+      {"points3D.txt", "1 0 0 0 0 0 0 0.5 1 3\n",
+       "points3D.txt: point 1 names 2-D point 3 of image 1 which has only 0"},
       {"points3D.txt", "1 0 0 0 300 0 0 0.5\n", "points3D.txt:1: colour component out of 0..255"},
   };
   for (const auto& c : cases) {
@@ -228,7 +244,8 @@ TEST(ColmapModel, ReadsTheRealKittiModel) {
   std::string data = test::DataDir();
   if (data.empty()) GTEST_SKIP() << "MVTM_DATA not present";
   std::string dir = data + "/kitti_odom06_f000-050/colmap/sparse";
-  if (!std::filesystem::exists(dir + "/images.txt") && !std::filesystem::exists(dir + "/images.bin")) {
+  if (!std::filesystem::exists(dir + "/images.txt") &&
+      !std::filesystem::exists(dir + "/images.bin")) {
     for (auto& e : std::filesystem::directory_iterator(dir)) dir = e.path().string();
   }
   Reconstruction r = ReadColmapModel(dir);
@@ -250,8 +267,8 @@ TEST(ColmapPeer, OurBinaryReaderReadsColmapsBinary) {
   Reconstruction r = RandomModel(8, 30, 9);
   WriteColmapText(r, (d / "txt").string());
   std::filesystem::create_directories(d / "bin");
-  std::string cmd = "colmap model_converter --input_path " + (d / "txt").string() + " --output_path " +
-                    (d / "bin").string() + " --output_type BIN >/dev/null 2>&1";
+  std::string cmd = "colmap model_converter --input_path " + (d / "txt").string() +
+                    " --output_path " + (d / "bin").string() + " --output_type BIN >/dev/null 2>&1";
   ASSERT_EQ(std::system(cmd.c_str()), 0);
   Reconstruction ours = ReadColmapText((d / "txt").string());
   Reconstruction theirs = ReadColmapBinary((d / "bin").string());

@@ -16,7 +16,8 @@ struct CommaDecimal : std::numpunct<char> {
 // Installs the comma locale as the global C++ locale for its lifetime.
 class ScopedCommaLocale {
  public:
-  ScopedCommaLocale() : previous_(std::locale::global(std::locale(std::locale::classic(), new CommaDecimal))) {}
+  ScopedCommaLocale()
+      : previous_(std::locale::global(std::locale(std::locale::classic(), new CommaDecimal))) {}
   ~ScopedCommaLocale() { std::locale::global(previous_); }
   // A stream that was not told otherwise now writes 1234.5 as "1.234,5".
   static std::string Probe() {

@@ -1,9 +1,10 @@
 // PLY through OpenMesh: round trips with colour and normals, UTM-sized coordinates, what is
 // missing from a file, and errors.
+#include "io/mesh_io.h"
+
 #include <gtest/gtest.h>
 
 #include "base/error.h"
-#include "io/mesh_io.h"
 #include "test_util.h"
 
 namespace mvtm {

@@ -1,13 +1,15 @@
 #pragma once
+#include <unistd.h>
+
 #include <filesystem>
 #include <fstream>
 #include <string>
-#include <unistd.h>
 
 namespace mvtm::test {
 
 inline std::filesystem::path FreshDir(const std::string& name) {
-  auto d = std::filesystem::temp_directory_path() / ("mvtm-test-" + name + "-" + std::to_string(getpid()));
+  auto d = std::filesystem::temp_directory_path() /
+           ("mvtm-test-" + name + "-" + std::to_string(getpid()));
   std::filesystem::remove_all(d);
   std::filesystem::create_directories(d);
   return d;

@@ -1,14 +1,15 @@
 // Trajectory readers: real TUM/KITTI/NeRF files from MVTM_DATA, hand-made files with known
 // answers, and FILE:LINE errors.
+#include "io/trajectory.h"
+
 #include <gtest/gtest.h>
 
 #include <sstream>
 #include <streambuf>
 
 #include "base/error.h"
-#include "io/colmap_model.h"
-#include "io/trajectory.h"
 #include "comma_locale.h"
+#include "io/colmap_model.h"
 #include "test_util.h"
 
 namespace mvtm {
@@ -16,7 +17,9 @@ namespace {
 
 TEST(Trajectory, TumConvertsAndNormalises) {
   auto d = test::FreshDir("tum");
-  test::WriteFile(d / "t.txt", "# t tx ty tz qx qy qz qw\n1.5 1 2 3 0 0 0 2\n2.5 4 5 6 0 0.7071067811865476 0 0.7071067811865476\n");
+  test::WriteFile(d / "t.txt",
+                  "# t tx ty tz qx qy qz qw\n1.5 1 2 3 0 0 0 2\n2.5 4 5 6 0 0.7071067811865476 0 "
+                  "0.7071067811865476\n");
   EXPECT_EQ(DetectTrajectoryFormat((d / "t.txt").string()), TrajectoryFormat::kTum);
   Trajectory t = ReadTum((d / "t.txt").string());
   ASSERT_EQ(t.poses.size(), 2u);
@@ -33,7 +36,8 @@ TEST(Trajectory, TumAndKittiRoundTripUnderCommaLocale) {
   std::vector<StampedPose> poses;
   for (int i = 0; i < 5; ++i) {
     Eigen::Quaterniond q(Eigen::AngleAxisd(0.1 * i + 0.05, Eigen::Vector3d(1, 2, 3).normalized()));
-    poses.push_back({1305031102.175304 + 0.1 * i, Rigid3d(q, Eigen::Vector3d(451000.125 + i, 5410000.5, 120.0 / 7)), 0});
+    poses.push_back({1305031102.175304 + 0.1 * i,
+                     Rigid3d(q, Eigen::Vector3d(451000.125 + i, 5410000.5, 120.0 / 7)), 0});
   }
   WriteTum((d / "t.txt").string(), poses);
   Trajectory t = ReadTum((d / "t.txt").string());
@@ -53,11 +57,14 @@ TEST(Trajectory, TumAndKittiRoundTripUnderCommaLocale) {
 
 TEST(Trajectory, ErrorsNameTheLine) {
   auto d = test::FreshDir("tum-bad");
-  struct C { std::string text, msg; };
+  struct C {
+    std::string text, msg;
+  };
   std::vector<C> cases = {
       {"1 0 0 0 0 0 0 1\n2 0 0 nan 0 0 0 1\n", "t.txt:2: tz: 'nan' is not finite"},
       {"1 0 0 0 0 0 0 0\n", "t.txt:1: quaternion has zero norm"},
-      {"1 0 0 0 0 0 0 1\n2 0 0 0 0 0 1\n", "t.txt:2: TUM pose needs 8 fields (timestamp tx ty tz qx qy qz qw), found 7"},
+      {"1 0 0 0 0 0 0 1\n2 0 0 0 0 0 1\n",
+       "t.txt:2: TUM pose needs 8 fields (timestamp tx ty tz qx qy qz qw), found 7"},
       {"# only a comment\n", "t.txt: trajectory file has no poses"},
       {"", "t.txt: trajectory file has no poses"},
       {"1 0 0 0 0 0 0 x1\n", "t.txt:1: qw: 'x1' is not a number"},
@@ -76,7 +83,8 @@ TEST(Trajectory, ErrorsNameTheLine) {
     ReadKittiPoses((d / "k.txt").string());
     FAIL();
   } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()), (d / "k.txt:2: rotation part is not a rotation (det 0)").string());
+    EXPECT_EQ(std::string(e.what()),
+              (d / "k.txt:2: rotation part is not a rotation (det 0)").string());
   }
 }
 
@@ -124,7 +132,8 @@ std::vector<StampedPose> SomePoses() {
   std::vector<StampedPose> poses;
   for (int i = 0; i < 4; ++i) {
     Eigen::Quaterniond q(Eigen::AngleAxisd(0.2 * i + 0.1, Eigen::Vector3d(1, -2, 3).normalized()));
-    poses.push_back({100.25 + i, Rigid3d(q, Eigen::Vector3d(451000.5 + i, 5410000.25, 120.0 / 7)), 0});
+    poses.push_back(
+        {100.25 + i, Rigid3d(q, Eigen::Vector3d(451000.5 + i, 5410000.25, 120.0 / 7)), 0});
   }
   return poses;
 }
@@ -188,7 +197,9 @@ TEST(Trajectory, StreamsGiveWhatTheFileGives) {
   }
   EXPECT_EQ(colmap.names[3], "img103.png");
   // Timestamps.
-  test::WriteFile(d / "rgb.txt", "# tum rgb.txt\n1305031102.175304 rgb/1305031102.175304.png\n1305031102.211214 rgb/b.png\n");
+  test::WriteFile(
+      d / "rgb.txt",
+      "# tum rgb.txt\n1305031102.175304 rgb/1305031102.175304.png\n1305031102.211214 rgb/b.png\n");
   std::istringstream ts(test::ReadFile(d / "rgb.txt"));
   auto from_file = ReadTimestamps((d / "rgb.txt").string());
   auto from_stream = ReadTimestamps(ts, "rgb");
@@ -208,11 +219,15 @@ TEST(Trajectory, PipeErrorsNameTheStreamAndLine) {
   };
   const std::vector<C> cases = {
       {"# c\n\n1 0 0 0 0 0 0 1\n2 0 0 nan 0 0 0 1\n", "-:4: tz: 'nan' is not finite"},
-      {"1 0 0 0 0 0 0 1\n1 0 0 0 0 1 0 0 0 0 1 0\n", "-:2: TUM pose needs 8 fields (timestamp tx ty tz qx qy qz qw), found 12"},
-      {"# c\n1 2 3 4 5\n", "-:2: cannot tell the trajectory format: 5 fields (TUM has 8, KITTI 12, COLMAP images.txt 10)"},
+      {"1 0 0 0 0 0 0 1\n1 0 0 0 0 1 0 0 0 0 1 0\n",
+       "-:2: TUM pose needs 8 fields (timestamp tx ty tz qx qy qz qw), found 12"},
+      {"# c\n1 2 3 4 5\n",
+       "-:2: cannot tell the trajectory format: 5 fields (TUM has 8, KITTI 12, COLMAP images.txt "
+       "10)"},
       {"# only a comment\n", "-: cannot tell the trajectory format: the file has no poses"},
       {"", "-: cannot tell the trajectory format: the file has no poses"},
-      {"1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 0 0", "-:2: rotation part is not a rotation (det 0)"},
+      {"1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 0 0",
+       "-:2: rotation part is not a rotation (det 0)"},
       {"1 0 0 0 0 0 0 0 1 a.png\n\n", "-:1: quaternion has zero norm"},
   };
   for (const auto& c : cases) {

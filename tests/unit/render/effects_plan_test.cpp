@@ -1,11 +1,12 @@
 // libcore/render/effects_plan: the plan and its reasons from hand-built surveys, and the
 // hole/coverage survey of a view against hand-counted pixels of a half-plane.
+#include "render/effects_plan.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "render/context.h"
-#include "render/effects_plan.h"
 #include "render/renderer.h"
 
 namespace mvtm {
@@ -33,13 +34,14 @@ TEST(EffectsPlan, EverythingTheSceneCallsForIsOn) {
   EXPECT_TRUE(p.occlusion);
   EXPECT_TRUE(p.masks);
   EXPECT_TRUE(p.skybox);
-  EXPECT_EQ(p.Defines(), (std::vector<std::string>{"MVTM_MAX_PROJECTORS 3", "MVTM_PTM", "MVTM_OCCLUSION",
-                                                   "MVTM_MASKS", "MVTM_SKYBOX"}));
+  EXPECT_EQ(p.Defines(), (std::vector<std::string>{"MVTM_MAX_PROJECTORS 3", "MVTM_PTM",
+                                                   "MVTM_OCCLUSION", "MVTM_MASKS", "MVTM_SKYBOX"}));
   const auto j = ExplainEffects(s, p);
   EXPECT_EQ(j["masks"]["reason"], "selected projector A_0001.png has masked pixels");
   EXPECT_EQ(j["skybox"]["reason"], "1 of 4 frames see no surface somewhere (e.g. A_0002.png)");
   EXPECT_EQ(j["several_projectors"]["reason"],
-            "up to 3 projectors per pixel, nearest first, then vertex colours; the first projector covers as "
+            "up to 3 projectors per pixel, nearest first, then vertex colours; the first projector "
+            "covers as "
             "little as 25.0 % of a view");
 }
 
@@ -69,7 +71,8 @@ TEST(EffectsPlan, UserSwitchesWinAndSayWhy) {
   EXPECT_EQ(j["occlusion"]["reason"], "turned off by --no-occlusion");
   EXPECT_EQ(j["masks"]["reason"], "turned off by --no-masks");
   EXPECT_EQ(j["skybox"]["reason"], "turned off by --no-skybox");
-  EXPECT_EQ(j["several_projectors"]["reason"], "--projectors 1 (vertex colours where it does not reach)");
+  EXPECT_EQ(j["several_projectors"]["reason"],
+            "--projectors 1 (vertex colours where it does not reach)");
 }
 
 TEST(EffectsPlan, VertexModeTurnsEveryProjectiveEffectOff) {
@@ -79,7 +82,8 @@ TEST(EffectsPlan, VertexModeTurnsEveryProjectiveEffectOff) {
   EXPECT_FALSE(p.ptm || p.occlusion || p.masks || p.skybox);
   EXPECT_EQ(p.Defines(), (std::vector<std::string>{"MVTM_MAX_PROJECTORS 1"}));
   const auto j = ExplainEffects(s, p);
-  for (const char* e : {"reverse_projection_rejection", "clip_test", "occlusion", "several_projectors", "masks", "skybox"}) {
+  for (const char* e : {"reverse_projection_rejection", "clip_test", "occlusion",
+                        "several_projectors", "masks", "skybox"}) {
     EXPECT_FALSE(j[e]["on"]) << e;
     EXPECT_EQ(j[e]["reason"], "vertex-colour mode") << e;
   }
@@ -120,7 +124,8 @@ Mesh HalfPlane() {
 }
 
 View At(double x) {
-  return View{ParseCameraSpec("PINHOLE 40 20 20 20 20 10"), Rigid3d(Eigen::Quaterniond::Identity(), {-x, 0, 0})};
+  return View{ParseCameraSpec("PINHOLE 40 20 20 20 20 10"),
+              Rigid3d(Eigen::Quaterniond::Identity(), {-x, 0, 0})};
 }
 
 TEST_F(SurveyViewTest, HolesSurfaceAndCoverageAreCountedPerPixel) {

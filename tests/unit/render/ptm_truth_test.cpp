@@ -65,7 +65,8 @@ class PtmTruth : public ::testing::Test {
   }
 
   // SSIM of every frame in renders/OUT against TRUTH_DIR (same names).
-  static std::vector<std::pair<std::string, double>> Score(const std::string& out, const fs::path& truth) {
+  static std::vector<std::pair<std::string, double>> Score(const std::string& out,
+                                                           const fs::path& truth) {
     std::vector<std::pair<std::string, double>> r;
     std::vector<fs::path> files;
     for (const auto& e : fs::directory_iterator(Root() / "renders" / out))
@@ -73,7 +74,8 @@ class PtmTruth : public ::testing::Test {
     std::sort(files.begin(), files.end());
     SsimOptions so;
     for (const auto& f : files)
-      r.emplace_back(f.filename().string(), Ssim(ReadImage(f.string()), ReadImage((truth / f.filename()).string()), so));
+      r.emplace_back(f.filename().string(),
+                     Ssim(ReadImage(f.string()), ReadImage((truth / f.filename()).string()), so));
     return r;
   }
   static double Mean(const std::vector<std::pair<std::string, double>>& v) {
@@ -106,22 +108,27 @@ TEST_F(PtmTruth, BakedDepthMatchesRayTracedDepth) {
     }
     std::nth_element(rel.begin(), rel.begin() + rel.size() / 2, rel.end());
     double median = rel[rel.size() / 2];
-    std::printf("[bakedepth %s] %zu pixels: median |d - truth|/truth %.2e; %.3f %% disagree by > 1 %% "
-                "(%zu surface/sky mismatches: silhouettes)\n", ws, total, median, 100.0 * disagree / total, inf_mismatch);
+    std::printf(
+        "[bakedepth %s] %zu pixels: median |d - truth|/truth %.2e; %.3f %% disagree by > 1 %% "
+        "(%zu surface/sky mismatches: silhouettes)\n",
+        ws, total, median, 100.0 * disagree / total, inf_mismatch);
     EXPECT_LT(median, 1e-3);
     EXPECT_LT(double(disagree) / total, 0.02);  // silhouettes only
   }
   // The UTM-like workspace bakes the same depth as the one at the origin.
   double worst_median = 0;
   for (const auto& e : fs::directory_iterator(Root() / "local" / "depth")) {
-    Image a = ReadImage(e.path().string()), b = ReadImage((Root() / "utm/depth" / e.path().filename()).string());
+    Image a = ReadImage(e.path().string()),
+          b = ReadImage((Root() / "utm/depth" / e.path().filename()).string());
     std::vector<double> rel;
     for (size_t i = 0; i < a.data.size(); ++i)
-      if (!std::isinf(a.data[i]) && !std::isinf(b.data[i])) rel.push_back(std::abs(a.data[i] - b.data[i]) / a.data[i]);
+      if (!std::isinf(a.data[i]) && !std::isinf(b.data[i]))
+        rel.push_back(std::abs(a.data[i] - b.data[i]) / a.data[i]);
     std::nth_element(rel.begin(), rel.begin() + rel.size() / 2, rel.end());
     worst_median = std::max(worst_median, rel[rel.size() / 2]);
   }
-  std::printf("[bakedepth utm vs local] worst per-image median relative difference %.2e\n", worst_median);
+  std::printf("[bakedepth utm vs local] worst per-image median relative difference %.2e\n",
+              worst_median);
   EXPECT_LT(worst_median, 1e-3);
 }
 
@@ -132,7 +139,8 @@ TEST_F(PtmTruth, SelfProjectionReproducesTheRecordedImage) {
   double worst = 1;
   for (const auto& [n, v] : s) worst = std::min(worst, v);
   std::printf("[self-projection] %zu frames, worst SSIM %.9f\n", s.size(), worst);
-  // Measured 1.000000000 on llvmpipe (texel centres hit exactly); 1e-6 leaves room for GPU rounding.
+  // Measured 1.000000000 on llvmpipe (texel centres hit exactly); 1e-6 leaves room for GPU
+  // rounding.
   for (const auto& [n, v] : s) EXPECT_GE(v, 1 - 1e-6) << n;
 }
 
@@ -147,8 +155,10 @@ TEST_F(PtmTruth, HeldOutPosesPtmBeatsVertexColoursOnEveryFrame) {
     wins += p[i].second > v[i].second;
     EXPECT_GT(p[i].second, v[i].second) << p[i].first;
   }
-  std::printf("[held-out, exclude-self, true masks] %zu frames: vertex %.4f, PTM %.4f mean SSIM; PTM wins %zu/%zu\n",
-              v.size(), Mean(v), Mean(p), wins, v.size());
+  std::printf(
+      "[held-out, exclude-self, true masks] %zu frames: vertex %.4f, PTM %.4f mean SSIM; PTM wins "
+      "%zu/%zu\n",
+      v.size(), Mean(v), Mean(p), wins, v.size());
 }
 
 TEST_F(PtmTruth, OffPathConfigurationsTable) {
@@ -158,7 +168,8 @@ TEST_F(PtmTruth, OffPathConfigurationsTable) {
   };
   std::vector<Config> configs = {
       {"vertex", [](PtmRenderOptions& o) { o.mode = "vertex"; }},
-      {"ptm", [](PtmRenderOptions& o) { o.projectors = 1, o.no_occlusion = true, o.no_skybox = true; }},
+      {"ptm",
+       [](PtmRenderOptions& o) { o.projectors = 1, o.no_occlusion = true, o.no_skybox = true; }},
       {"+occlusion", [](PtmRenderOptions& o) { o.projectors = 1, o.no_skybox = true; }},
       {"+several", [](PtmRenderOptions& o) { o.projectors = 4, o.no_skybox = true; }},
       {"+skybox", [](PtmRenderOptions& o) { o.projectors = 4; }},
@@ -188,7 +199,8 @@ TEST_F(PtmTruth, OffPathConfigurationsTable) {
   for (size_t c = 0; c < configs.size(); ++c) std::printf(" %10.4f", sum[c] / variants);
   std::printf("\n");
   // No added effect lowers the mean.
-  for (size_t c = 1; c < configs.size(); ++c) EXPECT_GE(sum[c], sum[c - 1] - 1e-9) << configs[c].name;
+  for (size_t c = 1; c < configs.size(); ++c)
+    EXPECT_GE(sum[c], sum[c - 1] - 1e-9) << configs[c].name;
   EXPECT_GT(sum[1], sum[0]);  // PTM beats vertex colours
 }
 
@@ -200,16 +212,20 @@ TEST_F(PtmTruth, UtmSceneRendersLikeTheOrigin) {
   size_t differ = 0, pixels = 0;
   for (const auto& [n, v] : s) {
     worst = std::min(worst, v);
-    Image a = ReadImage((Root() / "renders/origin_lane" / n).string()), b = ReadImage((Root() / "renders/utm_lane" / n).string());
+    Image a = ReadImage((Root() / "renders/origin_lane" / n).string()),
+          b = ReadImage((Root() / "renders/utm_lane" / n).string());
     for (size_t p = 0; p < a.pixels(); ++p) {
       bool d = false;
-      for (int c = 0; c < a.channels; ++c) d |= a.data[p * a.channels + c] != b.data[p * b.channels + c];
+      for (int c = 0; c < a.channels; ++c)
+        d |= a.data[p * a.channels + c] != b.data[p * b.channels + c];
       differ += d;
     }
     pixels += a.pixels();
   }
-  std::printf("[utm vs origin] %zu frames rendered 1.5 m left: mean SSIM %.6f, worst %.6f; %.4f %% of pixels differ\n",
-              s.size(), Mean(s), worst, 100.0 * differ / pixels);
+  std::printf(
+      "[utm vs origin] %zu frames rendered 1.5 m left: mean SSIM %.6f, worst %.6f; %.4f %% of "
+      "pixels differ\n",
+      s.size(), Mean(s), worst, 100.0 * differ / pixels);
   // The two scenes differ only in the last bits of poses and vertices (rounding of x + origin in
   // double), which can flip a pixel on a silhouette or at the occlusion threshold; at 320×96 ten
   // such pixels cost 0.001 SSIM in one frame. A float32 pipeline at UTM would be off by decimetres.

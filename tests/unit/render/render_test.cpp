@@ -26,8 +26,9 @@ class RenderTest : public ::testing::Test {
 GlContext* RenderTest::ctx_ = nullptr;
 
 Camera Cam(int w = 64, int h = 48, double f = 50) {
-  return ParseCameraSpec("PINHOLE " + std::to_string(w) + " " + std::to_string(h) + " " + std::to_string(f) + " " +
-                         std::to_string(f) + " " + std::to_string(w / 2.0) + " " + std::to_string(h / 2.0));
+  return ParseCameraSpec("PINHOLE " + std::to_string(w) + " " + std::to_string(h) + " " +
+                         std::to_string(f) + " " + std::to_string(f) + " " +
+                         std::to_string(w / 2.0) + " " + std::to_string(h / 2.0));
 }
 
 // A square [−s, s]² in the plane z = depth of world coordinates, offset by `o`, as a grid of
@@ -93,14 +94,16 @@ TEST_F(RenderTest, UtmCoordinatesRenderLikeTheOrigin) {
   Renderer local(Plane(5, 10, Eigen::Vector3d::Zero(), 8));
   Renderer far(Plane(5, 10, utm, 8));
   // A slanted view so depth varies across the image.
-  Rigid3d pose(Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY())), Eigen::Vector3d::Zero());
+  Rigid3d pose(Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY())),
+               Eigen::Vector3d::Zero());
   Rigid3d at_local = pose * LookingDownZ({1, -0.5, 0});
   Rigid3d at_far = pose * LookingDownZ(Eigen::Vector3d(1, -0.5, 0) + utm);
   Image a = local.RenderDepth({Cam(), at_local}), b = far.RenderDepth({Cam(), at_far});
   double worst = 0;
   for (size_t i = 0; i < a.data.size(); ++i) {
     ASSERT_EQ(std::isinf(a.data[i]), std::isinf(b.data[i])) << i;
-    if (!std::isinf(a.data[i])) worst = std::max(worst, std::abs(a.data[i] - b.data[i]) / double(a.data[i]));
+    if (!std::isinf(a.data[i]))
+      worst = std::max(worst, std::abs(a.data[i] - b.data[i]) / double(a.data[i]));
   }
   EXPECT_LT(worst, 1e-6);  // a float32 mesh at UTM without re-centring would be off by decimetres
 }
@@ -141,7 +144,8 @@ TEST_F(RenderTest, VertexExactlyOnTheProjectorPlane) {
   int n = 10;
   for (int j = 0; j <= n; ++j)
     for (int i = 0; i <= n; ++i) {
-      m.vertices.push_back(Eigen::Vector3d(-10 + 20.0 * i / n, 3, -10 + 20.0 * j / n));  // y = 3: a floor
+      m.vertices.push_back(
+          Eigen::Vector3d(-10 + 20.0 * i / n, 3, -10 + 20.0 * j / n));  // y = 3: a floor
       m.colors.push_back({1, 2, 3});
     }
   for (int j = 0; j < n; ++j)
@@ -163,7 +167,8 @@ TEST_F(RenderTest, VertexExactlyOnTheProjectorPlane) {
       float z = depth.at(x, y);
       if (std::isinf(z)) continue;
       // The surface point of this pixel, independently, in double.
-      Eigen::Vector3d X = view.world_to_camera.Inverse() * view.camera.Unproject({x + 0.5, y + 0.5}, z);
+      Eigen::Vector3d X =
+          view.world_to_camera.Inverse() * view.camera.Unproject({x + 0.5, y + 0.5}, z);
       Eigen::Vector3d xp = proj.world_to_camera * X;
       uint8_t src = static_cast<uint8_t>(f.source.at(x, y));
       for (int c = 0; c < 3; ++c) ASSERT_TRUE(std::isfinite(f.colour.at(x, y, c)));
@@ -185,7 +190,8 @@ TEST_F(RenderTest, VertexExactlyOnTheProjectorPlane) {
 TEST_F(RenderTest, GrazingTrianglesStayFiniteAndCorrect) {
   // A plane almost parallel to the projector's rays (89.5° from its normal).
   Mesh m = Plane(20, 0, Eigen::Vector3d::Zero(), 16);
-  Eigen::Matrix3d tilt = Eigen::AngleAxisd(M_PI / 2 - 0.5 * M_PI / 180, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  Eigen::Matrix3d tilt =
+      Eigen::AngleAxisd(M_PI / 2 - 0.5 * M_PI / 180, Eigen::Vector3d::UnitX()).toRotationMatrix();
   for (auto& v : m.vertices) v = tilt * v + Eigen::Vector3d(0, 0, 30);
   Renderer r(m);
   Image img = Pattern(64, 48);
@@ -197,7 +203,8 @@ TEST_F(RenderTest, GrazingTrianglesStayFiniteAndCorrect) {
   for (int y = 0; y < 48; ++y)
     for (int x = 0; x < 64; ++x) {
       if (std::isinf(depth.at(x, y)) || f.source.at(x, y) != 0) continue;
-      Eigen::Vector3d X = view.world_to_camera.Inverse() * view.camera.Unproject({x + 0.5, y + 0.5}, depth.at(x, y));
+      Eigen::Vector3d X = view.world_to_camera.Inverse() *
+                          view.camera.Unproject({x + 0.5, y + 0.5}, depth.at(x, y));
       Eigen::Vector2d uv = proj.camera.Project(proj.world_to_camera * X);
       // Where the texture lookup is well inside the image the colour is within the range of the
       // 2×2 texels around it (bilinear), however thin the triangle is in the projector.
@@ -222,13 +229,15 @@ TEST_F(RenderTest, ProjectorThatSeesNoGeometry) {
   // The projector looks away from the mesh: its depth map is all +inf and it colours nothing.
   Renderer r(Plane(50, 10));
   Image img = Pattern(64, 48);
-  View away{Cam(), Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitY())), Eigen::Vector3d::Zero())};
+  View away{Cam(), Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitY())),
+                           Eigen::Vector3d::Zero())};
   Image d = r.RenderDepth(away);
   for (float z : d.data) ASSERT_TRUE(std::isinf(z));
   EffectsPlan plan;
   plan.occlusion = true;
   plan.skybox = true;
-  Renderer::Frame f = r.Render(View{Cam(), LookingDownZ({0, 0, 0})}, {Projector{away, &img, &d, nullptr}}, plan);
+  Renderer::Frame f =
+      r.Render(View{Cam(), LookingDownZ({0, 0, 0})}, {Projector{away, &img, &d, nullptr}}, plan);
   for (float s : f.source.data) ASSERT_EQ(s, kSourceVertex);
 }
 
@@ -259,7 +268,8 @@ TEST_F(RenderTest, OcclusionUsesTheProjectorsDepth) {
     for (int x = 0; x < 64; ++x) {
       float z = sd.at(x, y);
       if (std::isinf(z)) continue;
-      Eigen::Vector3d X = side.world_to_camera.Inverse() * side.camera.Unproject({x + 0.5, y + 0.5}, z);
+      Eigen::Vector3d X =
+          side.world_to_camera.Inverse() * side.camera.Unproject({x + 0.5, y + 0.5}, z);
       bool on_wall = X.z() > 9;
       bool hidden = on_wall && std::abs(X.x() * 5 / 10) < 0.95 && std::abs(X.y() * 5 / 10) < 0.95;
       if (!hidden) continue;
@@ -308,7 +318,8 @@ TEST_F(RenderTest, BadInputsAreClearErrors) {
   Renderer r(Plane(5, 10));
   Image a = Pattern(64, 48), b = Pattern(32, 24);
   View v{Cam(), LookingDownZ({0, 0, 0})};
-  Projector pa{v, &a, nullptr, nullptr}, pb{View{Cam(32, 24, 25), v.world_to_camera}, &b, nullptr, nullptr};
+  Projector pa{v, &a, nullptr, nullptr},
+      pb{View{Cam(32, 24, 25), v.world_to_camera}, &b, nullptr, nullptr};
   EffectsPlan plan;
   plan.projectors = 2;
   try {
@@ -328,12 +339,15 @@ TEST_F(RenderTest, ShaderErrorsNameFileVariantAndLine) {
   // at that file and line (found here independently, by searching the file) and the variant.
   const std::string& src = ShaderSource("ptm_common.glsl");
   int line = 1;
-  for (size_t i = 0; i < src.find("uniform mat3 u_proj_R[MVTM_MAX_PROJECTORS]"); ++i) line += src[i] == '\n';
+  for (size_t i = 0; i < src.find("uniform mat3 u_proj_R[MVTM_MAX_PROJECTORS]"); ++i)
+    line += src[i] == '\n';
   try {
-    BuildProgram("mesh.vert", "ptm.frag", {"MVTM_MAX_PROJECTORS 0", "MVTM_PTM"}, {"ptm_common.glsl"});
+    BuildProgram("mesh.vert", "ptm.frag", {"MVTM_MAX_PROJECTORS 0", "MVTM_PTM"},
+                 {"ptm_common.glsl"});
     FAIL() << "no compile error";
   } catch (const Error& e) {
-    std::string want = "shaders/ptm_common.glsl:" + std::to_string(line) + " [MVTM_MAX_PROJECTORS 0 MVTM_PTM]: ";
+    std::string want =
+        "shaders/ptm_common.glsl:" + std::to_string(line) + " [MVTM_MAX_PROJECTORS 0 MVTM_PTM]: ";
     EXPECT_EQ(std::string(e.what()).substr(0, want.size()), want) << e.what();
   }
 }

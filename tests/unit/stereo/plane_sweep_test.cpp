@@ -2,23 +2,24 @@
 // with known baselines (images computed by intersecting each pixel's ray with the plane, sharing
 // nothing with the sweep), the homography of a plane, and the hard cases (no baseline, planes
 // through a camera centre, a textureless image, no neighbours, no points).
+#include "stereo/plane_sweep.h"
+
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
-#include <Eigen/Geometry>
-
 #include "stereo/neighbours.h"
-#include "stereo/plane_sweep.h"
 
 namespace mvtm {
 namespace {
 
 Camera Cam(int w = 96, int h = 64, double f = 60) {
-  return ParseCameraSpec("PINHOLE " + std::to_string(w) + " " + std::to_string(h) + " " + std::to_string(f) + " " +
-                         std::to_string(f) + " " + std::to_string(w / 2.0) + " " + std::to_string(h / 2.0));
+  return ParseCameraSpec("PINHOLE " + std::to_string(w) + " " + std::to_string(h) + " " +
+                         std::to_string(f) + " " + std::to_string(f) + " " +
+                         std::to_string(w / 2.0) + " " + std::to_string(h / 2.0));
 }
 
 // A camera at `c` with the identity rotation (looking down +z, y down).
@@ -68,7 +69,8 @@ Score Compare(const DepthMap& m, const std::function<double(int, int)>& truth) {
   std::vector<double> rel;
   for (int y = 0; y < m.depth.height; ++y)
     for (int x = 0; x < m.depth.width; ++x)
-      if (std::isfinite(m.depth.at(x, y))) rel.push_back(std::abs(m.depth.at(x, y) / truth(x, y) - 1));
+      if (std::isfinite(m.depth.at(x, y)))
+        rel.push_back(std::abs(m.depth.at(x, y) / truth(x, y) - 1));
   Score s;
   s.valid = double(rel.size()) / double(m.depth.pixels());
   if (rel.empty()) return s;
@@ -78,13 +80,19 @@ Score Compare(const DepthMap& m, const std::function<double(int, int)>& truth) {
 }
 
 TEST(PlaneSweep, HomographyMapsPlanePointsToTheirNeighbourPixels) {
-  StereoView a{Cam(), At({0, 0, 0}), {}}, b{Cam(), Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitY())), {-0.7, 0.1, 0.2}), {}};
+  StereoView a{Cam(), At({0, 0, 0}), {}},
+      b{Cam(),
+        Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitY())),
+                {-0.7, 0.1, 0.2}),
+        {}};
   const Eigen::Vector3d n = Eigen::Vector3d(0.2, -0.3, 1).normalized();
   const double d = 6.0;
   const Eigen::Matrix3d H = PlaneHomography(a, b, n, d);
-  for (const auto& px : {Eigen::Vector2d(3.5, 7.5), Eigen::Vector2d(50, 31), Eigen::Vector2d(90.5, 60.5)}) {
+  for (const auto& px :
+       {Eigen::Vector2d(3.5, 7.5), Eigen::Vector2d(50, 31), Eigen::Vector2d(90.5, 60.5)}) {
     const Eigen::Vector3d r = a.camera.Unproject(px, 1.0);
-    const Eigen::Vector3d X = r * (d / n.dot(r));  // on the plane, reference coordinates = world here
+    const Eigen::Vector3d X =
+        r * (d / n.dot(r));  // on the plane, reference coordinates = world here
     const Eigen::Vector2d expect = b.camera.Project(b.world_to_camera * X);
     const Eigen::Vector3d h = H * Eigen::Vector3d(px.x(), px.y(), 1);
     EXPECT_NEAR(h.x() / h.z(), expect.x(), 1e-9);
@@ -98,7 +106,8 @@ TEST(PlaneSweep, FrontoParallelWallAtKnownDepth) {
   const Camera cam = Cam();
   StereoView ref{cam, At({0, 0, 0}), See(cam, At({0, 0, 0}), n, Z)};
   std::vector<StereoView> nbs;
-  for (double bx : {-0.6, 0.6, 1.2}) nbs.push_back({cam, At({bx, 0, 0}), See(cam, At({bx, 0, 0}), n, Z)});
+  for (double bx : {-0.6, 0.6, 1.2})
+    nbs.push_back({cam, At({bx, 0, 0}), See(cam, At({bx, 0, 0}), n, Z)});
   const DepthMap m = SweepDepth(ref, nbs, {MakeFrontoSweep(3, 30, 64)}, PlaneSweepOptions());
   const Score s = Compare(m, [&](int, int) { return Z; });
   std::printf("[fronto wall] valid %.3f, median relative error %.2e\n", s.valid, s.median_rel);
@@ -115,10 +124,12 @@ TEST(PlaneSweep, GroundPlaneFoundByTheGroundSweep) {
   const Camera cam = Cam();
   StereoView ref{cam, At({0, 0, 0}), See(cam, At({0, 0, 0}), n, h)};
   std::vector<StereoView> nbs;
-  for (double bz : {-2.0, -1.0, 1.0, 2.0}) nbs.push_back({cam, At({0, 0, bz}), See(cam, At({0, 0, bz}), n, h)});
+  for (double bz : {-2.0, -1.0, 1.0, 2.0})
+    nbs.push_back({cam, At({0, 0, bz}), See(cam, At({0, 0, bz}), n, h)});
   PlaneSweepOptions o;
   const DepthMap m = SweepDepth(ref, nbs, {MakeOffsetSweep("ground", n, 0.5, 3.0, 32)}, o);
-  // Truth: the ray through pixel row y meets y_cam = h at z = h·f/(y + 0.5 − cy); upper half has no ground.
+  // Truth: the ray through pixel row y meets y_cam = h at z = h·f/(y + 0.5 − cy); upper half has no
+  // ground.
   const Score s = Compare(m, [&](int, int y) { return h * cam.fy() / (y + 0.5 - cam.cy()); });
   std::printf("[ground] valid %.3f, median relative error %.2e\n", s.valid, s.median_rel);
   // The lower half sees the ground; its rows near the horizon have almost no parallax under
@@ -126,14 +137,16 @@ TEST(PlaneSweep, GroundPlaneFoundByTheGroundSweep) {
   EXPECT_GT(s.valid, 0.2);
   EXPECT_LT(s.median_rel, 0.02);  // 32 planes 5.4 % apart in offset, refined by the parabola
   for (int y = 0; y < int(cam.cy()); ++y)
-    for (int x = 0; x < int(cam.width); ++x) ASSERT_TRUE(std::isinf(m.depth.at(x, y))) << x << "," << y;
+    for (int x = 0; x < int(cam.width); ++x)
+      ASSERT_TRUE(std::isinf(m.depth.at(x, y))) << x << "," << y;
 }
 
 TEST(PlaneSweep, TexturelessImageGivesNoDepth) {
   const Camera cam = Cam();
   cv::Mat flat(int(cam.height), int(cam.width), CV_32F, cv::Scalar(100));
   StereoView ref{cam, At({0, 0, 0}), flat};
-  std::vector<StereoView> nbs{{cam, At({0.5, 0, 0}), flat.clone()}, {cam, At({-0.5, 0, 0}), flat.clone()}};
+  std::vector<StereoView> nbs{{cam, At({0.5, 0, 0}), flat.clone()},
+                              {cam, At({-0.5, 0, 0}), flat.clone()}};
   const DepthMap m = SweepDepth(ref, nbs, {MakeFrontoSweep(1, 50, 16)}, PlaneSweepOptions());
   for (size_t i = 0; i < m.depth.data.size(); ++i) {
     ASSERT_TRUE(std::isinf(m.depth.data[i]));
@@ -155,7 +168,8 @@ TEST(PlaneSweep, PlanesThroughACameraCentreStayFinite) {
   const Eigen::Vector3d n(1, 0, 0);
   const Camera cam = Cam();
   // Looking forward and to the left (world −x), where the wall is.
-  const Rigid3d r = Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(0.6, Eigen::Vector3d::UnitY())), {0, 0, 0});
+  const Rigid3d r =
+      Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(0.6, Eigen::Vector3d::UnitY())), {0, 0, 0});
   auto view = [&](const Eigen::Vector3d& c) {
     Rigid3d p(r.q, -(r.q * c));
     return StereoView{cam, p, See(cam, p, n, -2.0)};
@@ -172,9 +186,12 @@ TEST(PlaneSweep, PlanesThroughACameraCentreStayFinite) {
     finite += std::isfinite(m.depth.data[i]);
   }
   EXPECT_GT(double(finite) / double(m.depth.data.size()), 0.25);
-  // Truth: the ray of pixel (x, y) meets the world plane x = −2 at z = −2 / (Rᵀ r).x, r = K⁻¹(x, y, 1).
+  // Truth: the ray of pixel (x, y) meets the world plane x = −2 at z = −2 / (Rᵀ r).x, r = K⁻¹(x, y,
+  // 1).
   const Eigen::Matrix3d Rt = r.R().transpose();
-  const Score s = Compare(m, [&](int x, int y) { return -2.0 / (Rt * cam.Unproject({x + 0.5, y + 0.5}, 1.0)).x(); });
+  const Score s = Compare(m, [&](int x, int y) {
+    return -2.0 / (Rt * cam.Unproject({x + 0.5, y + 0.5}, 1.0)).x();
+  });
   std::printf("[facade] valid %.3f, median relative error %.2e\n", s.valid, s.median_rel);
   EXPECT_LT(s.median_rel, 0.01);
 }
@@ -183,7 +200,8 @@ TEST(Neighbours, NoBaselineNoCoverageAndTooWideAnglesAreSkipped) {
   std::vector<Rigid3d> poses;
   for (int i = 0; i < 8; ++i) poses.push_back(At({0, 0, double(i)}));
   poses[3] = poses[4];  // a stop: image 3 has no baseline to image 4
-  poses[6] = Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(1.2, Eigen::Vector3d::UnitY())), poses[6].t);
+  poses[6] =
+      Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(1.2, Eigen::Vector3d::UnitY())), poses[6].t);
   std::vector<Camera> cams(poses.size(), Cam());
   NeighbourOptions o;
   o.count = 4;

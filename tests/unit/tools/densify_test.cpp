@@ -3,9 +3,6 @@
 // same workspace under a similarity transform giving the same maps up to the scale.
 #include "densify.h"
 
-#include "bakedepth.h"
-#include "roadmesh.h"
-
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -14,8 +11,10 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "bakedepth.h"
 #include "image/image.h"
 #include "mkroad/mkroad.h"
+#include "roadmesh.h"
 
 namespace mvtm {
 namespace {
@@ -72,8 +71,10 @@ Accuracy Score(const fs::path& ws, const std::string& prefix, const std::string&
   a.compared = rel.size();
   if (rel.empty()) return a;
   a.completeness = double(rel.size()) / double(truth_px);
-  a.within1 = double(std::count_if(rel.begin(), rel.end(), [](double r) { return r <= 0.01; })) / double(rel.size());
-  a.within5 = double(std::count_if(rel.begin(), rel.end(), [](double r) { return r <= 0.05; })) / double(rel.size());
+  a.within1 = double(std::count_if(rel.begin(), rel.end(), [](double r) { return r <= 0.01; })) /
+              double(rel.size());
+  a.within5 = double(std::count_if(rel.begin(), rel.end(), [](double r) { return r <= 0.05; })) /
+              double(rel.size());
   std::nth_element(rel.begin(), rel.begin() + long(rel.size() / 2), rel.end());
   a.median_rel = rel[rel.size() / 2];
   a.conf_good = n_good ? c_good / double(n_good) : 0;
@@ -96,10 +97,11 @@ TEST(Densify, MkroadDepthAgainstRayTracedTruth) {
   EXPECT_EQ(r.written, 24u);
   EXPECT_EQ(r.no_neighbours, 0u);
   const Accuracy a = Score(ws, "");
-  std::printf("[densify mkroad 320x96, %zu px] median rel %.4f, within 1 %% %.3f, within 5 %% %.3f, "
-              "completeness %.3f, confidence %.2f (<=1 %%) vs %.2f (>5 %%), %.0f ms/image\n",
-              a.compared, a.median_rel, a.within1, a.within5, a.completeness, a.conf_good, a.conf_bad,
-              r.ms_per_image);
+  std::printf(
+      "[densify mkroad 320x96, %zu px] median rel %.4f, within 1 %% %.3f, within 5 %% %.3f, "
+      "completeness %.3f, confidence %.2f (<=1 %%) vs %.2f (>5 %%), %.0f ms/image\n",
+      a.compared, a.median_rel, a.within1, a.within5, a.completeness, a.conf_good, a.conf_bad,
+      r.ms_per_image);
   // Measured at 320x96 (12 frames a pass): median 0.033, within 5 % 0.59, completeness 0.60. Raw
   // single-view stereo at this size is coarse (1 px is ~1.5 % of depth at 10 m); fusion below
   // is what the mesh is made of.
@@ -123,9 +125,12 @@ TEST(Densify, MkroadDepthAgainstRayTracedTruth) {
     return Score(ws, "", "depth");
   };
   const Accuracy corridor = bake(false), fused = bake(true);
-  for (const auto& [name, x] : {std::pair<const char*, Accuracy>{"corridor", corridor}, {"dense", fused}})
-    std::printf("[mesh %s] median rel %.4f, within 1 %% %.3f, within 5 %% %.3f, surface on %.3f of truth pixels\n",
-                name, x.median_rel, x.within1, x.within5, x.completeness);
+  for (const auto& [name, x] :
+       {std::pair<const char*, Accuracy>{"corridor", corridor}, {"dense", fused}})
+    std::printf(
+        "[mesh %s] median rel %.4f, within 1 %% %.3f, within 5 %% %.3f, surface on %.3f of truth "
+        "pixels\n",
+        name, x.median_rel, x.within1, x.within5, x.completeness);
   EXPECT_GT(fused.within1, corridor.within1);  // measured 0.60 vs 0.59
   EXPECT_GT(fused.within5, corridor.within5);  // measured 0.84 vs 0.75
   EXPECT_GT(fused.completeness, 0.70);         // measured 0.74 (the corridor's walls: 0.91)

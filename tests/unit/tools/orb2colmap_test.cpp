@@ -1,5 +1,7 @@
 // orb2colmap against real trajectories with ground truth (MVTM_DATA) and hand-made hard cases.
 // The numbers printed here are the ones quoted in the README and the closing notes.
+#include "orb2colmap.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -9,7 +11,6 @@
 #include "base/text.h"
 #include "geometry/align.h"
 #include "io/colmap_model.h"
-#include "orb2colmap.h"
 #include "test_util.h"
 
 namespace mvtm {
@@ -65,8 +66,10 @@ TEST(Orb2Colmap, TumFr1XyzKeyframesInterpolatedAgainstGroundTruth) {
     truth_kf.push_back(InterpolateCameraToWorld(gtk, p.time, Outside::kClamp)->t);
   }
   double ate_kf = AteRmse(AlignUmeyama(est_kf, truth_kf, true), est_kf, truth_kf);
-  std::printf("[tum_fr1_xyz] %zu frames from 32 keyframes: ATE %.4f m (keyframes alone %.4f m), scale %.4f\n",
-              est.size(), ate, ate_kf, T.scale);
+  std::printf(
+      "[tum_fr1_xyz] %zu frames from 32 keyframes: ATE %.4f m (keyframes alone %.4f m), scale "
+      "%.4f\n",
+      est.size(), ate, ate_kf, T.scale);
   // Bound. The keyframes alone are 0.010 m from the truth; the interpolated frames 0.093 m.
   // The difference is the keyframe spacing, not the code: fr1_xyz is a hand-held sweep that
   // reverses about once a second, and 32 keyframes over 30 s cut every reversal. An independent
@@ -121,8 +124,10 @@ TEST(Orb2Colmap, Kitti00EveryTenthPoseInterpolated) {
     sum_t += et, sum_r += er, ++n;
     max_t = std::max(max_t, et), max_r = std::max(max_r, er);
   }
-  std::printf("[kitti00 1-in-10] %zu interpolated poses: translation mean %.4f m max %.4f m; "
-              "rotation mean %.4f deg max %.4f deg\n", n, sum_t / n, max_t, sum_r / n, max_r);
+  std::printf(
+      "[kitti00 1-in-10] %zu interpolated poses: translation mean %.4f m max %.4f m; "
+      "rotation mean %.4f deg max %.4f deg\n",
+      n, sum_t / n, max_t, sum_r / n, max_r);
   // Bounds. Keyframes are 1.0 s apart and the car drives up to ~13 m/s: in KITTI 00's 90° turns
   // the chord of a 1 s arc misses the arc by up to v·T·θ/8 ≈ 0.8 m, and the ground truth's
   // pitch/roll vibration (several Hz) cannot be recovered from 1 Hz samples, hence degrees of
@@ -137,7 +142,8 @@ TEST(Orb2Colmap, Kitti00EveryTenthPoseInterpolated) {
 
 TEST(Orb2Colmap, HardCases) {
   auto d = test::FreshDir("o2c-hard");
-  auto run = [&](const std::string& traj, const std::string& frames, const std::string& outside = "drop") {
+  auto run = [&](const std::string& traj, const std::string& frames,
+                 const std::string& outside = "drop") {
     test::WriteFile(d / "kf.txt", traj);
     test::WriteFile(d / "frames.txt", frames);
     Orb2ColmapOptions o;
@@ -165,7 +171,8 @@ TEST(Orb2Colmap, HardCases) {
   EXPECT_EQ(r.images.at(2).world_to_camera.t, Eigen::Vector3d(0, 0, 0));
   // Unsorted keyframes are sorted; an exact duplicate is merged.
   r = run("1 1 0 0 0 0 0 1\n0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n", "0.25 a.png\n");
-  EXPECT_LT((r.images.at(1).world_to_camera.Inverse().t - Eigen::Vector3d(0.25, 0, 0)).norm(), 1e-15);
+  EXPECT_LT((r.images.at(1).world_to_camera.Inverse().t - Eigen::Vector3d(0.25, 0, 0)).norm(),
+            1e-15);
   // Outside the span: dropped by default, clamped on request.
   r = run("0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n", "-1 a.png\n0.5 b.png\n2 c.png\n");
   EXPECT_EQ(r.images.size(), 1u);
@@ -182,8 +189,10 @@ TEST(Orb2Colmap, HardCases) {
     }
     return "no error";
   };
-  EXPECT_EQ(error_of("0 0 0 0 0 0 0 1\n1 1 0 nan 0 0 0 1\n", "0 a.png\n"), "kf.txt:2: tz: 'nan' is not finite");
-  EXPECT_EQ(error_of("", "0 a.png\n"), "kf.txt: cannot tell the trajectory format: the file has no poses");
+  EXPECT_EQ(error_of("0 0 0 0 0 0 0 1\n1 1 0 nan 0 0 0 1\n", "0 a.png\n"),
+            "kf.txt:2: tz: 'nan' is not finite");
+  EXPECT_EQ(error_of("", "0 a.png\n"),
+            "kf.txt: cannot tell the trajectory format: the file has no poses");
   EXPECT_EQ(error_of("0 0 0 0 0 0 0 1\n0 1 0 0 0 0 0 1\n", "0 a.png\n"),
             "kf.txt:2: timestamp 0.000000 repeats line 1 with a different pose");
   EXPECT_EQ(error_of("0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n", "0 a.png\n0.5 a.png\n"),

@@ -1,7 +1,8 @@
+#include "track/labels.h"
+
 #include <gtest/gtest.h>
 
 #include "base/error.h"
-#include "track/labels.h"
 
 using namespace mvtm;
 

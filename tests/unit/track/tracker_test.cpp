@@ -1,12 +1,13 @@
 // Tracking cases whose answers are derived by hand: the frames are drawn from known boxes, so the
 // expected boxes, states and track ids come from the drawing, not from the tracker.
+#include "track/tracker.h"
+
 #include <gtest/gtest.h>
 
 #include <vector>
 
 #include "base/error.h"
 #include "track/blobs.h"
-#include "track/tracker.h"
 
 using namespace mvtm;
 
@@ -83,7 +84,8 @@ TEST(Tracker, DroppedFrameIsInterpolatedExactly) {
     std::vector<uint8_t> mask;
     r.RenderMask(4, 0, mask);
     auto truth = Draw({{5 + 28, 10 + 12, 10, 8}});
-    for (size_t i = 0; i < mask.size(); ++i) ASSERT_EQ(mask[i] != 0, truth[i] != 0) << "pixel " << i;
+    for (size_t i = 0; i < mask.size(); ++i)
+      ASSERT_EQ(mask[i] != 0, truth[i] != 0) << "pixel " << i;
   }
 }
 
@@ -93,7 +95,8 @@ TEST(Tracker, GrowingBoxIsScaled) {
   o.smooth = 0;
   Tracker t(kW, kH, o);
   for (int f = 0; f < 5; ++f) {
-    auto m = Draw(f == 2 ? std::vector<Box>{} : std::vector<Box>{{40 - f, 30 - f, 10 + 2 * f, 6 + 2 * f}});
+    auto m = Draw(f == 2 ? std::vector<Box>{}
+                         : std::vector<Box>{{40 - f, 30 - f, 10 + 2 * f, 6 + 2 * f}});
     t.AddFrame(m.data());
   }
   TrackResult r = t.Finish();
@@ -178,7 +181,8 @@ TEST(Tracker, CrossingTracksKeepTheirIds) {
     auto rows = RowsOf(r, fi);
     ASSERT_EQ(rows.size(), 2u) << "frame " << f;
     for (const TrackRow* row : rows) {
-      const Box want = row->track == 1 ? b(f) : a(f);  // B's first pixel comes first in raster order
+      const Box want =
+          row->track == 1 ? b(f) : a(f);  // B's first pixel comes first in raster order
       EXPECT_EQ(row->x, want.x) << "frame " << f << " track " << row->track;
       EXPECT_EQ(row->y, std::max(0, want.y)) << "frame " << f << " track " << row->track;
     }

@@ -1,10 +1,11 @@
 // Workspace: derived names, readiness checks, provenance.
+#include "workspace/workspace.h"
+
 #include <gtest/gtest.h>
 
 #include <fstream>
 
 #include "base/error.h"
-#include "workspace/workspace.h"
 
 namespace mvtm {
 namespace {
@@ -29,7 +30,8 @@ TEST(Workspace, MissingItemsAndProvenance) {
     ws.Require("ptmrender", {WsItem::kMesh});
     FAIL();
   } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()), d.string() + ": not ready for ptmrender: missing mesh.ply (or meshed-poisson.ply)");
+    EXPECT_EQ(std::string(e.what()),
+              d.string() + ": not ready for ptmrender: missing mesh.ply (or meshed-poisson.ply)");
   }
   std::ofstream(d / "meshed-poisson.ply") << "x";
   EXPECT_EQ(ws.MeshPath(), d / "meshed-poisson.ply");  // a COLMAP dense workspace works as is
