@@ -408,85 +408,98 @@ void Put(std::ostream& o, T v) {
 
 }  // namespace
 
+namespace {
+
+std::map<uint32_t, Camera> ReadCamerasBinary(const std::string& path) {
+  std::map<uint32_t, Camera> out;
+  BinReader in(path);
+  uint64_t n = in.Get<uint64_t>("camera count");
+  in.CheckCount(n, 24, "camera");
+  for (uint64_t i = 0; i < n; ++i) {
+    Camera c;
+    c.id = in.Get<uint32_t>("CAMERA_ID");
+    int32_t model = in.Get<int32_t>("MODEL_ID");
+    try {
+      c.model = CameraModelFromId(model);
+    } catch (const Error& e) {
+      in.Fail(e.what());
+    }
+    c.width = in.Get<uint64_t>("WIDTH");
+    c.height = in.Get<uint64_t>("HEIGHT");
+    for (int k = 0; k < CameraModelNumParams(c.model); ++k)
+      c.params.push_back(in.Get<double>("PARAMS"));
+    if (!out.emplace(c.id, c).second) in.Fail("duplicate CAMERA_ID " + std::to_string(c.id));
+  }
+  in.ExpectEnd();
+  return out;
+}
+
+std::map<uint32_t, ImageRecord> ReadImagesBinary(const std::string& path) {
+  std::map<uint32_t, ImageRecord> out;
+  BinReader in(path);
+  uint64_t n = in.Get<uint64_t>("image count");
+  in.CheckCount(n, 73, "image");
+  for (uint64_t i = 0; i < n; ++i) {
+    ImageRecord im;
+    im.id = in.Get<uint32_t>("IMAGE_ID");
+    double q[4], t[3];
+    for (double& v : q) v = in.Get<double>("QVEC");
+    for (double& v : t) v = in.Get<double>("TVEC");
+    if (!(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3] > 0))
+      in.Fail("image " + std::to_string(im.id) + ": quaternion has zero norm");
+    im.world_to_camera = Rigid3d(Eigen::Quaterniond(q[0], q[1], q[2], q[3]), {t[0], t[1], t[2]});
+    im.camera_id = in.Get<uint32_t>("CAMERA_ID");
+    im.name = in.GetString();
+    uint64_t np = in.Get<uint64_t>("points2D count");
+    in.CheckCount(np, 24, "points2D");
+    im.points2D.resize(np);
+    for (auto& p : im.points2D) {
+      p.xy.x() = in.Get<double>("X");
+      p.xy.y() = in.Get<double>("Y");
+      p.point3D_id = in.Get<uint64_t>("POINT3D_ID");
+    }
+    uint32_t id = im.id;
+    if (!out.emplace(id, std::move(im)).second) in.Fail("duplicate IMAGE_ID " + std::to_string(id));
+  }
+  in.ExpectEnd();
+  return out;
+}
+
+std::map<uint64_t, Point3D> ReadPoints3DBinary(const std::string& path) {
+  std::map<uint64_t, Point3D> out;
+  BinReader in(path);
+  uint64_t n = in.Get<uint64_t>("point count");
+  in.CheckCount(n, 43, "point");
+  for (uint64_t i = 0; i < n; ++i) {
+    Point3D p;
+    p.id = in.Get<uint64_t>("POINT3D_ID");
+    for (int k = 0; k < 3; ++k) p.xyz[k] = in.Get<double>("XYZ");
+    for (auto& c : p.rgb) c = in.Get<uint8_t>("RGB");
+    p.error = in.Get<double>("ERROR");
+    uint64_t tl = in.Get<uint64_t>("track length");
+    in.CheckCount(tl, 8, "track");
+    p.track.resize(tl);
+    for (auto& el : p.track) {
+      el.image_id = in.Get<uint32_t>("IMAGE_ID");
+      el.point2D_idx = in.Get<uint32_t>("POINT2D_IDX");
+    }
+    uint64_t id = p.id;
+    if (!out.emplace(id, std::move(p)).second)
+      in.Fail("duplicate POINT3D_ID " + std::to_string(id));
+  }
+  in.ExpectEnd();
+  return out;
+}
+
+}  // namespace
+
 Reconstruction ReadColmapBinary(const std::string& dir) {
   Reconstruction r;
-  const std::string cam_file = (fs::path(dir) / "cameras.bin").string();
   const std::string img_file = (fs::path(dir) / "images.bin").string();
   const std::string pts_file = (fs::path(dir) / "points3D.bin").string();
-  {
-    BinReader in(cam_file);
-    uint64_t n = in.Get<uint64_t>("camera count");
-    in.CheckCount(n, 24, "camera");
-    for (uint64_t i = 0; i < n; ++i) {
-      Camera c;
-      c.id = in.Get<uint32_t>("CAMERA_ID");
-      int32_t model = in.Get<int32_t>("MODEL_ID");
-      try {
-        c.model = CameraModelFromId(model);
-      } catch (const Error& e) {
-        in.Fail(e.what());
-      }
-      c.width = in.Get<uint64_t>("WIDTH");
-      c.height = in.Get<uint64_t>("HEIGHT");
-      for (int k = 0; k < CameraModelNumParams(c.model); ++k)
-        c.params.push_back(in.Get<double>("PARAMS"));
-      if (!r.cameras.emplace(c.id, c).second)
-        in.Fail("duplicate CAMERA_ID " + std::to_string(c.id));
-    }
-    in.ExpectEnd();
-  }
-  {
-    BinReader in(img_file);
-    uint64_t n = in.Get<uint64_t>("image count");
-    in.CheckCount(n, 73, "image");
-    for (uint64_t i = 0; i < n; ++i) {
-      ImageRecord im;
-      im.id = in.Get<uint32_t>("IMAGE_ID");
-      double q[4], t[3];
-      for (double& v : q) v = in.Get<double>("QVEC");
-      for (double& v : t) v = in.Get<double>("TVEC");
-      if (!(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3] > 0))
-        in.Fail("image " + std::to_string(im.id) + ": quaternion has zero norm");
-      im.world_to_camera = Rigid3d(Eigen::Quaterniond(q[0], q[1], q[2], q[3]), {t[0], t[1], t[2]});
-      im.camera_id = in.Get<uint32_t>("CAMERA_ID");
-      im.name = in.GetString();
-      uint64_t np = in.Get<uint64_t>("points2D count");
-      in.CheckCount(np, 24, "points2D");
-      im.points2D.resize(np);
-      for (auto& p : im.points2D) {
-        p.xy.x() = in.Get<double>("X");
-        p.xy.y() = in.Get<double>("Y");
-        p.point3D_id = in.Get<uint64_t>("POINT3D_ID");
-      }
-      uint32_t id = im.id;
-      if (!r.images.emplace(id, std::move(im)).second)
-        in.Fail("duplicate IMAGE_ID " + std::to_string(id));
-    }
-    in.ExpectEnd();
-  }
-  {
-    BinReader in(pts_file);
-    uint64_t n = in.Get<uint64_t>("point count");
-    in.CheckCount(n, 43, "point");
-    for (uint64_t i = 0; i < n; ++i) {
-      Point3D p;
-      p.id = in.Get<uint64_t>("POINT3D_ID");
-      for (int k = 0; k < 3; ++k) p.xyz[k] = in.Get<double>("XYZ");
-      for (auto& c : p.rgb) c = in.Get<uint8_t>("RGB");
-      p.error = in.Get<double>("ERROR");
-      uint64_t tl = in.Get<uint64_t>("track length");
-      in.CheckCount(tl, 8, "track");
-      p.track.resize(tl);
-      for (auto& el : p.track) {
-        el.image_id = in.Get<uint32_t>("IMAGE_ID");
-        el.point2D_idx = in.Get<uint32_t>("POINT2D_IDX");
-      }
-      uint64_t id = p.id;
-      if (!r.points3D.emplace(id, std::move(p)).second)
-        in.Fail("duplicate POINT3D_ID " + std::to_string(id));
-    }
-    in.ExpectEnd();
-  }
+  r.cameras = ReadCamerasBinary((fs::path(dir) / "cameras.bin").string());
+  r.images = ReadImagesBinary(img_file);
+  r.points3D = ReadPoints3DBinary(pts_file);
   CheckReferences(r, img_file, pts_file);
   return r;
 }

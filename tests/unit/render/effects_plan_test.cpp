@@ -6,6 +6,7 @@
 
 #include <cmath>
 
+#include "gl_suite.h"
 #include "render/context.h"
 #include "render/renderer.h"
 
@@ -105,16 +106,7 @@ TEST(EffectsPlan, SurveyKeepsTheFirstHoleAndTheLeastCoverage) {
 // Camera at the origin looking down +z, 40×20 px, f = 20, c = (20, 10); the half-plane x ≥ 0 at
 // z = 10 fills exactly the image columns u ≥ 20 (pixel centres 20.5 .. 39.5): 400 surface
 // pixels, 400 holes.
-class SurveyViewTest : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() { ctx_ = GlContext::Create().release(); }
-  static void TearDownTestSuite() {
-    delete ctx_;
-    ctx_ = nullptr;
-  }
-  static GlContext* ctx_;
-};
-GlContext* SurveyViewTest::ctx_ = nullptr;
+class SurveyViewTest : public GlSuite {};
 
 Mesh HalfPlane() {
   Mesh m;

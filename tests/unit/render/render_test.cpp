@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "base/error.h"
+#include "gl_suite.h"
 #include "render/context.h"
 #include "render/gl_program.h"
 #include "render/renderer.h"
@@ -14,16 +15,7 @@
 namespace mvtm {
 namespace {
 
-class RenderTest : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() { ctx_ = GlContext::Create().release(); }
-  static void TearDownTestSuite() {
-    delete ctx_;
-    ctx_ = nullptr;
-  }
-  static GlContext* ctx_;
-};
-GlContext* RenderTest::ctx_ = nullptr;
+class RenderTest : public GlSuite {};
 
 Camera Cam(int w = 64, int h = 48, double f = 50) {
   return ParseCameraSpec("PINHOLE " + std::to_string(w) + " " + std::to_string(h) + " " +
