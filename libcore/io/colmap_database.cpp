@@ -63,16 +63,23 @@ std::map<std::string, std::pair<uint32_t, uint32_t>> ColmapDatabase::Images() co
   return out;
 }
 
+namespace {
+// Parameters 1..4 of a camera row: model, width, height, params (COLMAP's blob of doubles).
+void BindCamera(sqlite3_stmt* s, const Camera& c) {
+  sqlite3_bind_int64(s, 1, static_cast<int>(c.model));
+  sqlite3_bind_int64(s, 2, static_cast<sqlite3_int64>(c.width));
+  sqlite3_bind_int64(s, 3, static_cast<sqlite3_int64>(c.height));
+  sqlite3_bind_blob(s, 4, c.params.data(), static_cast<int>(c.params.size() * sizeof(double)),
+                    SQLITE_TRANSIENT);
+}
+}  // namespace
+
 uint32_t ColmapDatabase::AddCamera(const Camera& c) {
   Stmt st(
       db_,
       "INSERT INTO cameras(model, width, height, params, prior_focal_length) VALUES(?,?,?,?,1);",
       path_);
-  sqlite3_bind_int64(st.s, 1, static_cast<int>(c.model));
-  sqlite3_bind_int64(st.s, 2, static_cast<sqlite3_int64>(c.width));
-  sqlite3_bind_int64(st.s, 3, static_cast<sqlite3_int64>(c.height));
-  sqlite3_bind_blob(st.s, 4, c.params.data(), static_cast<int>(c.params.size() * sizeof(double)),
-                    SQLITE_TRANSIENT);
+  BindCamera(st.s, c);
   if (sqlite3_step(st.s) != SQLITE_DONE)
     throw Error(path_, 0, std::string("database: ") + sqlite3_errmsg(db_));
   return static_cast<uint32_t>(sqlite3_last_insert_rowid(db_));
@@ -83,11 +90,7 @@ void ColmapDatabase::UpdateCamera(uint32_t id, const Camera& c) {
           "UPDATE cameras SET model=?, width=?, height=?, params=?, prior_focal_length=1 WHERE "
           "camera_id=?;",
           path_);
-  sqlite3_bind_int64(st.s, 1, static_cast<int>(c.model));
-  sqlite3_bind_int64(st.s, 2, static_cast<sqlite3_int64>(c.width));
-  sqlite3_bind_int64(st.s, 3, static_cast<sqlite3_int64>(c.height));
-  sqlite3_bind_blob(st.s, 4, c.params.data(), static_cast<int>(c.params.size() * sizeof(double)),
-                    SQLITE_TRANSIENT);
+  BindCamera(st.s, c);
   sqlite3_bind_int64(st.s, 5, id);
   if (sqlite3_step(st.s) != SQLITE_DONE)
     throw Error(path_, 0, std::string("database: ") + sqlite3_errmsg(db_));

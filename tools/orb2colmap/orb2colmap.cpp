@@ -58,14 +58,13 @@ std::string Basename(const std::string& p) { return fs::path(p).filename().strin
 
 // True when all three model files exist and are newer than every input.
 bool ModelIsUpToDate(const Orb2ColmapOptions& o) {
-  const char* ext = o.binary ? ".bin" : ".txt";
   std::vector<fs::path> inputs;
   for (const std::string& in :
        {o.trajectory, o.trajectory_times, o.frames, o.orb_settings, o.kitti_calib, o.images})
     if (!in.empty()) inputs.emplace_back(in);
   bool fresh = true;
-  for (const char* f : {"cameras", "images", "points3D"})
-    fresh = fresh && IsUpToDate(fs::path(o.outdir) / (std::string(f) + ext), inputs);
+  for (const auto& f : ColmapModelFileNames(o.binary))
+    fresh = fresh && IsUpToDate(fs::path(o.outdir) / f, inputs);
   return fresh;
 }
 

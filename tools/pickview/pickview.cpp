@@ -309,15 +309,6 @@ class Selector {
   SearchMethod method_;
 };
 
-std::vector<fs::path> ModelFiles(const Workspace& ws) {
-  std::vector<fs::path> files;
-  for (const char* f : {"cameras", "images", "points3D"})
-    for (const char* ext : {".txt", ".bin"})
-      if (fs::exists(ws.SparseDir() / (std::string(f) + ext)))
-        files.push_back(ws.SparseDir() / (std::string(f) + ext));
-  return files;
-}
-
 // Partners mode: WS/partners.tsv and the provenance record of the run.
 void WritePartnersAndProvenance(const PickViewOptions& o, const Workspace& ws,
                                 const Workspace* other_ws, const std::vector<PartnerRow>& rows) {
@@ -331,9 +322,9 @@ void WritePartnersAndProvenance(const PickViewOptions& o, const Workspace& ws,
                          {"other", o.other},
                          {"prefer_unmasked", o.prefer_unmasked},
                          {"tie_margin", o.tie_margin}};
-  std::vector<fs::path> inputs = ModelFiles(ws);
+  std::vector<fs::path> inputs = ws.SparseModelFiles();
   if (other_ws)
-    for (const auto& f : ModelFiles(*other_ws)) inputs.push_back(f);
+    for (const auto& f : other_ws->SparseModelFiles()) inputs.push_back(f);
   ws.WriteProvenance("pickview", opts, inputs);
 }
 

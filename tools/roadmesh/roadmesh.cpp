@@ -95,10 +95,9 @@ Mesh DenseMesh(const Workspace& ws, const Reconstruction& rec, const RoadMeshOpt
 void WriteRoadMeshProvenance(const Workspace& ws, const RoadMeshOptions& o,
                              const RoadMeshReport& rep) {
   std::vector<fs::path> inputs;
-  for (const char* f : {"images", "cameras", "points3D"})
-    for (const char* ext : {".txt", ".bin"})
-      if (fs::exists(ws.SparseDir() / (std::string(f) + ext)))
-        inputs.push_back(ws.SparseDir() / (std::string(f) + ext));
+  inputs = ws.SparseModelFiles();
+  if (o.dense)
+    for (const auto& e : fs::directory_iterator(ws.StereoDir())) inputs.push_back(e.path());
   nlohmann::json opts = {{"width", o.width},
                          {"wall_height", o.wall_height},
                          {"resolution", o.resolution},
