@@ -78,6 +78,9 @@ if [ ! -f "$ws/mesh.ply" ] && [ ! -f "$ws/meshed-poisson.ply" ]; then
   fi
 fi
 
+log "3b. exposure: a gain and an offset per photo, so that projectors blend at one exposure"
+"$bin/exposure" -q "$ws"
+
 log "4. vehicle masks and partners"
 if [ -d "$ws/labels" ] && [ ! -f "$ws/tracks.tsv" ]; then "$bin/segtrack" "$ws/labels" "$ws"; fi
 passes=$(ls "$ws/images" | sed -n 's/^\([^_]*\)_.*/\1/p' | sort -u | wc -l)
@@ -103,9 +106,13 @@ done
 
 log "7. ssim: held-out renders against the real photographs"
 for r in vertex ptm1 ptm; do "$bin/ssim" "$out/heldout_$r" "$out/heldout_truth" > "$out/ssim_$r.tsv"; done
+# The same renders with the held-out photo's own exposure fitted (ssim --fit-exposure): the photo
+# was taken at an exposure no other photo knows; raw scores above, fitted ones here.
+"$bin/ssim" --fit-exposure "$out/heldout_ptm" "$out/heldout_truth" > "$out/ssim_ptm_fitted.tsv"
 paste "$out/ssim_vertex.tsv" "$out/ssim_ptm1.tsv" "$out/ssim_ptm.tsv" |
   awk -F'\t' 'NR == 1 { printf "%-12s %10s %10s %14s\n", "frame", "vertex", "PTM 1 proj", "PTM all effects"; next }
               { printf "%-12s %10s %10s %14s\n", $1, $2, $6, $10 }'
+echo "PTM, all effects, held-out photo's exposure fitted (ssim --fit-exposure): mean SSIM $(awk -F'\t' '$1 == "mean" { print $2 }' "$out/ssim_ptm_fitted.tsv"), PSNR $(awk -F'\t' '$1 == "mean" { print $4 }' "$out/ssim_ptm_fitted.tsv") (raw PSNR $(awk -F'\t' '$1 == "mean" { print $4 }' "$out/ssim_ptm.tsv"))" >&2
 
 if [ "${HOLDOUT_STRICT:-0}" = 1 ]; then
   log "8. strict hold-out: mesh, colours and projectors from a workspace without the held-out photos"
@@ -123,6 +130,7 @@ if [ "${HOLDOUT_STRICT:-0}" = 1 ]; then
        ++n % 2 == 1 { ok = ($10 in keep); if (ok) print; next } ok { print "" }' \
     "$out/heldout_names.txt" "$out/full_txt/images.txt" > "$out/heldout_poses.txt"
   [ -f "$train/mesh.ply" ] || cpu_mesh "$train"
+  "$bin/exposure" -q "$train"
   "$bin/bakedepth" -q "$train"
   "$bin/ptmrender" -q --mode vertex --poses "$out/heldout_poses.txt" "$train" "$out/strict_vertex"
   "$bin/ptmrender" -q --poses "$out/heldout_poses.txt" "$train" "$out/strict_ptm"

@@ -4,6 +4,7 @@
 //   MVTM_OCCLUSION            compare with the projector's depth map (Alg. 2)
 //   MVTM_MASKS                skip masked projector texels (the next projector is tried)
 //   MVTM_SKYBOX               (sky.frag) sky only where the projector's depth map is +inf
+//   MVTM_EXPOSURE             bring each projector's samples to the workspace's common exposure
 uniform int u_num_projectors;
 uniform mat3 u_proj_R[MVTM_MAX_PROJECTORS];   // world → projector camera rotation
 uniform vec3 u_proj_t[MVTM_MAX_PROJECTORS];   // R_k (C_render − C_k), double on the CPU
@@ -19,6 +20,9 @@ uniform float u_bias;                         // relative: occluded when z > d·
 #endif
 #ifdef MVTM_MASKS
 uniform sampler2DArray u_masks;               // R8, 1 = do not use this texel
+#endif
+#ifdef MVTM_EXPOSURE
+uniform vec2 u_proj_exposure[MVTM_MAX_PROJECTORS];  // gain, offset/255 of I = gain·L + offset
 #endif
 
 // Projects camera-relative point (or direction, w = 0) into projector k. Returns false when
@@ -63,5 +67,9 @@ bool Usable(int k, vec2 uv, float z, bool at_infinity) {
 }
 
 vec3 Sample(int k, vec2 uv) {
-  return texture(u_images, vec3(uv / u_proj_size, float(u_proj_layer[k]))).rgb;
+  vec3 c = texture(u_images, vec3(uv / u_proj_size, float(u_proj_layer[k]))).rgb;
+#ifdef MVTM_EXPOSURE
+  c = (c - u_proj_exposure[k].y) / u_proj_exposure[k].x;  // the radiance L, common frame
+#endif
+  return c;
 }

@@ -15,6 +15,7 @@ std::vector<std::string> EffectsPlan::Defines() const {
   if (occlusion) d.push_back("MVTM_OCCLUSION");
   if (masks) d.push_back("MVTM_MASKS");
   if (skybox) d.push_back("MVTM_SKYBOX");
+  if (exposure) d.push_back("MVTM_EXPOSURE");
   return d;
 }
 
@@ -61,6 +62,7 @@ EffectsPlan PlanEffects(const SceneSurvey& s) {
   plan.occlusion = s.ptm && !s.no_occlusion && s.projector_differs;
   plan.masks = s.ptm && !s.no_masks && !s.mask_example.empty();
   plan.skybox = s.ptm && !s.no_skybox && s.frames_with_holes > 0;
+  plan.exposure = s.ptm && !s.no_exposure && !s.exposure_example.empty();
   return plan;
 }
 
@@ -115,7 +117,16 @@ nlohmann::json ExplainEffects(const SceneSurvey& s, const EffectsPlan& plan) {
                   " frames see no surface somewhere (e.g. " + s.hole_example + ")",
               !s.ptm        ? vertex_mode
               : s.no_skybox ? "turned off by --no-skybox"
-                            : "every pixel of every frame sees the mesh")}};
+                            : "every pixel of every frame sees the mesh")},
+      {"exposure",
+       Choice(plan.exposure,
+              "selected projector " + s.exposure_example +
+                  " was recorded at another exposure (exposure.tsv): its samples are brought to "
+                  "the common one",
+              !s.ptm ? vertex_mode
+              : s.no_exposure
+                  ? "turned off by --no-exposure"
+                  : "no exposure.tsv, or every selected projector at the common exposure")}};
 }
 
 }  // namespace mvtm

@@ -27,6 +27,7 @@ struct EffectsPlan {
   bool occlusion = false;  // test against projector depth maps
   bool masks = false;      // skip masked projector texels
   bool skybox = false;     // background from projectors at infinity (else constant colour)
+  bool exposure = false;   // projectors' samples brought to the common exposure (gain, offset)
   double bias = 0.005;     // relative occlusion bias: occluded when z > d·(1 + bias)
   std::array<float, 3> background{0, 0, 0};  // 0..255
 
@@ -41,10 +42,12 @@ struct SceneSurvey {
   int projectors_requested = 4;                                    // K
   double bias = 0.005;                                             // relative occlusion bias
   bool no_occlusion = false, no_masks = false, no_skybox = false;  // the user's switches
+  bool no_exposure = false;                                        // the user's switch
   // The inputs.
   bool projector_differs = false;   // some selected projector is not the pose it serves
   bool several_admissible = false;  // some pose has more than one admissible projector
   std::string mask_example;         // a selected projector with set mask pixels ("": none)
+  std::string exposure_example;     // a selected projector not at the common exposure ("": none)
   size_t frames_surveyed = 0;       // poses whose views were surveyed for holes
   size_t frames_with_holes = 0;     // ... of which see no surface somewhere
   std::string hole_example;         // one of those ("": none)
@@ -68,7 +71,8 @@ void AddToSurvey(SceneSurvey& survey, const ViewCoverage& view, const std::strin
 EffectsPlan PlanEffects(const SceneSurvey& survey);
 
 // {"reverse_projection_rejection": {"on": true, "reason": "..."}, "clip_test": ..., "occlusion":
-// ..., "several_projectors": ..., "vertex_colour_fallback": ..., "masks": ..., "skybox": ...}
+// ..., "several_projectors": ..., "vertex_colour_fallback": ..., "masks": ..., "skybox": ...,
+// "exposure": ...}
 nlohmann::json ExplainEffects(const SceneSurvey& survey, const EffectsPlan& plan);
 
 }  // namespace mvtm

@@ -338,6 +338,9 @@ struct Renderer::Impl {
       glUniform4fv(glGetUniformLocation(prog, ("u_proj_K" + i).c_str()), 1, K.data());
       glUniform1i(glGetUniformLocation(prog, ("u_proj_layer" + i).c_str()),
                   layer_of[static_cast<size_t>(k)]);
+      if (plan.exposure)
+        glUniform2f(glGetUniformLocation(prog, ("u_proj_exposure" + i).c_str()), ps[k].gain,
+                    ps[k].offset / 255.f);
     }
     if (n > 0) {
       glUniform2f(glGetUniformLocation(prog, "u_proj_size"), float(ps[0].image->width),

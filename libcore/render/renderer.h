@@ -42,6 +42,9 @@ struct Projector {
   // every projector of a frame has a key ≥ 0 and the keys equal the previous frame's, the
   // textures already on the GPU are reused instead of uploaded again.
   int64_t key = -1;
+  // Exposure of the image, I = gain · L + offset (8-bit scale; radiometry/exposure.h): with
+  // plan.exposure its samples are brought to the common frame, (I − offset) / gain.
+  float gain = 1.f, offset = 0.f;
 };
 
 struct RenderStats {

@@ -4,6 +4,7 @@
 
 #include "base/error.h"
 #include "image/mask.h"
+#include "io/exposure_tsv.h"
 
 namespace mvtm {
 
@@ -27,7 +28,18 @@ ProjectorSources::ProjectorSources(const Workspace& ws, const Reconstruction& re
       images_(std::move(images)),
       renderer_(renderer),
       prefer_textures_(prefer_textures),
-      capacity_(capacity) {}
+      capacity_(capacity) {
+  if (fs::exists(ws.ExposurePath()))
+    for (const auto& row : ReadExposureTsv(ws.ExposurePath().string()))
+      exposure_[row.image] = {row.gain, row.offset};
+}
+
+bool ProjectorSources::ExposureOf(size_t k, float& gain, float& offset) const {
+  auto it = exposure_.find(images_[k]->name);
+  gain = it == exposure_.end() ? 1.f : float(it->second.first);
+  offset = it == exposure_.end() ? 0.f : float(it->second.second);
+  return gain != 1.f || offset != 0.f;
+}
 
 View ProjectorSources::ViewOf(size_t k) const {
   return View{rec_.cameras.at(images_[k]->camera_id), images_[k]->world_to_camera};

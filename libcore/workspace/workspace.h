@@ -8,6 +8,7 @@
 //   masks/NAME.png        8-bit masks, 255 = remove (segtrack output)
 //   tracks.tsv            segtrack's tracks
 //   partners.tsv          pickview's view selection
+//   exposure.tsv          gain and offset per image (exposure)
 //   depth/NAME.exr        float32 linear camera-space depth, +inf = no surface (bakedepth)
 //   stereo/NAME.exr       float32 linear depth from multi-view stereo, +inf = untrusted (densify)
 //   stereo/NAME.conf.exr  its confidence, 0..1
@@ -75,6 +76,9 @@ class Workspace {
   std::vector<fs::path> SparseModelFiles() const;
   fs::path TracksPath() const;
   fs::path PartnersPath() const;
+  // exposure.tsv: gain and offset per image (exposure); ptmrender brings projectors to one
+  // exposure.
+  fs::path ExposurePath() const;
   fs::path ProvenancePath(const std::string& tool) const;
 
   // What `tool` needs that is missing, one human-readable item each (empty: ready).

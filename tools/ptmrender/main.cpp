@@ -49,6 +49,8 @@ int main(int argc, char** argv) {
                "Never test projector depth (off even when needed)");
   app.add_flag("--no-skybox", o.no_skybox, "Constant background instead of projected sky");
   app.add_flag("--no-masks", o.no_masks, "Ignore masks/ (vehicles are projected too)");
+  app.add_flag("--no-exposure", o.no_exposure,
+               "Ignore exposure.tsv (each projector at its own exposure)");
   app.add_option("--size", o.size, "Render size WxH (default: the camera's)");
   app.add_flag(
       "--explain", o.explain,

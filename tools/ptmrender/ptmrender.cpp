@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <ostream>
@@ -14,6 +15,7 @@
 #include "image/async_writer.h"
 #include "image/mask.h"
 #include "io/colmap_model.h"
+#include "io/exposure_tsv.h"
 #include "io/mesh_io.h"
 #include "io/trajectory.h"
 #include "render/context.h"
@@ -159,6 +161,20 @@ std::string FindMaskedProjector(const Workspace& ws, const Scene& scene,
   return "";
 }
 
+// The name of the first used projector whose exposure (exposure.tsv) is not the identity.
+std::string FindExposedProjector(const Workspace& ws, const Scene& scene,
+                                 const std::set<size_t>& used) {
+  if (!fs::exists(ws.ExposurePath())) return "";
+  std::map<std::string, ExposureRow> rows;
+  for (auto& r : ReadExposureTsv(ws.ExposurePath().string())) rows[r.image] = r;
+  for (size_t i : used) {
+    auto it = rows.find(scene.images[i]->name);
+    if (it != rows.end() && (float(it->second.gain) != 1.f || float(it->second.offset) != 0.f))
+      return it->first;
+  }
+  return "";
+}
+
 SceneSurvey StartSurvey(const PtmRenderOptions& o, const Workspace& ws, const Scene& scene,
                         const ProjectorPicks& picks) {
   SceneSurvey s;
@@ -168,9 +184,11 @@ SceneSurvey StartSurvey(const PtmRenderOptions& o, const Workspace& ws, const Sc
   s.no_occlusion = o.no_occlusion;
   s.no_masks = o.no_masks;
   s.no_skybox = o.no_skybox;
+  s.no_exposure = o.no_exposure;
   s.projector_differs = picks.differs;
   s.several_admissible = picks.several;
   if (s.ptm && !o.no_masks) s.mask_example = FindMaskedProjector(ws, scene, picks.used);
+  if (s.ptm && !o.no_exposure) s.exposure_example = FindExposedProjector(ws, scene, picks.used);
   return s;
 }
 
@@ -251,6 +269,7 @@ std::vector<Projector> FrameProjectors(const FrameJob& job, size_t i, ProjectorS
       rep.depth_ms += Ms(td, Clock::now());
     }
     if (job.plan.masks) p.mask = sources.MaskOf(c.index);
+    if (job.plan.exposure) sources.ExposureOf(c.index, p.gain, p.offset);
     ps.push_back(p);
   }
   return ps;
@@ -339,7 +358,8 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
 
   PtmRenderReport rep;
   rep.frames = chosen.size();
-  const std::vector<fs::path> inputs = {ws.MeshPath()};
+  std::vector<fs::path> inputs = {ws.MeshPath()};
+  if (!o.no_exposure && fs::exists(ws.ExposurePath())) inputs.push_back(ws.ExposurePath());
   const std::vector<size_t> todo = FramesToRender(o, poses, chosen, inputs, rep);
   if (todo.empty() && !o.explain) return rep;
 

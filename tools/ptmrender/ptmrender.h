@@ -26,10 +26,11 @@ struct PtmRenderOptions : WorkOptions {
   int projectors = 4;         // K: projectors tried per pixel, nearest first
   double bias = 0.005;        // relative occlusion bias
   bool no_occlusion = false, no_skybox = false, no_masks = false;
-  std::string size;         // WxH render size (default: the camera's)
-  bool explain = false;     // print the effects plan as JSON and render nothing
-  bool provenance = false;  // also write OUTDIR/provenance/NAME.png (source of each pixel)
-  bool exr = false;         // write float EXR instead of PNG
+  bool no_exposure = false;  // ignore exposure.tsv (projectors at their own exposures)
+  std::string size;          // WxH render size (default: the camera's)
+  bool explain = false;      // print the effects plan as JSON and render nothing
+  bool provenance = false;   // also write OUTDIR/provenance/NAME.png (source of each pixel)
+  bool exr = false;          // write float EXR instead of PNG
   ViewSelectionOptions selection;
   std::string gl = "auto";  // one of GlBackendNames()
 

@@ -27,6 +27,9 @@ int main(int argc, char** argv) {
                  "NAME.exr")
       ->type_name("OUT");
   app.add_flag("--json", o.json, "Write JSON instead of TSV");
+  app.add_flag("--fit-exposure", o.fit_exposure,
+               "First bring A to the exposure of B: gain and offset fitted by least squares "
+               "(inside the mask)");
   app.add_option("--sigma", o.ssim.sigma, "Gaussian window standard deviation in pixels")
       ->capture_default_str()
       ->type_name("S");

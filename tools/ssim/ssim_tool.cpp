@@ -13,6 +13,7 @@
 #include "base/error.h"
 #include "image/folder.h"
 #include "image/image.h"
+#include "radiometry/exposure.h"
 
 namespace mvtm {
 
@@ -121,6 +122,7 @@ Row ComparePair(const PairJob& job, const SsimToolOptions& o) {
                                   " (" + std::to_string(a.width) + "x" + std::to_string(a.height) +
                                   ")");
   }
+  if (o.fit_exposure) a = ApplyExposure(a, FitImageExposure(a, b, mask ? &*mask : nullptr));
   Image map;
   Row row;
   row.name = job.name;

@@ -37,7 +37,9 @@ struct SsimToolOptions {
   std::string map;                            // SSIM map output: .exr/.png file, or a folder
   bool json = false;                          // JSON instead of TSV
   ChannelMode channels = ChannelMode::kMean;  // colour handling
-  SsimOptions ssim;                           // sigma, k1, k2, data_range (0 = bit depth)
+  bool fit_exposure =
+      false;         // first bring A to B's exposure: gain and offset fitted (inside the mask)
+  SsimOptions ssim;  // sigma, k1, k2, data_range (0 = bit depth)
 
   // Throws UsageError naming the bad value.
   void Check() const;
