@@ -15,12 +15,31 @@ namespace mvtm {
 
 namespace {
 
+// Lengths in metre-equivalents (times the unit in model units).
 constexpr double kDefaultCameraHeight = 1.65;  // KITTI; used when too few points lie below
 constexpr double kDefaultWall = 8.0;           // wall distance where no side has enough points
 constexpr double kMaxWall = 30.0;
 constexpr double kExtend = 30.0;     // corridor continues this far past both ends
 constexpr double kWallWindow = 5.0;  // half-length of the along-path wall window
+constexpr double kFarAway = 60.0;    // points farther from the path are ignored
+constexpr double kPathStep = 0.5;    // spacing of the fine path in the ordering parameter
+constexpr double kMinSigma = 2.0;    // smallest path smoothing sigma
 constexpr size_t kMinGroundPoints = 10, kMinWallPoints = 5, kMinCellPoints = 3;
+
+// The options in model units; `u` converts any other metre-equivalent.
+struct Lengths {
+  double u, width, wall_height, res;
+  explicit Lengths(const CorridorOptions& o)
+      : u(o.unit),
+        width(o.width * o.unit),
+        wall_height(o.wall_height * o.unit),
+        res(o.resolution * o.unit) {}
+};
+
+// Counts from ratios of lengths: a 1e-9 tolerance, so a scaled model (whose ratios differ in the
+// last bits) gets the same grid.
+size_t CeilCount(double ratio) { return static_cast<size_t>(std::ceil(ratio - 1e-9)); }
+size_t FloorCount(double ratio) { return static_cast<size_t>(std::floor(ratio + 1e-9)); }
 
 double Median(std::vector<double> v) {
   if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
@@ -70,19 +89,20 @@ std::vector<std::pair<double, size_t>> OrderAlongRoad(const std::vector<Eigen::V
   return order;
 }
 
-// A fine polyline every 0.5 of the ordering parameter: weighted local linear fits of the centres.
+// A fine polyline every kPathStep of the ordering parameter: weighted local linear fits of the
+// centres. `unit`: model units per metre-equivalent.
 Polyline SmoothPath(const std::vector<std::pair<double, size_t>>& order,
                     const std::vector<Eigen::Vector3d>& centres,
-                    const std::vector<Eigen::Vector3d>& ups) {
+                    const std::vector<Eigen::Vector3d>& ups, double unit) {
   const size_t n = order.size();
   const double u0 = order.front().first, u1 = order.back().first;
-  if (u1 - u0 < 1e-6) throw Error("the cameras do not move: no path to follow");
+  if (u1 - u0 < 1e-6 * unit) throw Error("the cameras do not move: no path to follow");
   std::vector<double> gaps;
   for (size_t i = 1; i < n; ++i) gaps.push_back(order[i].first - order[i - 1].first);
-  const double sigma = std::max(2.0, 3.0 * Median(gaps));
+  const double sigma = std::max(kMinSigma * unit, 3.0 * Median(gaps));
 
   Polyline fine;
-  const int steps = std::max(2, static_cast<int>(std::ceil((u1 - u0) / 0.5)));
+  const int steps = std::max(2, static_cast<int>(CeilCount((u1 - u0) / (kPathStep * unit))));
   for (int k = 0; k <= steps; ++k) {
     const double u = u0 + (u1 - u0) * k / steps;
     double sw = 0, swx = 0, swxx = 0;
@@ -96,8 +116,9 @@ Polyline SmoothPath(const std::vector<std::pair<double, size_t>>& order,
     }
     const double det = sw * swxx - swx * swx;
     // Intercept of the weighted line fit (unbiased at the ends, unlike a weighted mean).
-    Eigen::Vector3d p = det > 1e-12 * sw * sw ? Eigen::Vector3d((swxx * swy - swx * swxy) / det)
-                                              : Eigen::Vector3d(swy / sw);
+    Eigen::Vector3d p = det > 1e-12 * sw * sw * unit * unit
+                            ? Eigen::Vector3d((swxx * swy - swx * swxy) / det)
+                            : Eigen::Vector3d(swy / sw);
     fine.p.push_back(p);
     fine.up.push_back(up.normalized());
   }
@@ -105,28 +126,29 @@ Polyline SmoothPath(const std::vector<std::pair<double, size_t>>& order,
 }
 
 // Extends the path by kExtend along its end tangents (cameras look past the last one).
-Polyline Extend(const Polyline& fine) {
+Polyline Extend(const Polyline& fine, double unit) {
   auto tangent = [&](size_t a, size_t b) {
     Eigen::Vector3d t = fine.p[b] - fine.p[a];
-    return t.norm() > 1e-9 ? Eigen::Vector3d(t.normalized()) : Eigen::Vector3d::UnitX();
+    return t.norm() > 1e-9 * unit ? Eigen::Vector3d(t.normalized()) : Eigen::Vector3d::UnitX();
   };
   const size_t last = fine.p.size() - 1, tail = std::min<size_t>(last, 4);
   const Eigen::Vector3d t_begin = tangent(0, tail), t_end = tangent(last - tail, last);
-  Polyline poly{{fine.p.front() - kExtend * t_begin}, {fine.up.front()}};
+  const double extend = kExtend * unit;
+  Polyline poly{{fine.p.front() - extend * t_begin}, {fine.up.front()}};
   poly.p.insert(poly.p.end(), fine.p.begin(), fine.p.end());
   poly.up.insert(poly.up.end(), fine.up.begin(), fine.up.end());
-  poly.p.push_back(fine.p.back() + kExtend * t_end);
+  poly.p.push_back(fine.p.back() + extend * t_end);
   poly.up.push_back(fine.up.back());
   return poly;
 }
 
-// Stations every `step` of arc length along `poly`, with their frames.
-std::vector<Station> Resample(const Polyline& poly, double step) {
+// Stations every `step` of arc length along `poly`, with their frames; `unit` as in SmoothPath.
+std::vector<Station> Resample(const Polyline& poly, double step, double unit) {
   std::vector<double> acc = {0};
   for (size_t i = 1; i < poly.p.size(); ++i)
     acc.push_back(acc.back() + (poly.p[i] - poly.p[i - 1]).norm());
   std::vector<Station> st;
-  const int count = static_cast<int>(std::floor(acc.back() / step)) + 1;
+  const int count = static_cast<int>(FloorCount(acc.back() / step)) + 1;
   size_t seg = 0;
   for (int k = 0; k < count; ++k) {
     const double s = k * step;
@@ -143,7 +165,7 @@ std::vector<Station> Resample(const Polyline& poly, double step) {
     const size_t a = k == 0 ? 0 : k - 1, b = std::min(st.size() - 1, k + 1);
     Eigen::Vector3d f = st[b].c - st[a].c;
     f -= f.dot(st[k].u) * st[k].u;  // forward lies in the plane normal to up
-    if (f.norm() < 1e-9) throw Error("the camera path runs along the cameras' up axis");
+    if (f.norm() < 1e-9 * unit) throw Error("the camera path runs along the cameras' up axis");
     st[k].f = f.normalized();
     st[k].l = st[k].u.cross(st[k].f);
   }
@@ -151,15 +173,15 @@ std::vector<Station> Resample(const Polyline& poly, double step) {
 }
 
 // The camera path ordered along the road, smoothed, extended past both ends and resampled every
-// `step` of arc length; `path_length` is the smoothed length without the extensions.
+// `len.res` of arc length; `path_length` is the smoothed length without the extensions.
 std::vector<Station> BuildPath(const std::vector<Eigen::Vector3d>& centres,
                                const std::vector<Eigen::Vector3d>& ups,
-                               const std::vector<Eigen::Vector3d>& views, double step,
+                               const std::vector<Eigen::Vector3d>& views, const Lengths& len,
                                double& path_length) {
-  const Polyline fine = SmoothPath(OrderAlongRoad(centres, views), centres, ups);
+  const Polyline fine = SmoothPath(OrderAlongRoad(centres, views), centres, ups, len.u);
   path_length = 0;
   for (size_t i = 1; i < fine.p.size(); ++i) path_length += (fine.p[i] - fine.p[i - 1]).norm();
-  return Resample(Extend(fine), step);
+  return Resample(Extend(fine, len.u), len.res, len.u);
 }
 
 // A sparse point in the corridor's coordinates: station index, arc length, lateral offset (left
@@ -169,7 +191,8 @@ struct Local {
   double s, d, h;
 };
 
-std::vector<Local> ToLocal(const Reconstruction& rec, const std::vector<Station>& st) {
+std::vector<Local> ToLocal(const Reconstruction& rec, const std::vector<Station>& st, double unit) {
+  const double far = kFarAway * unit;
   std::vector<Local> out;
   out.reserve(rec.points3D.size());
   for (const auto& [id, p] : rec.points3D) {
@@ -181,7 +204,7 @@ std::vector<Local> ToLocal(const Reconstruction& rec, const std::vector<Station>
     }
     const Eigen::Vector3d a = p.xyz - st[best].c;
     const double along = a.dot(st[best].f);
-    if (bd > 60.0 * 60.0) continue;  // far from the corridor
+    if (bd > far * far) continue;  // far from the corridor
     out.push_back({best, st[best].s + along, a.dot(st[best].l), a.dot(st[best].u)});
   }
   return out;
@@ -226,16 +249,17 @@ std::vector<double> SmoothAlong(const std::vector<double>& v, int radius) {
 // Camera height: points below the cameras, close to the path (the lane the car drives in:
 // cambered roads are higher towards their crown), else anywhere within the road. Sets
 // camera_height and ground_points.
-void FitCameraHeight(const std::vector<Local>& pts, double width, Corridor& out) {
+void FitCameraHeight(const std::vector<Local>& pts, const Lengths& len, Corridor& out) {
   std::vector<double> below;
-  for (double band : {width / 4, width / 2}) {
+  const double top = -0.5 * len.u, bottom = -4.0 * len.u;
+  for (double band : {len.width / 4, len.width / 2}) {
     below.clear();
     for (const Local& p : pts)
-      if (std::abs(p.d) < band && p.h < -0.5 && p.h > -4.0) below.push_back(-p.h);
+      if (std::abs(p.d) < band && p.h < top && p.h > bottom) below.push_back(-p.h);
     if (below.size() >= kMinGroundPoints) break;
   }
   out.ground_points = below.size() >= kMinGroundPoints ? below.size() : 0;
-  out.camera_height = out.ground_points ? Median(below) : kDefaultCameraHeight;
+  out.camera_height = out.ground_points ? Median(below) : kDefaultCameraHeight * len.u;
 }
 
 // The ground below the path: wall distances per station and a height field between the walls.
@@ -251,9 +275,13 @@ struct Ground {
 };
 
 // Walls: median lateral distance of points above the ground, per window along the path.
+// `options` only for the window in stations (a ratio of lengths).
 void FitWalls(const std::vector<Station>& st, const std::vector<Local>& pts, double cam_h,
               const CorridorOptions& o, Ground& g) {
-  const double wall_min = o.width / 2 + 1;
+  const Lengths len(o);
+  const double wall_min = (o.width / 2 + 1) * len.u, wall_max = kMaxWall * len.u;
+  const double beyond = (kMaxWall + 10) * len.u, low = -cam_h + 0.5 * len.u,
+               high = -cam_h + len.wall_height + 5 * len.u;
   std::vector<std::vector<size_t>> by_station(st.size());
   for (size_t i = 0; i < pts.size(); ++i) by_station[pts[i].k].push_back(i);
   const int win = std::max(1, static_cast<int>(std::lround(kWallWindow / o.resolution)));
@@ -263,14 +291,14 @@ void FitWalls(const std::vector<Station>& st, const std::vector<Local>& pts, dou
     for (long j = std::max(0L, k - win); j <= std::min(long(st.size()) - 1, k + win); ++j)
       for (size_t i : by_station[size_t(j)]) {
         const Local& p = pts[i];
-        if (p.h < -cam_h + 0.5 || p.h > -cam_h + o.wall_height + 5) continue;
-        if (p.d > o.width / 2 && p.d < kMaxWall + 10) l.push_back(p.d);
-        if (-p.d > o.width / 2 && -p.d < kMaxWall + 10) r.push_back(-p.d);
+        if (p.h < low || p.h > high) continue;
+        if (p.d > len.width / 2 && p.d < beyond) l.push_back(p.d);
+        if (-p.d > len.width / 2 && -p.d < beyond) r.push_back(-p.d);
       }
-    left[size_t(k)] = l.size() >= kMinWallPoints ? std::clamp(Median(l), wall_min, kMaxWall) : NAN;
-    right[size_t(k)] = r.size() >= kMinWallPoints ? std::clamp(Median(r), wall_min, kMaxWall) : NAN;
+    left[size_t(k)] = l.size() >= kMinWallPoints ? std::clamp(Median(l), wall_min, wall_max) : NAN;
+    right[size_t(k)] = r.size() >= kMinWallPoints ? std::clamp(Median(r), wall_min, wall_max) : NAN;
   }
-  const double fallback = std::clamp(kDefaultWall, wall_min, kMaxWall);
+  const double fallback = std::clamp(kDefaultWall * len.u, wall_min, wall_max);
   FillGaps(left, fallback);
   FillGaps(right, fallback);
   g.left = SmoothAlong(left, win);
@@ -279,24 +307,28 @@ void FitWalls(const std::vector<Station>& st, const std::vector<Local>& pts, dou
 
 // Ground height field: rows = stations, columns spread evenly from the right wall to the left;
 // each vertex the median height of the ground points (within 1 of the ground plane) around it.
+// The bin and search counts come from the options (ratios of lengths), the rest in model units.
 void MeasureGround(const std::vector<Station>& st, const std::vector<Local>& pts, double cam_h,
-                   double res, Ground& g) {
+                   const CorridorOptions& o, Ground& g) {
+  const Lengths len(o);
+  const double res = len.res;
   double span = 0;
   for (size_t k = 0; k < st.size(); ++k) span = std::max(span, g.left[k] + g.right[k]);
-  const size_t cols = g.cols = std::max<size_t>(2, static_cast<size_t>(std::ceil(span / res)));
+  const size_t cols = g.cols = std::max<size_t>(2, CeilCount(span / res));
   // Ground points binned by station and lateral bins of the search radius.
-  const double radius = std::max(1.0, 2 * res);
-  const int dbins = static_cast<int>(std::ceil(2 * (kMaxWall + 10) / radius));
+  const double radius_m = std::max(1.0, 2 * o.resolution), radius = radius_m * len.u;
+  const double wall_max = kMaxWall * len.u, margin = 10 * len.u, band = 1.0 * len.u;
+  const int dbins = static_cast<int>(std::ceil(2 * (kMaxWall + 10) / radius_m));
   auto dbin = [&](double d) {
-    return std::clamp(static_cast<int>(std::floor((d + kMaxWall + 10) / radius)), 0, dbins - 1);
+    return std::clamp(static_cast<int>(std::floor((d + wall_max + margin) / radius)), 0, dbins - 1);
   };
   std::vector<std::vector<std::vector<size_t>>> gbins(
       st.size(), std::vector<std::vector<size_t>>(size_t(dbins)));
   for (size_t i = 0; i < pts.size(); ++i)
-    if (std::abs(pts[i].h + cam_h) < 1.0) gbins[pts[i].k][size_t(dbin(pts[i].d))].push_back(i);
+    if (std::abs(pts[i].h + cam_h) < band) gbins[pts[i].k][size_t(dbin(pts[i].d))].push_back(i);
   g.height.assign(st.size() * (cols + 1), -cam_h);
   g.measured.assign(g.height.size(), 0);
-  const int srad = static_cast<int>(std::ceil(radius / res));
+  const int srad = static_cast<int>(std::ceil(radius_m / o.resolution));
   for (long k = 0; k < long(st.size()); ++k)
     for (size_t j = 0; j <= cols; ++j) {
       const double d = g.Lateral(size_t(k), j);
@@ -316,8 +348,8 @@ void MeasureGround(const std::vector<Station>& st, const std::vector<Local>& pts
 }
 
 // Smooths the field (two 3×3 box passes); unmeasured cells stay at the plane but blend in.
-// Returns the number of ground vertices off the plane or measured.
-size_t SmoothGround(size_t stations, double cam_h, Ground& g) {
+// Returns the number of ground vertices off the plane (by 1e-3 × unit) or measured.
+size_t SmoothGround(size_t stations, double cam_h, double unit, Ground& g) {
   const size_t cols = g.cols;
   std::vector<double>& field = g.height;
   for (int pass = 0; pass < 2; ++pass) {
@@ -335,7 +367,7 @@ size_t SmoothGround(size_t stations, double cam_h, Ground& g) {
   }
   size_t refined = 0;
   for (size_t i = 0; i < field.size(); ++i)
-    refined += std::abs(field[i] + cam_h) > 1e-3 || g.measured[i];
+    refined += std::abs(field[i] + cam_h) > 1e-3 * unit || g.measured[i];
   return refined;
 }
 
@@ -364,6 +396,7 @@ Mesh CorridorMesh(const std::vector<Station>& st, const Ground& g, const Corrido
       quad(k * gw + j, (k + 1) * gw + j, (k + 1) * gw + j + 1, k * gw + j + 1, false);
   const size_t rows =
       std::max<size_t>(1, static_cast<size_t>(std::ceil(o.wall_height / o.resolution)));
+  const double wall_height = o.wall_height * o.unit;
   for (int side = 0; side < 2; ++side) {
     const uint32_t base = static_cast<uint32_t>(mesh.vertices.size()),
                    ww = static_cast<uint32_t>(rows + 1);
@@ -371,7 +404,7 @@ Mesh CorridorMesh(const std::vector<Station>& st, const Ground& g, const Corrido
       const size_t j = side == 0 ? cols : 0;
       const double d = side == 0 ? g.left[k] : -g.right[k], h0 = g.height[k * (cols + 1) + j];
       for (size_t m = 0; m <= rows; ++m)
-        mesh.vertices.push_back(at(k, d, h0 + o.wall_height * double(m) / double(rows)));
+        mesh.vertices.push_back(at(k, d, h0 + wall_height * double(m) / double(rows)));
     }
     // (s, up) counter-clockwise has normal −left: the left wall faces the road as is.
     for (uint32_t k = 0; k + 1 < K; ++k)
@@ -396,16 +429,17 @@ Corridor BuildCorridor(const Reconstruction& rec, const CorridorOptions& o) {
     views.push_back(p.ViewDirection());
   }
   Corridor c;
-  const std::vector<Station> st = BuildPath(centres, ups, views, o.resolution, c.path_length);
+  const Lengths len(o);
+  const std::vector<Station> st = BuildPath(centres, ups, views, len, c.path_length);
   c.stations = st.size();
-  const std::vector<Local> pts = ToLocal(rec, st);
-  FitCameraHeight(pts, o.width, c);
+  const std::vector<Local> pts = ToLocal(rec, st, len.u);
+  FitCameraHeight(pts, len, c);
   Ground g;
   FitWalls(st, pts, c.camera_height, o, g);
   c.left_wall = Median(g.left);
   c.right_wall = Median(g.right);
-  MeasureGround(st, pts, c.camera_height, o.resolution, g);
-  c.refined_vertices = SmoothGround(st.size(), c.camera_height, g);
+  MeasureGround(st, pts, c.camera_height, o, g);
+  c.refined_vertices = SmoothGround(st.size(), c.camera_height, len.u, g);
   c.mesh = CorridorMesh(st, g, o);
   return c;
 }

@@ -16,9 +16,13 @@
 //     within 1 of the ground plane around each vertex, smoothed; unmeasured vertices stay on the
 //     plane.
 //
-// Conventions: poses are COLMAP's (world-to-camera, camera y down); all lengths — the options and
-// the constants above — are in the model's own unit (metres for a metric model: the defaults and
-// constants assume one); double precision throughout, so UTM-sized coordinates are fine.
+// Scale: every length above — the options and the constants — is in metre-equivalents and is
+// multiplied by `CorridorOptions::unit` (model units per metre-equivalent: 1 for a metric model),
+// so a model scaled by s and built with unit × s gives the corridor scaled by s (the same grid:
+// counts come from ratios of lengths, rounded with a 1e-9 tolerance). The results (Corridor) are
+// in model units.
+// Conventions: poses are COLMAP's (world-to-camera, camera y down); double precision throughout,
+// so UTM-sized coordinates are fine.
 // The mesh: ground grid vertices first (rows = stations, columns right to left), then the left
 // wall, then the right wall (own vertices: a sharp crease); triangles wound counter-clockwise seen
 // from the road (ground normals up, walls facing the path); area-weighted vertex normals; no
@@ -33,14 +37,16 @@
 
 namespace mvtm {
 
+// Lengths in metre-equivalents: each is multiplied by `unit` to get model units.
 struct CorridorOptions {
   double width = 8.0;         // road width: ground points within width/4 (else width/2) of the
                               // path; walls at least width/2 + 1 from it
   double wall_height = 10.0;  // wall height above the ground
   double resolution = 0.5;    // grid spacing along and across
+  double unit = 1;            // model units per metre-equivalent (1: a metric model), > 0
 };
 
-// The corridor and what it was fitted to.
+// The corridor and what it was fitted to; lengths in model units.
 struct Corridor {
   Mesh mesh;                             // vertices, faces, normals (see above)
   size_t stations = 0;                   // cross-sections along the path

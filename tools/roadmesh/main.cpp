@@ -13,19 +13,23 @@ int main(int argc, char** argv) {
       app, "roadmesh",
       "Build WS/mesh.ply from the workspace's sparse COLMAP model when there is no dense "
       "mesh: a corridor along the camera path (ground strip, side walls fitted to the "
-      "sparse points, open sky) with normals and Lambertian vertex colours.");
+      "sparse points, open sky) with normals and Lambertian vertex colours. Lengths are in "
+      "metre-equivalents: metres for a metric model (--metric), else scaled by the camera height "
+      "the scene shows (1.65 m).");
   app.add_option("WS", o.workspace, "Workspace folder (sparse/, images/)")->required();
   app.add_option("--width", o.width,
-                 "Road width in metres (0 < M <= 50): ground points within M/4 (else M/2) of the "
-                 "path; walls "
-                 "at least M/2 + 1 away")
+                 "Road width in metre-equivalents (0 < M <= 50): ground points within M/4 (else "
+                 "M/2) of the path; walls at least M/2 + 1 away")
       ->capture_default_str();
   app.add_option("--wall-height", o.wall_height,
-                 "Wall height above the ground in metres (0 < M <= 200)")
+                 "Wall height above the ground in metre-equivalents (0 < M <= 200)")
       ->capture_default_str();
   app.add_option("--resolution", o.resolution,
-                 "Grid spacing along and across in metres (0.05 <= M <= 5)")
+                 "Grid spacing along and across in metre-equivalents (0.05 <= M <= 5)")
       ->capture_default_str();
+  app.add_flag("--metric", o.metric,
+               "The model is in metres: lengths are metres (else the model's unit is its camera "
+               "height over 1.65 m)");
   app.add_flag("--no-colours", o.no_colours,
                "Write no vertex colours (no images, no OpenGL needed)");
   app.add_flag(
@@ -51,10 +55,11 @@ int main(int argc, char** argv) {
     if (!o.quiet)
       std::fprintf(
           stderr,
-          "roadmesh: %s: %zu vertices, %zu triangles; path %.1f m, camera height %.2f m (%s), "
-          "walls %.1f m left / %.1f m right; %zu ground vertices refined; %zu of %zu vertices "
-          "coloured%s%s\n",
-          r.mesh_path.c_str(), r.vertices, r.faces, r.path_length, r.camera_height,
+          "roadmesh: %s: %zu vertices, %zu triangles; unit %.4g per metre (%s); in model units: "
+          "path %.4g, camera height %.3g (%s), walls %.3g left / %.3g right; %zu ground vertices "
+          "refined; %zu of %zu vertices coloured%s%s\n",
+          r.mesh_path.c_str(), r.vertices, r.faces, r.unit.unit,
+          mvtm::DescribeSceneUnit(r.unit).c_str(), r.path_length, r.camera_height,
           r.ground_points ? (std::to_string(r.ground_points) + " points").c_str() : "default",
           r.left_wall, r.right_wall, r.refined_vertices, r.coloured, r.vertices,
           r.gl.empty() ? "" : "; ", r.gl.c_str());

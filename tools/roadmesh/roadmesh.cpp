@@ -1,5 +1,10 @@
 #include "roadmesh.h"
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <unordered_map>
 #include <vector>
 
 #include "base/error.h"
@@ -18,6 +23,59 @@
 namespace mvtm {
 
 namespace {
+
+constexpr double kDashcamHeight = 1.65;  // metres (KITTI); the unit is the height over this
+constexpr double kTypicalSpacing = 1.0;  // metres between frames, for the fallback only
+constexpr double kLowRows = 0.6;         // the bottom 40 % of the rows look at the road
+constexpr size_t kMinImagePoints = 5, kMinHeightImages = 3;
+
+double Median(std::vector<double> v) {
+  auto mid = v.begin() + static_cast<long>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+// The height of a point below the camera nearest to it when it lies in that camera's lane
+// (see SceneUnit), else NaN.
+double HeightBelowNearest(const Eigen::Vector3d& x, const std::vector<Rigid3d>& w2c,
+                          const std::vector<Eigen::Vector3d>& centres) {
+  size_t best = 0;
+  for (size_t j = 1; j < centres.size(); ++j)
+    if ((x - centres[j]).squaredNorm() < (x - centres[best]).squaredNorm()) best = j;
+  const Eigen::Vector3d v = w2c[best].q * (x - centres[best]);  // camera axes
+  const double h = v.y();
+  return h > 0 && std::abs(v.x()) <= h && std::abs(v.z()) <= h
+             ? h
+             : std::numeric_limits<double>::quiet_NaN();
+}
+
+// Per image, the median height of its road points (images with too few are left out); `w2c` the
+// images' normalised poses; `points` counts the heights used.
+std::vector<double> ImageGroundHeights(const Reconstruction& rec,
+                                       const std::vector<const ImageRecord*>& images,
+                                       const std::vector<Rigid3d>& w2c, size_t& points) {
+  std::vector<Eigen::Vector3d> centres;
+  for (const Rigid3d& p : w2c) centres.push_back(p.Centre());
+  std::unordered_map<uint64_t, double> height;  // by point id, NaN: not a road point
+  std::vector<double> per_image;
+  points = 0;
+  for (const ImageRecord* im : images) {
+    const Camera& cam = rec.cameras.at(im->camera_id);
+    const double low = std::max(cam.cy(), kLowRows * double(cam.height));
+    std::vector<double> hs;
+    for (const Point2D& p : im->points2D) {
+      const auto pt = rec.points3D.find(p.point3D_id);
+      if (p.xy.y() < low || pt == rec.points3D.end()) continue;
+      auto [it, fresh] = height.try_emplace(p.point3D_id, 0.0);
+      if (fresh) it->second = HeightBelowNearest(pt->second.xyz, w2c, centres);
+      if (!std::isnan(it->second)) hs.push_back(it->second);
+    }
+    if (hs.size() < kMinImagePoints) continue;
+    points += hs.size();
+    per_image.push_back(Median(hs));
+  }
+  return per_image;
+}
 
 // Checks the workspace holds what the run needs and no mesh (unless --force); returns where the
 // new mesh goes. mesh.ply is the first name Workspace::MeshPath() looks for, so the new mesh wins.
@@ -101,6 +159,9 @@ void WriteRoadMeshProvenance(const Workspace& ws, const RoadMeshOptions& o,
   nlohmann::json opts = {{"width", o.width},
                          {"wall_height", o.wall_height},
                          {"resolution", o.resolution},
+                         {"metric", o.metric},
+                         {"unit", rep.unit.unit},
+                         {"unit_source", rep.unit.source},
                          {"no_colours", o.no_colours},
                          {"dense", o.dense},
                          {"voxel", o.voxel},
@@ -116,6 +177,45 @@ void WriteRoadMeshProvenance(const Workspace& ws, const RoadMeshOptions& o,
 }
 
 }  // namespace
+
+SceneUnit EstimateSceneUnit(const Reconstruction& rec) {
+  SceneUnit su;
+  const auto images = rec.ImagesByName();
+  std::vector<Rigid3d> w2c;
+  for (const ImageRecord* im : images)
+    w2c.emplace_back(NormalizedQuaternion(im->world_to_camera.q), im->world_to_camera.t);
+  const std::vector<double> heights = ImageGroundHeights(rec, images, w2c, su.points);
+  su.spacing = MedianSpacing(w2c);
+  if (heights.size() >= kMinHeightImages) {
+    su.source = "camera height";
+    su.images = heights.size();
+    su.camera_height = Median(heights);
+    su.unit = su.camera_height / kDashcamHeight;
+  } else if (su.spacing > 0) {
+    su.source = "camera spacing";
+    su.unit = su.spacing / kTypicalSpacing;
+  } else {
+    su.source = "none";  // the cameras do not move: the corridor refuses the model anyway
+  }
+  return su;
+}
+
+std::string DescribeSceneUnit(const SceneUnit& su) {
+  char buf[160];
+  const std::string source = su.source;
+  if (source == "camera height")
+    std::snprintf(buf, sizeof buf, "camera height %.4g from %zu points in %zu images / 1.65 m",
+                  su.camera_height, su.points, su.images);
+  else if (source == "camera spacing")
+    std::snprintf(buf, sizeof buf,
+                  "median camera spacing %.4g / 1 m: too few road points below the cameras",
+                  su.spacing);
+  else if (source == "none")
+    std::snprintf(buf, sizeof buf, "the cameras do not move");
+  else
+    std::snprintf(buf, sizeof buf, "%s", su.source);
+  return buf;
+}
 
 void RoadMeshOptions::Check() const {
   if (!(width > 0 && width <= 50)) throw UsageError("--width: must be in (0, 50] metres");
@@ -143,7 +243,8 @@ RoadMeshReport RunRoadMesh(const RoadMeshOptions& o) {
   if (rep.images < 2)
     throw Error(ws.SparseDir().string(), 0, "need at least two registered images to follow a path");
 
-  Corridor corridor = BuildCorridor(rec, {o.width, o.wall_height, o.resolution});
+  if (!o.metric) rep.unit = EstimateSceneUnit(rec);
+  Corridor corridor = BuildCorridor(rec, {o.width, o.wall_height, o.resolution, rep.unit.unit});
   if (o.dense) corridor.mesh = DenseMesh(ws, rec, o, corridor.mesh, rep);
   Mesh& mesh = corridor.mesh;
   rep.stations = corridor.stations;

@@ -1,7 +1,8 @@
 // libcore/mesh corridor against hand-built scenes whose answer is known without the corridor code:
 // a straight road on a known plane with walls at known distances (seen through a rigid motion to
 // UTM-sized coordinates), the same road driven the other way, no points at all, bad paths; and the
-// area-weighted normals the corridor relies on (scene/mesh.h) on a shape worked out by hand.
+// area-weighted normals the corridor relies on (scene/mesh.h) on a shape worked out by hand; and
+// scale-freedom: a curved road with scattered points and the same road under a similarity.
 #include "mesh/corridor.h"
 
 #include <gtest/gtest.h>
@@ -9,6 +10,9 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
+#include <random>
 
 #include "base/error.h"
 
@@ -161,6 +165,100 @@ TEST(Corridor, BadPathsThrow) {
   for (auto& [id, im] : still.images)
     im.world_to_camera = still.images.begin()->second.world_to_camera;
   EXPECT_THROW(BuildCorridor(still, CorridorOptions()), Error);
+}
+
+// A curved road (radius 150, 40 cameras about 1.1 apart, 1.6 above the road, level) with
+// scattered points: the road, a pavement, facades, and clutter; no two values on a boundary of
+// the corridor's rules except by chance.
+Reconstruction CurvedRoad() {
+  std::mt19937_64 rng(7);
+  auto uniform = [&](double a, double b) { return a + (b - a) * double(rng() >> 11) * 0x1p-53; };
+  const double radius = 150;
+  auto at = [&](double s, double d, double z) {  // arc length, offset to the left, height
+    const double a = s / radius;
+    return Eigen::Vector3d((radius - d) * std::sin(a), radius - (radius - d) * std::cos(a), z);
+  };
+  Reconstruction rec;
+  const Motion none{Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero()};
+  for (int i = 0; i < 40; ++i) {
+    ImageRecord im;
+    im.id = uint32_t(i + 1);
+    im.name = "c" + std::to_string(100 + i);
+    const double s = 1.1 * i + uniform(-0.1, 0.1), a = s / radius + uniform(-0.01, 0.01);
+    const Eigen::Vector3d forward(std::cos(a), std::sin(a), 0);
+    im.world_to_camera = Looking(at(s, uniform(-0.2, 0.2), 1.6), forward.normalized(), none);
+    rec.images[im.id] = im;
+  }
+  auto add = [&](const Eigen::Vector3d& x) {
+    Point3D p;
+    p.id = rec.points3D.size() + 1;
+    p.xyz = x;
+    rec.points3D[p.id] = p;
+  };
+  for (int i = 0; i < 3000; ++i) {
+    const double s = uniform(-20, 70), kind = uniform(0, 1);
+    if (kind < 0.5)
+      add(at(s, uniform(-5, 5), uniform(-0.05, 0.05)));  // the road
+    else if (kind < 0.6)
+      add(at(s, uniform(5, 7), 0.15 + uniform(-0.05, 0.05)));  // a pavement
+    else if (kind < 0.95)
+      add(at(s, kind < 0.8 ? uniform(8, 9) : uniform(-12.5, -11), uniform(0, 14)));  // facades
+    else
+      add(at(s, uniform(-40, 40), uniform(-3, 20)));  // clutter
+  }
+  return rec;
+}
+
+// The similarity x → s·R·x + t applied to a model: points and poses (w2c' = w2c ∘ the inverse).
+Reconstruction Transformed(const Reconstruction& rec, double s, const Motion& m) {
+  Reconstruction out = rec;
+  const Eigen::Quaterniond qr(m.R);
+  for (auto& [id, im] : out.images) {
+    const Eigen::Quaterniond q = NormalizedQuaternion(im.world_to_camera.q) * qr.conjugate();
+    im.world_to_camera = Rigid3d(q, -(q * (s * (m.R * im.world_to_camera.Centre()) + m.t)));
+  }
+  for (auto& [id, p] : out.points3D) p.xyz = s * (m.R * p.xyz) + m.t;
+  return out;
+}
+
+// The corridor of a model scaled by 0.2, rotated and moved to UTM coordinates, built with the unit
+// scaled by 0.2, is the first corridor under the same similarity, vertex by vertex.
+TEST(Corridor, ScaledModelWithScaledUnitGivesTheScaledCorridor) {
+  const double s = 0.2;
+  const Motion m{Eigen::Matrix3d(Eigen::AngleAxisd(2.0, Eigen::Vector3d(1, -2, 5).normalized())),
+                 Eigen::Vector3d(451000, 5410000, 120)};
+  const Reconstruction a = CurvedRoad(), b = Transformed(a, s, m);
+  CorridorOptions oa;
+  oa.width = 9;  // other than the defaults, so every option is seen scaled
+  oa.wall_height = 12;
+  oa.resolution = 0.7;
+  CorridorOptions ob = oa;
+  ob.unit = s;
+  const Corridor ca = BuildCorridor(a, oa), cb = BuildCorridor(b, ob);
+  ASSERT_EQ(ca.stations, cb.stations);
+  ASSERT_EQ(ca.mesh.vertices.size(), cb.mesh.vertices.size());
+  ASSERT_EQ(ca.mesh.faces, cb.mesh.faces);
+  EXPECT_GT(ca.ground_points, 0u);
+  EXPECT_EQ(ca.ground_points, cb.ground_points);
+  EXPECT_EQ(ca.refined_vertices, cb.refined_vertices);
+  // The scene's sizes scale; relative to them, double rounding of UTM-sized coordinates: an ulp
+  // of |t| (≈ 1e-9) over the corridor's few hundred operations per vertex, 1e3 ulps.
+  const double ulp = std::numeric_limits<double>::epsilon() * m.t.norm(), tol = 1e3 * ulp;
+  EXPECT_NEAR(cb.path_length, s * ca.path_length, tol);
+  EXPECT_NEAR(cb.camera_height, s * ca.camera_height, tol);
+  EXPECT_NEAR(cb.left_wall, s * ca.left_wall, tol);
+  EXPECT_NEAR(cb.right_wall, s * ca.right_wall, tol);
+  double worst = 0, worst_normal = 0;
+  for (size_t v = 0; v < ca.mesh.vertices.size(); ++v) {
+    const Eigen::Vector3d want = s * (m.R * ca.mesh.vertices[v]) + m.t;
+    worst = std::max(worst, (cb.mesh.vertices[v] - want).norm());
+    const Eigen::Vector3d n = m.R * ca.mesh.normals[v].cast<double>();
+    worst_normal = std::max(worst_normal, (cb.mesh.normals[v].cast<double>() - n).norm());
+  }
+  std::printf("[corridor similarity] %zu vertices, worst %.3g (tolerance %.3g), normals %.3g\n",
+              ca.mesh.vertices.size(), worst, tol, worst_normal);
+  EXPECT_LT(worst, tol);
+  EXPECT_LT(worst_normal, 1e-5);  // float normals: a few float ulps
 }
 
 // Two triangles on the edge (0,0,0)–(1,0,0): one in z = 0 of area 1 facing +z, one in y = 0 of
