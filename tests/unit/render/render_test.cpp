@@ -114,6 +114,27 @@ TEST_F(RenderTest, SelfProjectionReproducesTheImage) {
   for (float s : f.source.data) ASSERT_EQ(s, 0.f);
 }
 
+TEST_F(RenderTest, ExposureBringsProjectorsToTheCommonFrame) {
+  // A projector recorded at gain 2 and offset 10 (I = 2L + 10): with the exposure effect its
+  // own pose renders L = (I - 10) / 2, rounded to 8 bits (within half a grey level: the shader
+  // computes in float on the 0..1 scale). Without the effect the image comes back unchanged.
+  Renderer r(Plane(50, 10, Eigen::Vector3d::Zero(), 8));
+  Image img = Pattern(64, 48);
+  View v{Cam(), LookingDownZ({0.3, 0.2, 0})};
+  Projector p{v, &img, nullptr, nullptr};
+  p.gain = 2.f;
+  p.offset = 10.f;
+  EffectsPlan plan;
+  plan.exposure = true;
+  const Renderer::Frame f = r.Render(v, {p}, plan);
+  for (size_t i = 0; i < img.data.size(); ++i) {
+    const float want = std::max(0.f, (img.data[i] - 10.f) / 2.f);
+    ASSERT_NEAR(f.colour.data[i], want, 0.5f + 1e-3f) << i;
+  }
+  plan.exposure = false;
+  EXPECT_EQ(r.Render(v, {p}, plan).colour.data, img.data);
+}
+
 TEST_F(RenderTest, GeometryBehindTheProjectorIsNotTextured) {
   // The render camera at z = 0 looks at a plane at z = 10 (+z); the projector at z = 20 looks
   // along +z too, so the plane is *behind* it (z_proj = −10).
