@@ -4,7 +4,7 @@
 //   image<TAB>gain<TAB>offset<TAB>points
 // then one row per image of the model in name order: the image name (as in images.txt), the
 // gain and the offset of I = gain · L + offset on the 8-bit scale, written with 17 significant
-// digits, and the number of point observations the fit kept (0: not fitted, identity).
+// digits, and the number of point observations of the image (0: not fitted, identity kept).
 // Conventions as io/partners.h: classic "C" numbers, '#' comments and blank lines skipped,
 // "FILE:LINE: what" errors, atomic path writer. Gains must be finite and > 0, offsets finite.
 // Thread safety: functions are reentrant.

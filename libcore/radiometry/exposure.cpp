@@ -12,7 +12,7 @@ void ExposureOptions::Check() const {
   if (iterations < 1 || iterations > 1000) throw UsageError("--iterations: must be 1..1000");
   if (!(outlier_mads > 0 && std::isfinite(outlier_mads)))
     throw UsageError("--outlier-mads: must be > 0");
-  if (min_points < 2) throw UsageError("--min-points: must be >= 2");
+  if (min_points < 2 || min_points > 1000000) throw UsageError("--min-points: must be 2..1000000");
 }
 
 namespace {

@@ -28,13 +28,15 @@ ProjectorSources::ProjectorSources(const Workspace& ws, const Reconstruction& re
       images_(std::move(images)),
       renderer_(renderer),
       prefer_textures_(prefer_textures),
-      capacity_(capacity) {
-  if (fs::exists(ws.ExposurePath()))
-    for (const auto& row : ReadExposureTsv(ws.ExposurePath().string()))
-      exposure_[row.image] = {row.gain, row.offset};
-}
+      capacity_(capacity) {}
 
-bool ProjectorSources::ExposureOf(size_t k, float& gain, float& offset) const {
+bool ProjectorSources::ExposureOf(size_t k, float& gain, float& offset) {
+  if (!exposure_read_) {  // on first use: a run that does not use exposure never reads the file
+    exposure_read_ = true;
+    if (fs::exists(ws_.ExposurePath()))
+      for (const auto& row : ReadExposureTsv(ws_.ExposurePath().string()))
+        exposure_[row.image] = {row.gain, row.offset};
+  }
   auto it = exposure_.find(images_[k]->name);
   gain = it == exposure_.end() ? 1.f : float(it->second.first);
   offset = it == exposure_.end() ? 0.f : float(it->second.second);

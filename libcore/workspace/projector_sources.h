@@ -31,7 +31,7 @@ class ProjectorSources {
   const Image* MaskOf(size_t k);  // nullptr when the image has no mask file
   // The image's exposure from WS/exposure.tsv (gain 1, offset 0 when absent); true when it is
   // not the identity.
-  bool ExposureOf(size_t k, float& gain, float& offset) const;
+  bool ExposureOf(size_t k, float& gain, float& offset);
   View ViewOf(size_t k) const;
   void Trim();
 
@@ -44,6 +44,7 @@ class ProjectorSources {
   size_t capacity_;
   std::map<size_t, Image> image_, depth_, mask_;
   std::map<std::string, std::pair<double, double>> exposure_;  // name → gain, offset
+  bool exposure_read_ = false;
 };
 
 // Nearest-neighbour resize (for depth maps baked at another scale).

@@ -10,8 +10,8 @@ namespace mvtm {
 
 struct ExposureToolOptions {
   std::string workspace;
-  ExposureOptions fit;  // --no-offsets, --iterations, --outlier-mads, --min-points
-  bool force = false;   // refit when exposure.tsv is newer than the model and the images
+  ExposureOptions fit;  // --offsets, --iterations, --outlier-mads, --min-points
+  bool force = false;   // refit when exposure.tsv is newer than the sparse model
   bool quiet = false;
 
   void Check() const;
