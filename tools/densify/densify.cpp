@@ -89,6 +89,9 @@ double DensifyOne(const DensifyOptions& o, const Workspace& ws, const DenseScene
   std::vector<Eigen::Vector3d> pts = PointsSeenBy(s.rec, *s.images[i]);
   const std::vector<size_t> nbs = SelectStereoNeighbours(s.w2c, s.cameras, i, pts, o.neighbours);
   if (nbs.empty()) ++rep.no_neighbours;
+  if (pts.size() < 3)  // an image with (almost) no sparse points sweeps over its neighbours' points
+    for (size_t j : nbs)
+      for (const auto& X : PointsSeenBy(s.rec, *s.images[j])) pts.push_back(X);
   StereoView ref{s.cameras[i], s.w2c[i], LoadGrey(ws.ImagePath(s.images[i]->name), s.cameras[i])};
   std::vector<StereoView> views;
   for (size_t j : nbs)

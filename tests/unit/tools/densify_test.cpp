@@ -13,6 +13,7 @@
 
 #include "bakedepth.h"
 #include "image/image.h"
+#include "io/colmap_model.h"
 #include "mkroad/mkroad.h"
 #include "roadmesh.h"
 
@@ -134,6 +135,34 @@ TEST(Densify, MkroadDepthAgainstRayTracedTruth) {
   EXPECT_GT(fused.within1, corridor.within1);  // measured 0.60 vs 0.59
   EXPECT_GT(fused.within5, corridor.within5);  // measured 0.84 vs 0.75
   EXPECT_GT(fused.completeness, 0.70);         // measured 0.74 (the corridor's walls: 0.91)
+}
+
+TEST(Densify, AnImageWithoutSparsePointsSweepsOverItsNeighbours) {
+  const fs::path ws = Root() / "nopoints";
+  MakeRoad(ws, 0);
+  // Image A_0005 loses every observation (and the tracks lose it): its sweep ranges must come
+  // from its neighbours' points, and its depth must still agree with the truth.
+  Reconstruction rec = ReadColmapModel((ws / "sparse").string());
+  const ImageRecord* a5 = rec.FindImage("A_0005.png");
+  ASSERT_NE(a5, nullptr);
+  const uint32_t id = a5->id;
+  for (auto& p : rec.images[id].points2D) p.point3D_id = kInvalidPoint3DId;
+  for (auto& [pid, pt] : rec.points3D)
+    pt.track.erase(std::remove_if(pt.track.begin(), pt.track.end(),
+                                  [&](const TrackElement& e) { return e.image_id == id; }),
+                   pt.track.end());
+  WriteColmapText(rec, (ws / "sparse").string());
+  DensifyOptions o;
+  o.workspace = ws.string();
+  o.scale = 1.0;
+  o.frames = "5:6";  // A_0005 in name order
+  o.quiet = true;
+  ASSERT_EQ(RunDensify(o).written, 1u);
+  const Accuracy a = Score(ws, "A_0005");
+  std::printf("[densify, no points of its own] %zu px, median rel %.4f, completeness %.3f\n",
+              a.compared, a.median_rel, a.completeness);
+  EXPECT_GT(a.completeness, 0.3);
+  EXPECT_LT(a.median_rel, 0.06);
 }
 
 }  // namespace
