@@ -1,13 +1,17 @@
-// mvtm — closing a dense mesh with a proxy: the proxy's ground laid just beneath the dense surface.
+// mvtm — closing a dense mesh with a proxy (the road corridor): its ground beneath the dense
+// surface, its walls behind it.
 //
-// Dense stereo leaves holes where the photos give no match (dark, textureless asphalt, sky edges,
-// moving vehicles) and fragments between them; the road must stay closed for rendering. Every
-// ground face of the proxy (face normal within 45° of `up`) is appended to the dense mesh moved
-// down by `depth_below` along `up`: where the dense road exists it hides the proxy (the depth
-// test keeps the nearer surface), where it has holes the proxy shows. No face is dropped by a
-// proximity test, so fragments of dense road never punch holes. The proxy's walls are dropped:
-// the dense surface replaces them. Lengths in the model's own unit. Normals are recomputed;
-// colours dropped (bake them afterwards). Thread safety: pure function.
+// Dense stereo leaves holes where the photos give no match (dark, textureless asphalt, white
+// facades, sky edges, moving vehicles) and fragments between them; the road must stay closed and
+// a hole must not show the background. Every face of the proxy is appended to the dense mesh,
+// moved away from the camera path so that the dense surface, where it exists, hides it (the
+// depth test keeps the nearer surface) and the proxy shows only through the holes:
+//   * ground faces (face normal within 45° of `up`) are lowered by `ground_below` along `up`;
+//   * wall faces (every other face; a wall's normals face the path) are moved back by
+//     `walls_behind` against their vertex normals; `walls_behind` < 0 drops the walls.
+// No face is dropped by a proximity test, so fragments of dense surface never punch holes.
+// Lengths in the model's own unit. Normals are recomputed; colours dropped (bake them
+// afterwards). Thread safety: pure function.
 #pragma once
 
 #include <Eigen/Core>
@@ -18,10 +22,11 @@
 namespace mvtm {
 
 struct MergeReport {
-  size_t proxy_faces_kept = 0;  // ground faces of the proxy appended
+  size_t ground_faces = 0, wall_faces = 0;  // proxy faces appended
 };
 
-Mesh MergeGroundBeneath(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3d& up,
-                        double depth_below, MergeReport* report = nullptr);
+// The proxy needs vertex normals for its walls (Mesh::ComputeNormals) unless walls_behind <= 0.
+Mesh MergeProxyBehind(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3d& up,
+                      double ground_below, double walls_behind, MergeReport* report = nullptr);
 
 }  // namespace mvtm

@@ -47,6 +47,11 @@ int main(int argc, char** argv) {
                  "--dense: lower the corridor ground by this many voxels under the fused surface "
                  "(0: at its fitted height)")
       ->capture_default_str();
+  app.add_option(
+         "--walls-behind", o.walls_behind,
+         "--dense: move the corridor walls back by this many voxels behind the fused surface, "
+         "so they show only through its holes (-1: no walls)")
+      ->capture_default_str();
   app.add_flag("--force", o.force, "Replace an existing mesh");
   mvtm::AddChoiceOption(app, "--gl", o.gl, mvtm::GlBackendNames(), "OpenGL backend");
   mvtm::AddQuietOption(app, o.quiet);
@@ -66,8 +71,8 @@ int main(int argc, char** argv) {
     if (!o.quiet && o.dense)
       std::fprintf(stderr,
                    "roadmesh: dense: %zu depth maps fused into %zu triangles; %zu corridor ground "
-                   "triangles close its holes\n",
-                   r.dense_views, r.dense_faces, r.corridor_faces);
+                   "and %zu wall triangles behind it close its holes\n",
+                   r.dense_views, r.dense_faces, r.corridor_faces, r.corridor_wall_faces);
     return 0;
   });
 }

@@ -143,10 +143,12 @@ Mesh DenseMesh(const Workspace& ws, const Reconstruction& rec, const RoadMeshOpt
   DriveAxes(w2c, down, side);
   MergeReport mr;
   const double voxel = o.voxel * MedianCameraSpacing(views);
-  Mesh out = MergeGroundBeneath(dense, corridor, -down, o.ground_below * voxel, &mr);
+  Mesh out =
+      MergeProxyBehind(dense, corridor, -down, o.ground_below * voxel, o.walls_behind * voxel, &mr);
   rep.dense_views = views.size();
   rep.dense_faces = dense.faces.size();
-  rep.corridor_faces = mr.proxy_faces_kept;
+  rep.corridor_faces = mr.ground_faces;
+  rep.corridor_wall_faces = mr.wall_faces;
   return out;
 }
 
@@ -168,6 +170,7 @@ void WriteRoadMeshProvenance(const Workspace& ws, const RoadMeshOptions& o,
                          {"max_depth", o.max_depth},
                          {"min_agree", o.min_agree},
                          {"ground_below", o.ground_below},
+                         {"walls_behind", o.walls_behind},
                          {"gl", rep.gl},
                          {"camera_height", rep.camera_height},
                          {"ground_points", rep.ground_points},
@@ -229,6 +232,8 @@ void RoadMeshOptions::Check() const {
   if (min_agree < 1 || min_agree > 16) throw UsageError("--min-agree: must be 1..16");
   if (!(ground_below >= 0 && ground_below <= 100))
     throw UsageError("--ground-below: must be in [0, 100] voxels");
+  if (!(walls_behind >= -1 && walls_behind <= 1000))
+    throw UsageError("--walls-behind: must be in [0, 1000] voxels, or -1 (no walls)");
   ParseGlBackend(gl);
 }
 

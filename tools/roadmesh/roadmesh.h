@@ -33,10 +33,12 @@ struct RoadMeshOptions {
   double voxel = 0.1;     // --dense: voxel size as a fraction of the median camera spacing, (0, 10]
   double max_depth = 40;  // --dense: depth used, in median camera spacings, (0, 1000]
   int min_agree = 2;      // --dense: other views that must confirm a depth pixel, 1..16
-  double ground_below = 0;  // --dense: corridor ground lowered by this many voxels (0: at its
-                            // fitted height), [0, 100]
-  bool force = false;       // replace an existing mesh
-  std::string gl = "auto";  // auto | egl | osmesa (depth maps for the colour visibility test)
+  double ground_below = 0;   // --dense: corridor ground lowered by this many voxels (0: at its
+                             // fitted height), [0, 100]
+  double walls_behind = 20;  // --dense: corridor walls moved back by this many voxels behind the
+                             // fused surface; -1: no walls, [0, 1000]
+  bool force = false;        // replace an existing mesh
+  std::string gl = "auto";   // auto | egl | osmesa (depth maps for the colour visibility test)
   bool quiet = false;
 
   // Throws UsageError naming the bad value and the allowed range.
@@ -82,8 +84,9 @@ struct RoadMeshReport {
   size_t refined_vertices = 0;           // ground vertices moved by the height field
   size_t coloured = 0;                   // vertices seen by at least one image
   size_t dense_views = 0,
-         dense_faces = 0;     // --dense: depth maps fused, triangles of the fused surface
-  size_t corridor_faces = 0;  // --dense: corridor ground triangles kept in the holes
+         dense_faces = 0;          // --dense: depth maps fused, triangles of the fused surface
+  size_t corridor_faces = 0;       // --dense: corridor ground triangles kept in the holes
+  size_t corridor_wall_faces = 0;  // --dense: corridor wall triangles behind the fused surface
   std::string gl;
   std::string mesh_path;
 };
