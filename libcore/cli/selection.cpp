@@ -1,6 +1,8 @@
 #include "cli/selection.h"
 
 #include <algorithm>
+#include <cstdint>
+#include <limits>
 
 #include "base/error.h"
 #include "base/text.h"
@@ -30,10 +32,14 @@ Selection Selection::Shard(const std::string& spec) {
   Selection s;
   auto slash = spec.find('/');
   if (slash == std::string::npos) throw UsageError("--shard: '" + spec + "' is not I/N");
-  s.shard_index = static_cast<int>(ParseIntArg(spec.substr(0, slash), "--shard index"));
-  s.shard_count = static_cast<int>(ParseIntArg(spec.substr(slash + 1), "--shard count"));
-  if (s.shard_count < 1 || s.shard_index < 0 || s.shard_index >= s.shard_count)
-    throw UsageError("--shard: '" + spec + "' needs 0 <= I < N");
+  const int64_t index = ParseIntArg(spec.substr(0, slash), "--shard index");
+  const int64_t count = ParseIntArg(spec.substr(slash + 1), "--shard count");
+  // Checked before narrowing: 0/4294967297 must not become 0/1.
+  if (count < 1 || count > std::numeric_limits<int>::max() || index < 0 || index >= count)
+    throw UsageError("--shard: '" + spec +
+                     "' needs 0 <= I < N <= " + std::to_string(std::numeric_limits<int>::max()));
+  s.shard_index = static_cast<int>(index);
+  s.shard_count = static_cast<int>(count);
   return s;
 }
 

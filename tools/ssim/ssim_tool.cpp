@@ -160,7 +160,10 @@ Stats StatsOf(const std::vector<double>& v) {
   const double mean = sum / x.size();
   double ss = 0;
   for (double d : x) ss += (d - mean) * (d - mean);
-  return {mean, std::sqrt(ss / x.size()), *std::min_element(x.begin(), x.end())};
+  // A set holding inf (identical images: PSNR inf) has an infinite mean and no defined spread:
+  // nan, spelled "nan" (inf − inf would print as "-nan").
+  const double sd = std::isfinite(mean) ? std::sqrt(ss / x.size()) : nan;
+  return {mean, sd, *std::min_element(x.begin(), x.end())};
 }
 
 std::string Fixed(double v) {

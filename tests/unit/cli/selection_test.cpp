@@ -39,6 +39,15 @@ TEST(Selection, BadSpecsAreUsageErrors) {
   EXPECT_THROW(Selection::Shard("1"), UsageError);
   EXPECT_THROW(Selection::Shard("a/2"), UsageError);
   EXPECT_THROW(Selection::Frames("x:3"), UsageError);
+  // Beyond int: refused, never wrapped (0/4294967297 used to be taken as 0/1).
+  EXPECT_THROW(Selection::Shard("0/4294967297"), UsageError);
+  EXPECT_THROW(Selection::Shard("4294967296/4294967297"), UsageError);
+  try {
+    Selection::Shard("0/4294967297");
+  } catch (const UsageError& e) {
+    EXPECT_STREQ(e.what(), "--shard: '0/4294967297' needs 0 <= I < N <= 2147483647");
+  }
+  EXPECT_EQ(Selection::Shard("5/2147483647").shard_count, 2147483647);
 }
 
 }  // namespace
