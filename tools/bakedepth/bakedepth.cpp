@@ -42,13 +42,13 @@ BakeDepthReport RunBakeDepth(const BakeDepthOptions& o) {
     }
     todo.push_back(images[i]);
   }
+  RemoveStaleTemporaries(ws.DepthDir());  // a killed run's leftovers, even when all is up to date
   if (!todo.empty()) {
     Mesh mesh = ReadMesh(mesh_path.string());
     if (mesh.faces.empty()) throw Error(mesh_path.string(), 0, "the mesh has no triangles");
     auto ctx = GlContext::Create(ParseGlBackend(o.gl));
     rep.gl = ctx->Describe();
     Renderer renderer(mesh);
-    RemoveStaleTemporaries(ws.DepthDir());
     Progress bar("bakedepth", todo.size(), o.quiet);
     for (const ImageRecord* im : todo) {
       const Camera& cam = rec.cameras.at(im->camera_id);

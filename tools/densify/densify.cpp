@@ -125,9 +125,9 @@ DensifyReport RunDensify(const DensifyOptions& o) {
     else
       todo.push_back(i);
   }
+  RemoveStaleTemporaries(ws.StereoDir());  // a killed run's leftovers, even when all is up to date
   if (todo.empty()) return rep;
   fs::create_directories(ws.StereoDir());
-  RemoveStaleTemporaries(ws.StereoDir());
   Progress bar("densify", todo.size(), o.quiet);
   double share = 0;
   const auto t0 = Clock::now();

@@ -281,8 +281,6 @@ void RenderFrames(const FrameJob& job, Renderer& renderer, const std::vector<siz
   ProjectorSources sources(job.ws, job.scene.rec, job.scene.images, &renderer,
                            /*prefer_textures=*/true);
   const bool grey = GreySources(job.ws, job.scene, job.picks.used);
-  RemoveStaleTemporaries(outdir);
-  if (job.o.provenance) RemoveStaleTemporaries(outdir / "provenance");
   AsyncImageWriter writer;
   Progress bar("ptmrender", todo.size(), job.o.quiet);
   for (size_t i : todo) {
@@ -361,6 +359,10 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
   std::vector<fs::path> inputs = {ws.MeshPath()};
   if (!o.no_exposure && fs::exists(ws.ExposurePath())) inputs.push_back(ws.ExposurePath());
   const std::vector<size_t> todo = FramesToRender(o, poses, chosen, inputs, rep);
+  if (!o.explain) {  // a killed run's leftovers go, even when every frame is up to date
+    RemoveStaleTemporaries(o.outdir);
+    if (o.provenance) RemoveStaleTemporaries(fs::path(o.outdir) / "provenance");
+  }
   if (todo.empty() && !o.explain) return rep;
 
   const Mesh mesh = LoadMesh(ws, survey.ptm);
