@@ -4,6 +4,7 @@
 #include <string>
 
 #include "base/error.h"
+#include "base/stats.h"
 #include "fusion/fusion.h"
 
 namespace mvtm {
@@ -60,8 +61,7 @@ double MedianCameraSpacing(const std::vector<DepthView>& views) {
         "fewer than two distinct camera centres: no camera spacing to derive the voxel "
         "size from (give it explicitly)");
   }
-  std::nth_element(nearest.begin(), nearest.begin() + nearest.size() / 2, nearest.end());
-  return nearest[nearest.size() / 2];
+  return Median(std::move(nearest));
 }
 
 Eigen::Vector3d MeanCameraCentre(const std::vector<DepthView>& views) {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "base/error.h"
+#include "base/stats.h"
 #include "geometry/rigid.h"
 
 namespace mvtm {
@@ -40,13 +41,6 @@ struct Lengths {
 // last bits) gets the same grid.
 size_t CeilCount(double ratio) { return static_cast<size_t>(std::ceil(ratio - 1e-9)); }
 size_t FloorCount(double ratio) { return static_cast<size_t>(std::floor(ratio + 1e-9)); }
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
-  auto mid = v.begin() + static_cast<long>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
 
 // One cross-section of the corridor: centre on the smoothed camera path, and a right-handed
 // frame forward × left = up.

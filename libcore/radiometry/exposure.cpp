@@ -5,6 +5,8 @@
 #include <map>
 
 #include "base/error.h"
+#include "base/stats.h"
+#include "image/mask.h"
 
 namespace mvtm {
 
@@ -16,12 +18,6 @@ void ExposureOptions::Check() const {
 }
 
 namespace {
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
-  return v[v.size() / 2];
-}
 
 struct State {
   std::vector<Exposure> e;
@@ -123,13 +119,9 @@ Exposure FitImageExposure(const Image& from, const Image& to, const Image* mask)
     throw Error("exposure fit: the mask differs in size");
   double sx = 0, sy = 0, sxx = 0, sxy = 0, n = 0;
   const size_t c = size_t(from.channels);
+  const Image inside = mask ? MaskFromImage(*mask) : Image();
   for (size_t p = 0; p < from.pixels(); ++p) {
-    if (mask) {
-      bool in = false;
-      for (int k = 0; k < mask->channels; ++k)
-        in = in || mask->data[p * size_t(mask->channels) + size_t(k)] != 0;
-      if (!in) continue;
-    }
+    if (mask && inside.data[p] == 0) continue;
     for (size_t k = 0; k < c; ++k) {
       const double x = from.data[p * c + k], y = to.data[p * c + k];
       sx += x, sy += y, sxx += x * x, sxy += x * y, n += 1;

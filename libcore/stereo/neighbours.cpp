@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "base/error.h"
+#include "base/stats.h"
 
 namespace mvtm {
 
@@ -23,9 +24,7 @@ double MedianSpacing(const std::vector<Rigid3d>& w2c) {
   std::vector<double> d;
   for (size_t i = 1; i < w2c.size(); ++i)
     d.push_back((w2c[i].Centre() - w2c[i - 1].Centre()).norm());
-  if (d.empty()) return 0;
-  std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
-  return d[d.size() / 2];
+  return d.empty() ? 0 : Median(std::move(d));
 }
 
 namespace {
@@ -40,12 +39,6 @@ double Coverage(const Rigid3d& w2c, const Camera& cam, const std::vector<Eigen::
     in += uv.x() >= 0 && uv.y() >= 0 && uv.x() < double(cam.width) && uv.y() < double(cam.height);
   }
   return pts.empty() ? 1.0 : double(in) / double(pts.size());
-}
-
-double Percentile(std::vector<double> v, double q) {
-  const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * double(v.size() - 1) + 0.5));
-  std::nth_element(v.begin(), v.begin() + long(k), v.end());
-  return v[k];
 }
 
 }  // namespace

@@ -30,17 +30,25 @@ ProjectorSources::ProjectorSources(const Workspace& ws, const Reconstruction& re
       prefer_textures_(prefer_textures),
       capacity_(capacity) {}
 
+std::map<std::string, ExposureRow> ReadWorkspaceExposure(const Workspace& ws) {
+  std::map<std::string, ExposureRow> by_name;
+  if (fs::exists(ws.ExposurePath()))
+    for (auto& row : ReadExposureTsv(ws.ExposurePath().string())) by_name[row.image] = row;
+  return by_name;
+}
+
+bool ChangesSamples(const ExposureRow& e) { return float(e.gain) != 1.f || float(e.offset) != 0.f; }
+
 bool ProjectorSources::ExposureOf(size_t k, float& gain, float& offset) {
   if (!exposure_read_) {  // on first use: a run that does not use exposure never reads the file
     exposure_read_ = true;
-    if (fs::exists(ws_.ExposurePath()))
-      for (const auto& row : ReadExposureTsv(ws_.ExposurePath().string()))
-        exposure_[row.image] = {row.gain, row.offset};
+    exposure_ = ReadWorkspaceExposure(ws_);
   }
   auto it = exposure_.find(images_[k]->name);
-  gain = it == exposure_.end() ? 1.f : float(it->second.first);
-  offset = it == exposure_.end() ? 0.f : float(it->second.second);
-  return gain != 1.f || offset != 0.f;
+  const ExposureRow e = it == exposure_.end() ? ExposureRow() : it->second;
+  gain = float(e.gain);
+  offset = float(e.offset);
+  return ChangesSamples(e);
 }
 
 View ProjectorSources::ViewOf(size_t k) const {

@@ -12,11 +12,17 @@
 #include <map>
 #include <vector>
 
+#include "io/exposure_tsv.h"
 #include "render/renderer.h"
 #include "scene/reconstruction.h"
 #include "workspace/workspace.h"
 
 namespace mvtm {
+
+// WS/exposure.tsv by image name; empty when the workspace has none. Throws Error when malformed.
+std::map<std::string, ExposureRow> ReadWorkspaceExposure(const Workspace& ws);
+// Whether an exposure changes a projector's samples at the renderer's (float) precision.
+bool ChangesSamples(const ExposureRow& e);
 
 class ProjectorSources {
  public:
@@ -43,7 +49,7 @@ class ProjectorSources {
   bool prefer_textures_;
   size_t capacity_;
   std::map<size_t, Image> image_, depth_, mask_;
-  std::map<std::string, std::pair<double, double>> exposure_;  // name → gain, offset
+  std::map<std::string, ExposureRow> exposure_;  // exposure.tsv, read on first use
   bool exposure_read_ = false;
 };
 

@@ -164,13 +164,10 @@ std::string FindMaskedProjector(const Workspace& ws, const Scene& scene,
 // The name of the first used projector whose exposure (exposure.tsv) is not the identity.
 std::string FindExposedProjector(const Workspace& ws, const Scene& scene,
                                  const std::set<size_t>& used) {
-  if (!fs::exists(ws.ExposurePath())) return "";
-  std::map<std::string, ExposureRow> rows;
-  for (auto& r : ReadExposureTsv(ws.ExposurePath().string())) rows[r.image] = r;
+  const std::map<std::string, ExposureRow> rows = ReadWorkspaceExposure(ws);
   for (size_t i : used) {
     auto it = rows.find(scene.images[i]->name);
-    if (it != rows.end() && (float(it->second.gain) != 1.f || float(it->second.offset) != 0.f))
-      return it->first;
+    if (it != rows.end() && ChangesSamples(it->second)) return it->first;
   }
   return "";
 }

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "base/error.h"
+#include "base/stats.h"
 #include "cli/progress.h"
 #include "fusion/fusion.h"
 #include "image/image.h"
@@ -28,12 +29,6 @@ constexpr double kDashcamHeight = 1.65;  // metres (KITTI); the unit is the heig
 constexpr double kTypicalSpacing = 1.0;  // metres between frames, for the fallback only
 constexpr double kLowRows = 0.6;         // the bottom 40 % of the rows look at the road
 constexpr size_t kMinImagePoints = 5, kMinHeightImages = 3;
-
-double Median(std::vector<double> v) {
-  auto mid = v.begin() + static_cast<long>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
 
 // The height of a point below the camera nearest to it when it lies in that camera's lane
 // (see SceneUnit), else NaN.
