@@ -12,6 +12,12 @@
 #               PTM with the vehicles projected, PTM with masks; then inpaint3d removes the
 #               vehicles from the photographs and PTM renders again; and a 1.5 m lane change
 # 6. ssim       the photo-consistency table of the held-out renders against the truth
+# 7. drive      a car steered from a steering log (examples/steer-controls.awk) through a lane
+#               change into the curve, and a 3.5 m lane change along the recorded path of
+#               drive A; ptmrender renders the steered drive; gazemap maps a synthetic gaze
+#               trace (examples/gaze-trace.awk: fixations, saccades, a blink) through those
+#               frames onto the road and back to the photographs; the table of dwell time per
+#               area of interest is printed
 # Every step skips outputs that are up to date, so a re-run is quick.
 set -euo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
@@ -60,3 +66,31 @@ row "PTM, vehicles projected" "$out/ssim_ptm_vehicles.tsv"
 row "PTM, segtrack masks" "$out/ssim_ptm_masks.tsv"
 row "PTM, masks + inpaint3d textures" "$out/ssim_ptm.tsv"
 printf '\nlane change: %s frames in %s; effects plan in %s\n' "$(ls "$out/lane_left" | grep -c png)" "$out/lane_left" "$out/plan.json"
+
+echo "== 7. drive a lane change and the curve; ptmrender it; gazemap a synthetic gaze trace" >&2
+# The steering log and the gaze trace are generated (see the awk files for what they hold) and
+# replace the old ones only when they differ, so drive and gazemap, which skip outputs newer than
+# their inputs, skip on a re-run.
+put() { awk -f "$top/examples/$1" > "$2.new"; if cmp -s "$2.new" "$2"; then rm "$2.new"; else mv "$2.new" "$2"; fi; }
+mkdir -p "$out/drive"
+put steer-controls.awk "$out/drive/controls.tsv"
+"$bin/drive" --metric --pass A_ --start A_0000.png --rate 5 \
+  "$ws" "$out/drive/controls.tsv" "$out/drive/steered.txt"
+# drive A's 20 photographs (4.2 m apart) taken as 2 a second (8.4 m/s): 3.5 m right from 2 s in 4 s
+"$bin/drive" --metric --pass A_ --frame-rate 2 --rate 5 --lane-change 2:4:-3.5 \
+  "$ws" "$out/drive/lane_change.txt"
+# ptmrender keeps the frames that exist: render all again (--force) when the poses changed
+if [ "$out/drive/steered.txt" -nt "$out/steered/.done" ]; then
+  "$bin/ptmrender" --force --poses "$out/drive/steered.txt" "$ws" "$out/steered"
+  touch "$out/steered/.done"
+fi
+# the frames shown 6x (1920x576) on a 531 mm wide screen, the eye 65 cm in front of it
+put gaze-trace.awk "$out/drive/gaze.tsv"
+"$bin/gazemap" --screen 1920x576 --screen-mm 531x159 --distance 650 \
+  "$ws" "$out/drive/steered.txt" "$out/drive/gaze.tsv" "$out/gaze" > /dev/null
+printf '\nsteered drive: %s frames in %s; lane change along drive A: %s poses in %s\n' \
+  "$(ls "$out/steered" | grep -c png)" "$out/steered" \
+  "$(grep -vc '^#' "$out/drive/lane_change.txt")" "$out/drive/lane_change.txt"
+printf 'gaze on the steered drive: %s fixations; dwell time (s) per area of interest (%s)\n' \
+  "$(tail -n +2 "$out/gaze/fixations.tsv" | wc -l)" "$out/gaze/aoi.tsv"
+awk -F'\t' '{ printf "%-34s %10s %10s %10s\n", $1, $2, $3, $4 }' "$out/gaze/aoi.tsv"

@@ -1,11 +1,13 @@
 #include "base/atomic_file.h"
 
+#include <fcntl.h>
 #include <signal.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <cerrno>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <locale>
 
@@ -21,13 +23,15 @@ bool ProcessAlive(long pid) {
 }
 }  // namespace
 
+void CreateFolder(const fs::path& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw Error(dir.string(), 0, "cannot create folder: " + ec.message());
+}
+
 AtomicFile::AtomicFile(const fs::path& final_path) : final_(final_path) {
   fs::path dir = final_.parent_path();
-  if (!dir.empty()) {
-    std::error_code ec;
-    fs::create_directories(dir, ec);
-    if (ec) throw Error(dir.string(), 0, "cannot create folder: " + ec.message());
-  }
+  if (!dir.empty()) CreateFolder(dir);
   std::string name = "." + final_.stem().string() + ".tmp-" + std::to_string(getpid()) + "-" +
                      std::to_string(g_counter++) + final_.extension().string();
   temp_ = dir / name;
@@ -56,9 +60,32 @@ static void WriteAtomic(const fs::path& path, std::ios::openmode mode,
     f.imbue(std::locale::classic());
     f.precision(17);
     write(f);
-    f.flush();
-    if (!f) throw Error(path.string(), 0, "write failed (disk full?)");
+    f.close();
+    if (f.fail()) throw Error(path.string(), 0, "write failed (disk full?)");
   }
+  out.Commit();
+}
+
+void WriteBytesAtomic(const fs::path& path, const void* data, size_t size) {
+  AtomicFile out(path);
+  int fd = ::open(out.temp_path().c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  if (fd < 0)
+    throw Error(path.string(), 0, std::string("cannot open for writing: ") + strerror(errno));
+  const char* p = static_cast<const char*>(data);
+  size_t left = size;
+  while (left > 0) {
+    ssize_t n = ::write(fd, p, left);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      int err = n < 0 ? errno : ENOSPC;
+      ::close(fd);
+      throw Error(path.string(), 0, std::string("write failed: ") + strerror(err));
+    }
+    p += n;
+    left -= static_cast<size_t>(n);
+  }
+  if (::close(fd) != 0)
+    throw Error(path.string(), 0, std::string("write failed: ") + strerror(errno));
   out.Commit();
 }
 
@@ -72,6 +99,7 @@ void WriteBinaryAtomic(const fs::path& path, const std::function<void(std::ostre
 
 bool IsUpToDate(const fs::path& output, const std::vector<fs::path>& inputs) {
   std::error_code ec;
+  if (!fs::is_regular_file(output, ec)) return false;  // a folder under the name is no output
   auto out_time = fs::last_write_time(output, ec);
   if (ec) return false;
   for (const auto& in : inputs) {

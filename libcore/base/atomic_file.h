@@ -45,6 +45,13 @@ void WriteTextAtomic(const fs::path& path, const std::function<void(std::ostream
 // Same for binary content.
 void WriteBinaryAtomic(const fs::path& path, const std::function<void(std::ostream&)>& write);
 
+// Writes `size` bytes to a temporary file and renames it to `path`. Every write() and the
+// close() are checked, so a full disk is an Error and nothing is renamed into place.
+void WriteBytesAtomic(const fs::path& path, const void* data, size_t size);
+
+// Creates `dir` and its parents; throws Error(dir, "cannot create folder: reason").
+void CreateFolder(const fs::path& dir);
+
 // True when `output` exists and is at least as new as every existing input.
 bool IsUpToDate(const fs::path& output, const std::vector<fs::path>& inputs);
 

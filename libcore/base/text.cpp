@@ -19,6 +19,8 @@ LineReader::LineReader(std::istream& in, std::string name) : in_(&in), name_(std
 bool LineReader::NextRaw(std::string& line) {
   if (!std::getline(*in_, line)) return false;
   ++line_no_;
+  // A UTF-8 byte-order mark (Windows editors write one) is not part of the first field.
+  if (line_no_ == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);
   if (!line.empty() && line.back() == '\r') line.pop_back();
   return true;
 }

@@ -3,7 +3,8 @@
 // Every text reader in mvtm goes through LineReader so that any malformed input is reported as
 // "FILE:LINE: what" and never crashes. Numbers are parsed with std::from_chars, which ignores the
 // global locale (a comma-decimal locale cannot change how "1.5" reads). Non-finite values
-// ("nan", "inf") are rejected unless a caller asks for them.
+// ("nan", "inf") are rejected unless a caller asks for them. Lines may end in CRLF, and a UTF-8
+// byte-order mark at the start of a file is skipped.
 #pragma once
 
 #include <cstdint>

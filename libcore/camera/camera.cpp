@@ -1,5 +1,7 @@
 #include "camera/camera.h"
 
+#include <cmath>
+
 #include "base/error.h"
 #include "base/text.h"
 
@@ -10,19 +12,20 @@ struct ModelInfo {
   CameraModel model;
   const char* name;
   int num_params;
+  int num_focal;  // leading parameters that are focal lengths (f, or fx fy)
 };
 constexpr ModelInfo kModels[] = {
-    {CameraModel::kSimplePinhole, "SIMPLE_PINHOLE", 3},
-    {CameraModel::kPinhole, "PINHOLE", 4},
-    {CameraModel::kSimpleRadial, "SIMPLE_RADIAL", 4},
-    {CameraModel::kRadial, "RADIAL", 5},
-    {CameraModel::kOpenCV, "OPENCV", 8},
-    {CameraModel::kOpenCVFisheye, "OPENCV_FISHEYE", 8},
-    {CameraModel::kFullOpenCV, "FULL_OPENCV", 12},
-    {CameraModel::kFOV, "FOV", 5},
-    {CameraModel::kSimpleRadialFisheye, "SIMPLE_RADIAL_FISHEYE", 4},
-    {CameraModel::kRadialFisheye, "RADIAL_FISHEYE", 5},
-    {CameraModel::kThinPrismFisheye, "THIN_PRISM_FISHEYE", 12},
+    {CameraModel::kSimplePinhole, "SIMPLE_PINHOLE", 3, 1},
+    {CameraModel::kPinhole, "PINHOLE", 4, 2},
+    {CameraModel::kSimpleRadial, "SIMPLE_RADIAL", 4, 1},
+    {CameraModel::kRadial, "RADIAL", 5, 1},
+    {CameraModel::kOpenCV, "OPENCV", 8, 2},
+    {CameraModel::kOpenCVFisheye, "OPENCV_FISHEYE", 8, 2},
+    {CameraModel::kFullOpenCV, "FULL_OPENCV", 12, 2},
+    {CameraModel::kFOV, "FOV", 5, 2},
+    {CameraModel::kSimpleRadialFisheye, "SIMPLE_RADIAL_FISHEYE", 4, 1},
+    {CameraModel::kRadialFisheye, "RADIAL_FISHEYE", 5, 1},
+    {CameraModel::kThinPrismFisheye, "THIN_PRISM_FISHEYE", 12, 2},
 };
 const ModelInfo& Info(CameraModel m) {
   for (const auto& i : kModels)
@@ -44,6 +47,23 @@ CameraModel CameraModelFromId(int id) {
   for (const auto& i : kModels)
     if (static_cast<int>(i.model) == id) return i.model;
   throw Error("unknown camera model id " + std::to_string(id));
+}
+
+std::string CameraProblem(const Camera& c) {
+  if (c.width == 0 || c.height == 0) return "width and height must be positive";
+  if (c.width > kMaxCameraSide || c.height > kMaxCameraSide)
+    return "size " + std::to_string(c.width) + "x" + std::to_string(c.height) + " is beyond the " +
+           std::to_string(kMaxCameraSide) + " pixels a side mvtm handles";
+  const ModelInfo& m = Info(c.model);
+  if (static_cast<int>(c.params.size()) != m.num_params)
+    return std::string(m.name) + " takes " + std::to_string(m.num_params) + " parameters, got " +
+           std::to_string(c.params.size());
+  for (double p : c.params)
+    if (!std::isfinite(p)) return "parameters must be finite numbers";
+  for (int i = 0; i < m.num_focal; ++i)
+    if (!(c.params[static_cast<size_t>(i)] > 0))
+      return "focal length must be positive, got " + FormatDouble(c.params[static_cast<size_t>(i)]);
+  return "";
 }
 
 void Camera::RequireUndistorted() const {
@@ -123,16 +143,13 @@ Camera ParseCameraSpec(const std::string& spec) {
   } catch (const Error& e) {
     throw UsageError(std::string("--camera: ") + e.what());
   }
-  c.width = static_cast<uint64_t>(ParseIntArg(tok[1], "--camera width"));
-  c.height = static_cast<uint64_t>(ParseIntArg(tok[2], "--camera height"));
-  if (c.width == 0 || c.height == 0)
-    throw UsageError("--camera: width and height must be positive");
-  for (size_t i = 3; i < tok.size(); ++i)
-    c.params.push_back(ParseDoubleArg(tok[i], "--camera parameter"));
-  if (static_cast<int>(c.params.size()) != CameraModelNumParams(c.model))
-    throw UsageError("--camera: " + std::string(tok[0]) + " takes " +
-                     std::to_string(CameraModelNumParams(c.model)) + " parameters, got " +
-                     std::to_string(c.params.size()));
+  const int64_t w = ParseIntArg(tok[1], "--camera"), h = ParseIntArg(tok[2], "--camera");
+  if (w <= 0 || h <= 0) throw UsageError("--camera: width and height must be positive");
+  c.width = static_cast<uint64_t>(w);
+  c.height = static_cast<uint64_t>(h);
+  for (size_t i = 3; i < tok.size(); ++i) c.params.push_back(ParseDoubleArg(tok[i], "--camera"));
+  std::string problem = CameraProblem(c);
+  if (!problem.empty()) throw UsageError("--camera: " + problem);
   return c;
 }
 

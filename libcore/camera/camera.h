@@ -71,6 +71,16 @@ struct Camera {
   Eigen::Matrix4d GlProjection(double near_plane, double far_plane) const;
 };
 
+// Largest width or height accepted for a camera (GL renderbuffers and textures go this far on
+// Mesa; a larger value in a model file is a typo, not a camera).
+inline constexpr uint64_t kMaxCameraSide = 65536;
+
+// What is wrong with a camera, or "" when it is usable: a size of 0 or beyond kMaxCameraSide, the
+// wrong parameter count for its model, a non-finite parameter, a focal length that is not > 0.
+// Every reader of cameras (COLMAP text and binary, KITTI calib, ORB-SLAM2 settings, NeRF,
+// --camera) applies it, so a bad camera is refused where it enters, naming the file and line.
+std::string CameraProblem(const Camera& c);
+
 // Parses "MODEL W H P1 P2 ..." (as on the orb2colmap command line). Throws UsageError.
 Camera ParseCameraSpec(const std::string& spec);
 

@@ -1,8 +1,10 @@
 #include "cli/app.h"
 
 #include <clocale>
+#include <filesystem>
 #include <iostream>
 #include <locale>
+#include <new>
 
 #include "base/error.h"
 #include "base/version.h"
@@ -44,6 +46,14 @@ int RunMain(CLI::App& app, const std::string& tool, int argc, char** argv,
     return 2;
   } catch (const Error& e) {
     std::cerr << tool << ": error: " << e.what() << "\n";
+    return 1;
+  } catch (const std::filesystem::filesystem_error& e) {
+    // The library's text is "filesystem error: status: ... [PATH]"; say it mvtm's way.
+    std::string where = e.path1().empty() ? "" : e.path1().string() + ": ";
+    std::cerr << tool << ": error: " << where << e.code().message() << "\n";
+    return 1;
+  } catch (const std::bad_alloc&) {
+    std::cerr << tool << ": error: out of memory (an input larger than this machine can hold?)\n";
     return 1;
   } catch (const std::exception& e) {
     std::cerr << tool << ": error: " << e.what() << "\n";

@@ -14,6 +14,8 @@ Selection Selection::Frames(const std::string& spec) {
   auto colon = spec.find(':');
   if (colon == std::string::npos) {
     s.begin = ParseIntArg(spec, "--frames");
+    if (s.begin == std::numeric_limits<int64_t>::max())
+      throw UsageError("--frames: '" + spec + "' is out of range");
     s.end = s.begin + 1;
     s.has_end = true;
     if (s.begin == -1) s.has_end = false;
@@ -25,6 +27,9 @@ Selection Selection::Frames(const std::string& spec) {
     s.end = ParseIntArg(b, "--frames end");
     s.has_end = true;
   }
+  // Counted from the same end, a start after the end selects nothing: surely a typo.
+  if (s.has_end && (s.begin < 0) == (s.end < 0) && s.begin > s.end)
+    throw UsageError("--frames: '" + spec + "' starts after it ends");
   return s;
 }
 

@@ -25,7 +25,8 @@ std::string WorkOptions::ProvenanceName(const std::string& tool) const {
 
 ImageSize ParseImageSize(const std::string& spec, const std::string& option) {
   const auto x = spec.find('x');
-  if (x == std::string::npos) throw UsageError(option + ": '" + spec + "' is not WxH");
+  if (x == std::string::npos || x == 0 || x + 1 == spec.size())
+    throw UsageError(option + ": '" + spec + "' is not WxH");
   const int64_t w = ParseIntArg(spec.substr(0, x), option + " width");
   const int64_t h = ParseIntArg(spec.substr(x + 1), option + " height");
   if (w <= 0 || h <= 0 || w > kMaxImageSide || h > kMaxImageSide)

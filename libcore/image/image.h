@@ -38,6 +38,10 @@ struct Image {
   double MaxValue() const { return bits == 8 ? 255.0 : bits == 16 ? 65535.0 : 1.0; }
 };
 
+// Largest images read (an image header is not trusted with an allocation beyond these).
+inline constexpr int kMaxReadImageSide = 65536;
+inline constexpr uint64_t kMaxImagePixels = uint64_t(1) << 30;
+
 // Size and channel count without reading the pixels. Throws Error.
 struct ImageSpecInfo {
   int width = 0, height = 0, channels = 0, bits = 8;
@@ -46,6 +50,11 @@ ImageSpecInfo ReadImageSpec(const std::string& path);
 
 // Throws Error("PATH: ...") when the file is missing, unreadable or of an unsupported type.
 Image ReadImage(const std::string& path);
+// A float map (depth maps, confidences): one 32-bit float channel, else an Error naming the file
+// (an RGB PNG saved as NAME.exr, a 3-channel EXR).
+Image ReadFloatMap(const std::string& path);
+// Throws Error(path, 0, "image is AxB but its camera is WxH") unless `img` is w×h.
+void RequireImageSize(const Image& img, const std::string& path, uint64_t w, uint64_t h);
 // Writes atomically; the format follows the extension. Throws Error.
 void WriteImage(const std::string& path, const Image& img);
 

@@ -648,23 +648,23 @@ void SsimOptions::Check() const {
   auto bad = [](const std::string& what) { throw UsageError(what); };
   std::ostringstream s;
   if (!(sigma > 0) || !std::isfinite(sigma)) {
-    s << "sigma must be > 0, got " << sigma;
+    s << "--sigma: must be > 0, got " << sigma;
     bad(s.str());
   }
   if (!(k1 >= 0) || !std::isfinite(k1)) {
-    s << "k1 must be >= 0, got " << k1;
+    s << "--k1: must be >= 0, got " << k1;
     bad(s.str());
   }
   if (!(k2 >= 0) || !std::isfinite(k2)) {
-    s << "k2 must be >= 0, got " << k2;
+    s << "--k2: must be >= 0, got " << k2;
     bad(s.str());
   }
   if (!(data_range >= 0) || !std::isfinite(data_range)) {
-    s << "data range must be > 0 (or 0 for the bit depth), got " << data_range;
+    s << "--data-range: must be > 0 (or 0 for the bit depth), got " << data_range;
     bad(s.str());
   }
   if (!(truncate > 0) || !std::isfinite(truncate)) {
-    s << "truncate must be > 0, got " << truncate;
+    s << "--truncate: must be > 0, got " << truncate;
     bad(s.str());
   }
   if (truncate * sigma > 1000) {
@@ -672,7 +672,7 @@ void SsimOptions::Check() const {
     bad(s.str());
   }
   if (threads < 0) {
-    s << "threads must be >= 0, got " << threads;
+    s << "--threads: must be >= 0, got " << threads;
     bad(s.str());
   }
 }

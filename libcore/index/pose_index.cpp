@@ -23,7 +23,8 @@ constexpr size_t kNone = static_cast<size_t>(-1);
 // The K best candidates so far, in CandidateBefore order (K is small: insertion into a sorted run).
 class TopK {
  public:
-  explicit TopK(size_t k) : k_(k) { v_.reserve(k + 1); }
+  // Reserves no more than a small bound: --k may be far larger than the number of images.
+  explicit TopK(size_t k) : k_(k) { v_.reserve(std::min<size_t>(k, 255) + 1); }
   bool full() const { return v_.size() >= k_; }
   double worst() const { return v_.back().cost; }
   void Offer(const Candidate& c) {

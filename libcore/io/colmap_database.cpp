@@ -34,7 +34,14 @@ ColmapDatabase::ColmapDatabase(const std::string& path) : path_(path) {
     db_ = nullptr;
     throw Error(path, 0, "cannot open database: " + msg);
   }
-  Exec(kSchema);
+  try {
+    Exec(kSchema);
+  } catch (const Error&) {
+    // Not a database (or a corrupt one): the destructor will not run, so close here.
+    sqlite3_close(db_);
+    db_ = nullptr;
+    throw;
+  }
 }
 
 ColmapDatabase::~ColmapDatabase() { sqlite3_close(db_); }

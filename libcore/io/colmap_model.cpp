@@ -5,6 +5,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include "base/atomic_file.h"
@@ -86,6 +87,12 @@ Eigen::Quaterniond CheckedQuaternion(double w, double x, double y, double z,
                                      const std::string& file, long line) {
   double n2 = w * w + x * x + y * y + z * z;
   if (!(n2 > 0)) throw Error(file, line, "quaternion has zero norm");
+  if (!std::isfinite(n2) || n2 < 1e-280) {
+    // Components near the double range (1e308) or tiny: rescale by the largest one so a later
+    // normalisation neither overflows nor underflows (the rotation is the same).
+    double m = std::max({std::abs(w), std::abs(x), std::abs(y), std::abs(z)});
+    return Eigen::Quaterniond(w / m, x / m, y / m, z / m);
+  }
   return Eigen::Quaterniond(w, x, y, z);
 }
 
@@ -119,6 +126,8 @@ std::map<uint32_t, Camera> ReadColmapCamerasText(std::istream& stream, const std
       in.Fail(std::string(tok[1]) + " takes " + std::to_string(np) + " parameters, found " +
               std::to_string(tok.size() - 4));
     for (size_t i = 4; i < tok.size(); ++i) c.params.push_back(ParseDouble(tok[i], in, "PARAMS"));
+    std::string problem = CameraProblem(c);
+    if (!problem.empty()) in.Fail("camera " + std::to_string(c.id) + ": " + problem);
     if (!cameras.emplace(c.id, c).second) in.Fail("duplicate CAMERA_ID " + std::to_string(c.id));
   }
   return cameras;
@@ -183,8 +192,10 @@ void ForEachColmapImageText(std::istream& stream, const std::string& name,
 std::map<uint32_t, ImageRecord> ReadColmapImagesText(std::istream& stream,
                                                      const std::string& name) {
   std::map<uint32_t, ImageRecord> images;
+  std::set<std::string> names;
   ForEachColmapImageText(stream, name, [&](ImageRecord&& im, long line) {
     const uint32_t id = im.id;
+    if (!names.insert(im.name).second) throw Error(name, line, "duplicate image NAME " + im.name);
     if (!images.emplace(id, std::move(im)).second)
       throw Error(name, line, "duplicate IMAGE_ID " + std::to_string(id));
   });
@@ -428,6 +439,8 @@ std::map<uint32_t, Camera> ReadCamerasBinary(const std::string& path) {
     c.height = in.Get<uint64_t>("HEIGHT");
     for (int k = 0; k < CameraModelNumParams(c.model); ++k)
       c.params.push_back(in.Get<double>("PARAMS"));
+    std::string problem = CameraProblem(c);
+    if (!problem.empty()) in.Fail("camera " + std::to_string(c.id) + ": " + problem);
     if (!out.emplace(c.id, c).second) in.Fail("duplicate CAMERA_ID " + std::to_string(c.id));
   }
   in.ExpectEnd();
@@ -436,6 +449,7 @@ std::map<uint32_t, Camera> ReadCamerasBinary(const std::string& path) {
 
 std::map<uint32_t, ImageRecord> ReadImagesBinary(const std::string& path) {
   std::map<uint32_t, ImageRecord> out;
+  std::set<std::string> names;
   BinReader in(path);
   uint64_t n = in.Get<uint64_t>("image count");
   in.CheckCount(n, 73, "image");
@@ -459,6 +473,7 @@ std::map<uint32_t, ImageRecord> ReadImagesBinary(const std::string& path) {
       p.point3D_id = in.Get<uint64_t>("POINT3D_ID");
     }
     uint32_t id = im.id;
+    if (!names.insert(im.name).second) in.Fail("duplicate image NAME " + im.name);
     if (!out.emplace(id, std::move(im)).second) in.Fail("duplicate IMAGE_ID " + std::to_string(id));
   }
   in.ExpectEnd();

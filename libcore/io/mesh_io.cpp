@@ -6,6 +6,9 @@
 #include <Eigen/Geometry>
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <algorithm>
+#include <charconv>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -14,6 +17,7 @@
 
 #include "base/atomic_file.h"
 #include "base/error.h"
+#include "base/text.h"
 
 namespace mvtm {
 
@@ -29,19 +33,92 @@ using OMesh = OpenMesh::TriMesh_ArrayKernelT<Traits>;
 
 namespace {
 
+enum class PlyType { kInt8, kUint8, kInt16, kUint16, kInt32, kUint32, kFloat32, kFloat64 };
+
+bool PlyTypeFromName(const std::string& t, PlyType& out) {
+  static const std::pair<const char*, PlyType> kNames[] = {
+      {"char", PlyType::kInt8},      {"int8", PlyType::kInt8},       {"uchar", PlyType::kUint8},
+      {"uint8", PlyType::kUint8},    {"short", PlyType::kInt16},     {"int16", PlyType::kInt16},
+      {"ushort", PlyType::kUint16},  {"uint16", PlyType::kUint16},   {"int", PlyType::kInt32},
+      {"int32", PlyType::kInt32},    {"uint", PlyType::kUint32},     {"uint32", PlyType::kUint32},
+      {"float", PlyType::kFloat32},  {"float32", PlyType::kFloat32}, {"double", PlyType::kFloat64},
+      {"float64", PlyType::kFloat64}};
+  for (const auto& [name, type] : kNames)
+    if (t == name) {
+      out = type;
+      return true;
+    }
+  return false;
+}
+
+size_t PlySize(PlyType t) {
+  switch (t) {
+    case PlyType::kInt8:
+    case PlyType::kUint8:
+      return 1;
+    case PlyType::kInt16:
+    case PlyType::kUint16:
+      return 2;
+    case PlyType::kInt32:
+    case PlyType::kUint32:
+    case PlyType::kFloat32:
+      return 4;
+    case PlyType::kFloat64:
+      return 8;
+  }
+  return 8;
+}
+
 struct PlyProperty {
-  std::string name, type, list_count_type;  // list_count_type non-empty for lists
+  std::string name;
+  PlyType type = PlyType::kFloat32;
+  bool is_list = false;
+  PlyType count_type = PlyType::kUint8;  // lists only
 };
 struct PlyElement {
   std::string name;
   size_t count = 0;
+  long line = 0;  // header line declaring it
   std::vector<PlyProperty> props;
+  // Fewest bytes one element can take in the body (binary), or fewest values (ascii).
+  size_t MinBytes() const {
+    size_t n = 0;
+    for (const auto& p : props) n += p.is_list ? PlySize(p.count_type) : PlySize(p.type);
+    return n;
+  }
 };
 struct PlyHeader {
   std::string format;
   std::vector<PlyElement> elements;
-  bool double_positions = false;
+  size_t bytes = 0;  // header length
+  long lines = 0;
 };
+
+// Largest element count accepted (4·10⁹ would not fit the 32-bit indices of faces anyway).
+constexpr uint64_t kMaxPlyCount = 0xffffffffull;
+
+size_t ParsePlyCount(const std::string& tok, const std::string& path, long line) {
+  if (tok.empty() || tok.find_first_not_of("0123456789") != std::string::npos)
+    throw Error(path, line, "element count '" + tok + "' is not a non-negative integer");
+  if (tok.size() > 10 || std::stoull(tok) > kMaxPlyCount)
+    throw Error(path, line, "element count " + tok + " is beyond 2^32-1");
+  return static_cast<size_t>(std::stoull(tok));
+}
+
+PlyProperty ParsePlyProperty(std::istringstream& ls, const std::string& path, long line) {
+  PlyProperty p;
+  std::string type, count_type;
+  ls >> type;
+  if (type == "list") {
+    p.is_list = true;
+    ls >> count_type >> type;
+    if (!PlyTypeFromName(count_type, p.count_type))
+      throw Error(path, line, "unknown PLY list count type '" + count_type + "'");
+  }
+  if (!PlyTypeFromName(type, p.type)) throw Error(path, line, "unknown PLY type '" + type + "'");
+  if (!(ls >> p.name)) throw Error(path, line, "property has no name");
+  return p;
+}
 
 // Reads and checks the header. OpenMesh 9's PLY reader loops forever on a header cut before
 // "end_header", so every PLY passes through here first.
@@ -49,147 +126,215 @@ PlyHeader ReadPlyHeader(std::istream& in, const std::string& path) {
   PlyHeader h;
   std::string line;
   long n = 0;
-  size_t bytes = 0;
   while (std::getline(in, line)) {
     ++n;
-    bytes += line.size() + 1;
+    h.bytes += line.size() + 1;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     std::istringstream ls(line);
     std::string key;
     ls >> key;
     if (n == 1 && key != "ply") throw Error(path, 1, "not a PLY file (first line is not 'ply')");
     if (key == "format") {
-      ls >> h.format;
+      // OpenMesh 9 loops forever on a format line it does not know: checked here.
+      std::string version;
+      if (!h.format.empty()) throw Error(path, n, "second 'format' line");
+      ls >> h.format >> version;
+      if (h.format != "ascii" && h.format != "binary_little_endian" &&
+          h.format != "binary_big_endian")
+        throw Error(path, n, "unknown PLY format '" + h.format + "'");
+      if (version != "1.0") throw Error(path, n, "unsupported PLY version '" + version + "'");
     } else if (key == "element") {
       PlyElement e;
-      if (!(ls >> e.name >> e.count)) throw Error(path, n, "bad element line");
+      std::string count;
+      if (!(ls >> e.name >> count)) throw Error(path, n, "bad element line");
+      e.count = ParsePlyCount(count, path, n);
+      e.line = n;
       h.elements.push_back(e);
     } else if (key == "property") {
       if (h.elements.empty()) throw Error(path, n, "property before any element");
-      PlyProperty p;
-      ls >> p.type;
-      if (p.type == "list") ls >> p.list_count_type >> p.type;
-      ls >> p.name;
-      if (h.elements.back().name == "vertex" && p.name == "x" &&
-          (p.type == "double" || p.type == "float64"))
-        h.double_positions = true;
-      h.elements.back().props.push_back(p);
+      h.elements.back().props.push_back(ParsePlyProperty(ls, path, n));
     } else if (key == "end_header") {
       if (h.format.empty()) throw Error(path, n, "PLY header has no 'format' line");
+      h.lines = n;
       return h;
     }
-    if (bytes > 65536) break;
+    if (h.bytes > 65536) break;
   }
   throw Error(path, n, "PLY header has no 'end_header' (truncated file?)");
 }
 
-size_t PlySize(const std::string& t) {
-  if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
-  if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
-  if (t == "int" || t == "uint" || t == "float" || t == "int32" || t == "uint32" || t == "float32")
-    return 4;
-  if (t == "double" || t == "float64") return 8;
-  return 0;
-}
-
-double PlyValue(std::istream& in, const std::string& t, bool ascii, const std::string& path) {
-  if (ascii) {
-    std::string tok;
-    if (!(in >> tok)) throw Error(path, 0, "truncated PLY body");
-    try {
-      return std::stod(tok);
-    } catch (...) {
-      throw Error(path, 0, "PLY body: '" + tok + "' is not a number");
-    }
-  }
-  unsigned char b[8];
-  size_t n = PlySize(t);
-  if (!n) throw Error(path, 0, "unsupported PLY property type '" + t + "'");
-  if (!in.read(reinterpret_cast<char*>(b), static_cast<std::streamsize>(n)))
-    throw Error(path, 0, "truncated PLY body");
-  auto get = [&](auto v) {
-    std::memcpy(&v, b, sizeof v);
-    return static_cast<double>(v);
-  };
-  if (t == "char" || t == "int8") return get(int8_t{});
-  if (t == "uchar" || t == "uint8") return get(uint8_t{});
-  if (t == "short" || t == "int16") return get(int16_t{});
-  if (t == "ushort" || t == "uint16") return get(uint16_t{});
-  if (t == "int" || t == "int32") return get(int32_t{});
-  if (t == "uint" || t == "uint32") return get(uint32_t{});
-  if (t == "float" || t == "float32") return get(float{});
-  return get(double{});
-}
-
-// Double-precision PLY positions, which OpenMesh's reader rounds to float: read directly
-// (ascii or binary_little_endian, vertex x y z [nx ny nz] [red green blue], triangle lists).
-Mesh ReadPlyDouble(std::istream& in, const PlyHeader& h, const std::string& path) {
+// Refuses counts the file cannot hold before anything is allocated (a header claiming 2^32
+// faces in a 1 kB file): binary elements need MinBytes() each, ascii ones two bytes a value.
+void CheckPlyCounts(const PlyHeader& h, uint64_t file_size, const std::string& path) {
   bool ascii = h.format == "ascii";
-  if (!ascii && h.format != "binary_little_endian")
-    throw Error(path, 0, "PLY format '" + h.format + "' with double positions is not supported");
-  Mesh m;
+  uint64_t body = file_size > h.bytes ? file_size - h.bytes : 0, need = 0;
   for (const auto& e : h.elements) {
-    bool is_v = e.name == "vertex", is_f = e.name == "face";
-    if (is_v) m.vertices.reserve(e.count);
-    bool has_n = false, has_c = false;
+    uint64_t each = ascii ? 2 * e.props.size() : e.MinBytes();
+    need += each * e.count;
+    if (each > 0 && (e.count > body / each || need > body))
+      throw Error(path, e.line,
+                  "element " + e.name + " claims " + std::to_string(e.count) +
+                      " entries, more than the file's " + std::to_string(body) +
+                      " bytes of data can hold (truncated or corrupt file?)");
+  }
+}
+
+// Reads PLY bodies (ascii or binary_little_endian, any numeric types): vertex x y z [nx ny nz]
+// [red green blue], faces as index lists (polygons fanned into triangles). Every value is
+// checked: indices in range, colours 0..255, positions finite.
+class PlyBodyReader {
+ public:
+  PlyBodyReader(std::istream& in, const PlyHeader& h, const std::string& path)
+      : in_(in),
+        ascii_(h.format == "ascii"),
+        swap_(h.format == "binary_big_endian"),
+        path_(path),
+        line_(h.lines + 1) {}
+
+  double Value(PlyType t) {
+    if (ascii_) return AsciiValue();
+    unsigned char b[8];
+    const size_t n = PlySize(t);
+    if (!in_.read(reinterpret_cast<char*>(b), static_cast<std::streamsize>(n)))
+      Fail("truncated PLY body");
+    if (swap_) std::reverse(b, b + n);
+    auto get = [&](auto v) {
+      std::memcpy(&v, b, sizeof v);
+      return static_cast<double>(v);
+    };
+    switch (t) {
+      case PlyType::kInt8:
+        return get(int8_t{});
+      case PlyType::kUint8:
+        return get(uint8_t{});
+      case PlyType::kInt16:
+        return get(int16_t{});
+      case PlyType::kUint16:
+        return get(uint16_t{});
+      case PlyType::kInt32:
+        return get(int32_t{});
+      case PlyType::kUint32:
+        return get(uint32_t{});
+      case PlyType::kFloat32:
+        return get(float{});
+      case PlyType::kFloat64:
+        return get(double{});
+    }
+    return 0;
+  }
+  // An integer value in [0, limit): list counts, face indices, colours.
+  uint32_t Index(PlyType t, double limit, const char* what) {
+    double d = Value(t);
+    if (!(d >= 0 && d < limit) || d != std::floor(d))
+      Fail(std::string(what) + " " + FormatDouble(d) + " is out of range (0 to " +
+           FormatDouble(limit - 1) + ")");
+    return static_cast<uint32_t>(d);
+  }
+  [[noreturn]] void Fail(const std::string& what) const {
+    throw Error(path_, ascii_ ? line_ : 0, what);
+  }
+
+ private:
+  double AsciiValue() {
+    int c;
+    while ((c = in_.peek()) == ' ' || c == '\t' || c == '\r' || c == '\n') {
+      if (c == '\n') ++line_;
+      in_.get();
+    }
+    std::string tok;
+    while ((c = in_.peek()) != EOF && !std::isspace(c)) tok.push_back(static_cast<char>(in_.get()));
+    if (tok.empty()) Fail("truncated PLY body");
+    double v = 0;
+    const char* end = tok.data() + tok.size();
+    auto r = std::from_chars(tok.data(), end, v);
+    if (r.ec != std::errc() || r.ptr != end) Fail("'" + tok + "' is not a number");
+    return v;
+  }
+
+  std::istream& in_;
+  bool ascii_, swap_;
+  std::string path_;
+  long line_;
+};
+
+void ReadPlyVertices(PlyBodyReader& r, const PlyElement& e, Mesh& m) {
+  bool has_n = false, has_c = false;
+  for (const auto& p : e.props) {
+    has_n |= p.name == "nx";
+    has_c |= p.name == "red";
+  }
+  m.vertices.reserve(e.count);
+  for (size_t i = 0; i < e.count; ++i) {
+    Eigen::Vector3d v(0, 0, 0);
+    Eigen::Vector3f nrm(0, 0, 0);
+    std::array<uint8_t, 3> col{0, 0, 0};
     for (const auto& p : e.props) {
-      has_n |= p.name == "nx";
-      has_c |= p.name == "red";
-    }
-    for (size_t i = 0; i < e.count; ++i) {
-      Eigen::Vector3d v(0, 0, 0);
-      Eigen::Vector3f nrm(0, 0, 0);
-      std::array<uint8_t, 3> col{0, 0, 0};
-      for (const auto& p : e.props) {
-        if (!p.list_count_type.empty()) {
-          size_t cnt = static_cast<size_t>(PlyValue(in, p.list_count_type, ascii, path));
-          std::vector<uint32_t> idx(cnt);
-          for (auto& x : idx) {
-            double d = PlyValue(in, p.type, ascii, path);
-            if (d < 0) throw Error(path, 0, "negative face index");
-            x = static_cast<uint32_t>(d);
-          }
-          if (is_f && (p.name == "vertex_indices" || p.name == "vertex_index"))
-            for (size_t k = 2; k < cnt; ++k) m.faces.push_back({idx[0], idx[k - 1], idx[k]});
-          continue;
-        }
-        double d = PlyValue(in, p.type, ascii, path);
-        if (!is_v) continue;
-        if (p.name == "x")
-          v.x() = d;
-        else if (p.name == "y")
-          v.y() = d;
-        else if (p.name == "z")
-          v.z() = d;
-        else if (p.name == "nx")
-          nrm.x() = static_cast<float>(d);
-        else if (p.name == "ny")
-          nrm.y() = static_cast<float>(d);
-        else if (p.name == "nz")
-          nrm.z() = static_cast<float>(d);
-        else if (p.name == "red")
-          col[0] = static_cast<uint8_t>(d);
-        else if (p.name == "green")
-          col[1] = static_cast<uint8_t>(d);
-        else if (p.name == "blue")
-          col[2] = static_cast<uint8_t>(d);
+      if (p.is_list) {
+        uint32_t cnt = r.Index(p.count_type, 1 << 16, "list length");
+        for (uint32_t k = 0; k < cnt; ++k) r.Value(p.type);
+        continue;
       }
-      if (is_v) {
-        if (!v.allFinite()) throw Error(path, 0, "vertex " + std::to_string(i) + " is not finite");
-        m.vertices.push_back(v);
-        if (has_n) m.normals.push_back(nrm);
-        if (has_c) m.colors.push_back(col);
+      static const char* kNames[] = {"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue"};
+      int which = 0;
+      while (which < 9 && p.name != kNames[which]) ++which;
+      if (which >= 6 && which < 9) {
+        col[static_cast<size_t>(which - 6)] =
+            static_cast<uint8_t>(r.Index(p.type, 256, p.name.c_str()));
+        continue;
       }
+      double d = r.Value(p.type);
+      if (which < 3) v[which] = d;
+      if (which >= 3 && which < 6) nrm[which - 3] = static_cast<float>(d);
     }
-    if (is_v) {
-      if (!has_n) m.missing.push_back("normals");
-      if (!has_c) m.missing.push_back("colours");
+    if (!v.allFinite()) r.Fail("vertex " + std::to_string(i) + " is not finite");
+    m.vertices.push_back(v);
+    if (has_n) m.normals.push_back(nrm);
+    if (has_c) m.colors.push_back(col);
+  }
+  if (!has_n) m.missing.push_back("normals");
+  if (!has_c) m.missing.push_back("colours");
+}
+
+void ReadPlyFaces(PlyBodyReader& r, const PlyElement& e, Mesh& m) {
+  double nv = static_cast<double>(m.vertices.size());
+  m.faces.reserve(e.count);
+  std::vector<uint32_t> idx;
+  for (size_t i = 0; i < e.count; ++i) {
+    for (const auto& p : e.props) {
+      bool indices = p.is_list && (p.name == "vertex_indices" || p.name == "vertex_index");
+      if (!p.is_list) {
+        r.Value(p.type);
+        continue;
+      }
+      uint32_t cnt = r.Index(p.count_type, 1 << 16, "list length");
+      idx.resize(cnt);
+      for (auto& x : idx) x = indices ? r.Index(p.type, nv, "face index") : (r.Value(p.type), 0u);
+      if (indices)
+        for (size_t k = 2; k < cnt; ++k) m.faces.push_back({idx[0], idx[k - 1], idx[k]});
     }
   }
-  for (const auto& f : m.faces)
-    for (uint32_t i : f)
-      if (i >= m.vertices.size())
-        throw Error(path, 0, "face index " + std::to_string(i) + " out of range");
+}
+
+Mesh ReadPlyBody(std::istream& in, const PlyHeader& h, const std::string& path) {
+  PlyBodyReader r(in, h, path);
+  Mesh m;
+  bool seen_vertices = false;
+  for (const auto& e : h.elements) {
+    if (e.name == "vertex") {
+      ReadPlyVertices(r, e, m);
+      seen_vertices = true;
+    } else if (e.name == "face") {
+      if (!seen_vertices) throw Error(path, e.line, "element face comes before element vertex");
+      ReadPlyFaces(r, e, m);
+    } else {
+      for (size_t i = 0; i < e.count; ++i)
+        for (const auto& p : e.props) {
+          uint32_t cnt = p.is_list ? r.Index(p.count_type, 1 << 16, "list length") : 1;
+          for (uint32_t k = 0; k < cnt; ++k) r.Value(p.type);
+        }
+    }
+  }
+  if (!seen_vertices) throw Error(path, 0, "PLY has no element vertex");
   if (m.faces.empty()) m.missing.push_back("faces");
   return m;
 }
@@ -202,7 +347,12 @@ Mesh ReadMesh(const std::string& path) {
   if (ext == ".ply" || ext == ".PLY") {
     std::ifstream in(path, std::ios::binary);
     PlyHeader h = ReadPlyHeader(in, path);
-    if (h.double_positions) return ReadPlyDouble(in, h, path);
+    std::error_code ec;
+    uint64_t size = std::filesystem::file_size(path, ec);
+    CheckPlyCounts(h, ec ? 0 : size, path);
+    // mvtm's own reader for every PLY: it keeps double positions (OpenMesh rounds them to
+    // float), refuses bad indices (OpenMesh drops such faces) and never loops on bad headers.
+    return ReadPlyBody(in, h, path);
   }
   omerr().disable();  // OpenMesh's own chatter; failures become Errors below
   omlog().disable();

@@ -1,11 +1,13 @@
-// mvtm — triangle meshes (PLY, through OpenMesh).
+// mvtm — triangle meshes (PLY read and written by mvtm itself; OBJ and OFF through OpenMesh).
 //
 // Conventions:
 //  * Vertex positions are double in memory, in world coordinates (metres). A PLY written by
 //    mvtm stores positions as double when any coordinate exceeds 1e5 in magnitude (UTM-sized
-//    worlds), else as float like COLMAP's meshes; both read back. OpenMesh reads every mesh
-//    format except double-precision PLY, which it would round to float (0.5 m at UTM northings):
-//    those are read directly.
+//    worlds), else as float like COLMAP's meshes; both read back. PLY (ascii, binary little- and
+//    big-endian, any numeric property types) is read by mvtm's own reader: OpenMesh would round
+//    double positions to float (0.5 m at UTM northings), drop faces with bad indices silently and
+//    loop forever on some malformed headers. Every count is checked against the file's size
+//    before anything is allocated; indices, list lengths and colours must be integers in range.
 //  * Colours are 8-bit RGB, normals unit float vectors; faces are triangles (polygons are
 //    triangulated on read).
 //  * ReadMesh() reports what the file lacks (normals, colours, faces) in Mesh::missing rather
@@ -18,7 +20,7 @@
 
 namespace mvtm {
 
-// Throws Error("PATH: ...") when unreadable or when a face index is out of range.
+// Throws Error("PATH[:LINE]: ...") when unreadable or malformed (LINE for ASCII bodies).
 Mesh ReadMesh(const std::string& path);
 // Writes PLY (binary unless ascii) atomically, with normals and colours when present.
 void WriteMesh(const std::string& path, const Mesh& mesh, bool ascii = false);

@@ -1,5 +1,7 @@
 #include "io/trajectory.h"
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -21,6 +23,11 @@ namespace {
 Eigen::Quaterniond NormalisedOrFail(double w, double x, double y, double z, const std::string& name,
                                     long line) {
   double n = std::sqrt(w * w + x * x + y * y + z * z);
+  if (!std::isfinite(n)) {  // components near 1e308: rescale first, the rotation is the same
+    double m = std::max({std::abs(w), std::abs(x), std::abs(y), std::abs(z)});
+    w /= m, x /= m, y /= m, z /= m;
+    n = std::sqrt(w * w + x * x + y * y + z * z);
+  }
   if (!(n > 1e-12)) throw Error(name, line, "quaternion has zero norm");
   Eigen::Quaterniond q(w / n, x / n, y / n, z / n);
   return q;
@@ -255,6 +262,8 @@ Camera ReadKittiCalib(const std::string& path, int cam_index, uint64_t width, ui
     c.width = width;
     c.height = height;
     c.params = {p[0], p[5], p[2], p[6]};
+    std::string problem = CameraProblem(c);
+    if (!problem.empty()) in.Fail(key + " " + problem);
     return c;
   }
   throw Error(path, 0, "no line '" + key + "'");
@@ -265,8 +274,8 @@ Camera ReadOrbSettings(const std::string& path, uint64_t width, uint64_t height)
   cv::FileStorage fsr;
   try {
     fsr.open(path, cv::FileStorage::READ);
-  } catch (const cv::Exception& e) {
-    throw Error(path, 0, "not a readable ORB-SLAM2 settings file: " + e.msg);
+  } catch (const cv::Exception&) {  // OpenCV's text names its own source lines: not for users
+    throw Error(path, 0, "not a readable ORB-SLAM2 settings file (YAML)");
   }
   if (!fsr.isOpened()) throw Error(path, 0, "not a readable ORB-SLAM2 settings file");
   auto get = [&](const char* key, bool required, double def) {
@@ -290,6 +299,8 @@ Camera ReadOrbSettings(const std::string& path, uint64_t width, uint64_t height)
   if (height) h = static_cast<double>(height);
   if (!(w > 0) || !(h > 0))
     throw Error(path, 0, "no Camera.width/Camera.height: give the image size (--size)");
+  if (!(w <= double(kMaxCameraSide)) || !(h <= double(kMaxCameraSide)))
+    throw Error(path, 0, "Camera.width/Camera.height beyond " + std::to_string(kMaxCameraSide));
   if (!(fx > 0) || !(fy > 0)) throw Error(path, 0, "focal lengths must be positive");
   Camera c;
   c.width = static_cast<uint64_t>(w);
@@ -304,6 +315,8 @@ Camera ReadOrbSettings(const std::string& path, uint64_t width, uint64_t height)
     c.model = CameraModel::kFullOpenCV;
     c.params = {fx, fy, cx, cy, k1, k2, p1, p2, k3, 0, 0, 0};
   }
+  std::string problem = CameraProblem(c);
+  if (!problem.empty()) throw Error(path, 0, problem);
   return c;
 }
 
@@ -313,7 +326,7 @@ NerfScene ReadNerfTransforms(const std::string& path) {
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(f);
-  } catch (const nlohmann::json::parse_error& e) {
+  } catch (const nlohmann::json::exception& e) {  // parse_error, out_of_range (number overflow)
     throw Error(path, 0, std::string("invalid JSON: ") + e.what());
   }
   auto num = [&](const nlohmann::json& obj, const char* key, const std::string& where) {
@@ -333,6 +346,8 @@ NerfScene ReadNerfTransforms(const std::string& path) {
          k2 = j.contains("k2") ? num(j, "k2", "/") : 0;
   double p1 = j.contains("p1") ? num(j, "p1", "/") : 0,
          p2 = j.contains("p2") ? num(j, "p2", "/") : 0;
+  if (!(w >= 1 && w <= double(kMaxCameraSide)) || !(h >= 1 && h <= double(kMaxCameraSide)))
+    throw Error(path, 0, "/w and /h must be in 1.." + std::to_string(kMaxCameraSide));
   s.camera.width = static_cast<uint64_t>(w);
   s.camera.height = static_cast<uint64_t>(h);
   if (k1 == 0 && k2 == 0 && p1 == 0 && p2 == 0) {
@@ -342,6 +357,8 @@ NerfScene ReadNerfTransforms(const std::string& path) {
     s.camera.model = CameraModel::kOpenCV;
     s.camera.params = {fx, fy, cx, cy, k1, k2, p1, p2};
   }
+  std::string problem = CameraProblem(s.camera);
+  if (!problem.empty()) throw Error(path, 0, problem);
   if (!j.contains("frames") || !j["frames"].is_array()) throw Error(path, 0, "/frames is missing");
   size_t i = 0;
   for (const auto& fr : j["frames"]) {

@@ -41,6 +41,20 @@ Eigen::Matrix4f ClipFromCamera(const Camera& c, double n, double f) {
   return (c.GlProjection(n, f) * flip).cast<float>();
 }
 
+// Throws a one-line Error when this OpenGL cannot hold a w×h texture or framebuffer (Mesa
+// crashes instead of failing cleanly on oversized allocations).
+void RequireGlSize(int w, int h, const std::string& what) {
+  GLint max_tex = 0, max_rb = 0, dims[2] = {0, 0};
+  glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_tex);
+  glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &max_rb);
+  glGetIntegerv(GL_MAX_VIEWPORT_DIMS, dims);
+  int limit = std::min({max_tex, max_rb, dims[0], dims[1]});
+  if (w <= 0 || h <= 0 || w > limit || h > limit)
+    throw Error(what + " of " + std::to_string(w) + "x" + std::to_string(h) +
+                " pixels is beyond this OpenGL's limit of " + std::to_string(limit) +
+                " pixels a side");
+}
+
 struct Target {
   GLuint fbo = 0, colour = 0, source = 0, depth_rb = 0, lin_depth = 0;
   int w = 0, h = 0;
@@ -101,6 +115,7 @@ struct Renderer::Impl {
   // Colour (RGBA8) + source (R8UI) + depth, or linear depth (R32F) + depth.
   void EnsureTarget(Target& t, int w, int h, bool depth_only) {
     if (t.fbo && t.w == w && t.h == h) return;
+    RequireGlSize(w, h, "a render");
     t.Release();
     t.w = w;
     t.h = h;
@@ -209,6 +224,7 @@ struct Renderer::Impl {
 
   // (Re)allocates the three texture arrays for `count` layers of w×h texels; forgets all layers.
   void AllocateLayers(int w, int h, int count) {
+    RequireGlSize(w, h, "a projector image");
     auto alloc = [&](GLuint& tex, GLenum unit, GLint internal, GLenum format, GLenum type,
                      GLint filter) {
       if (!tex) glGenTextures(1, &tex);

@@ -60,7 +60,10 @@ const Image& ProjectorSources::ImageOf(size_t k) {
   if (it == image_.end()) {
     const std::string& name = images_[k]->name;
     fs::path p = prefer_textures_ ? ws_.SourceImagePath(name) : ws_.ImagePath(name);
-    it = image_.emplace(k, ReadImage(p.string())).first;
+    Image img = ReadImage(p.string());
+    const Camera& cam = rec_.cameras.at(images_[k]->camera_id);
+    RequireImageSize(img, p.string(), cam.width, cam.height);
+    it = image_.emplace(k, std::move(img)).first;
   }
   return it->second;
 }
@@ -72,7 +75,7 @@ const Image& ProjectorSources::DepthOf(size_t k) {
     fs::path dp = ws_.DepthPath(images_[k]->name);
     Image d;
     if (fs::exists(dp)) {
-      d = ResizeNearest(ReadImage(dp.string()), int(v.camera.width), int(v.camera.height));
+      d = ResizeNearest(ReadFloatMap(dp.string()), int(v.camera.width), int(v.camera.height));
     } else {
       if (!renderer_) throw Error(dp.string(), 0, "no depth map (run bakedepth)");
       d = renderer_->RenderDepth(v);
@@ -86,7 +89,10 @@ const Image* ProjectorSources::MaskOf(size_t k) {
   auto it = mask_.find(k);
   if (it == mask_.end()) {
     fs::path mp = ws_.MaskPath(images_[k]->name);
-    it = mask_.emplace(k, fs::exists(mp) ? ReadMask(mp.string()) : Image()).first;
+    Image m = fs::exists(mp) ? ReadMask(mp.string()) : Image();
+    const Camera& cam = rec_.cameras.at(images_[k]->camera_id);
+    if (!m.empty()) RequireImageSize(m, mp.string(), cam.width, cam.height);
+    it = mask_.emplace(k, std::move(m)).first;
   }
   return it->second.empty() ? nullptr : &it->second;
 }

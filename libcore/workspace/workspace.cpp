@@ -1,5 +1,6 @@
 #include "workspace/workspace.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <ctime>
@@ -136,6 +137,24 @@ std::string FileChecksum(const fs::path& path) {
   char hex[17];
   std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
   return hex;
+}
+
+fs::path Workspace::MetricRecord() const {
+  const fs::path dir = root_ / "provenance";
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) return {};
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(dir, ec))
+    if (e.path().extension() == ".json") files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  for (const fs::path& p : files) {
+    std::ifstream in(p);
+    const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+    if (j.is_discarded() || !j.is_object() || !j.contains("options")) continue;
+    const nlohmann::json& o = j["options"];
+    if (o.is_object() && o.contains("metric") && o["metric"] == true) return p;
+  }
+  return {};
 }
 
 void Workspace::WriteProvenance(const std::string& tool, const nlohmann::json& options,

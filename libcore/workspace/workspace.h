@@ -80,6 +80,10 @@ class Workspace {
   // exposure.
   fs::path ExposurePath() const;
   fs::path ProvenancePath(const std::string& tool) const;
+  // The provenance record that says the model is metric — a tool's last run with the option
+  // "metric": true (roadmesh --metric) — as the record's path; empty when none does.
+  // A record that cannot be read or parsed says nothing.
+  fs::path MetricRecord() const;
 
   // What `tool` needs that is missing, one human-readable item each (empty: ready).
   std::vector<std::string> Missing(const std::vector<WsItem>& needs) const;

@@ -27,9 +27,12 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// The image as grey float on the 0..255 scale, resized to `cam`'s size.
-cv::Mat LoadGrey(const fs::path& path, const Camera& cam) {
-  const Image im = ToGrey(ReadImage(path.string()));
+// The image (of its model camera `full`'s size) as grey float on the 0..255 scale, resized to
+// the working camera `cam`'s size.
+cv::Mat LoadGrey(const fs::path& path, const Camera& full, const Camera& cam) {
+  Image colour = ReadImage(path.string());
+  RequireImageSize(colour, path.string(), full.width, full.height);
+  const Image im = ToGrey(colour);
   cv::Mat g;  // a copy: the Image's buffer dies with it
   cv::Mat(im.height, im.width, CV_32F, const_cast<float*>(im.data.data()))
       .convertTo(g, CV_32F, 255.0 / im.MaxValue());
@@ -92,11 +95,14 @@ double DensifyOne(const DensifyOptions& o, const Workspace& ws, const DenseScene
   if (pts.size() < 3)  // an image with (almost) no sparse points sweeps over its neighbours' points
     for (size_t j : nbs)
       for (const auto& X : PointsSeenBy(s.rec, *s.images[j])) pts.push_back(X);
-  StereoView ref{s.cameras[i], s.w2c[i], LoadGrey(ws.ImagePath(s.images[i]->name), s.cameras[i])};
+  StereoView ref{s.cameras[i], s.w2c[i],
+                 LoadGrey(ws.ImagePath(s.images[i]->name), s.rec.cameras.at(s.images[i]->camera_id),
+                          s.cameras[i])};
   std::vector<StereoView> views;
   for (size_t j : nbs)
-    views.push_back(
-        {s.cameras[j], s.w2c[j], LoadGrey(ws.ImagePath(s.images[j]->name), s.cameras[j])});
+    views.push_back({s.cameras[j], s.w2c[j],
+                     LoadGrey(ws.ImagePath(s.images[j]->name),
+                              s.rec.cameras.at(s.images[j]->camera_id), s.cameras[j])});
   const DepthMap dm = SweepDepth(ref, views, Families(o, s, i, pts), o.sweep);
   WriteImage(ws.StereoDepthPath(s.images[i]->name).string(), dm.depth);
   WriteImage(ws.StereoConfidencePath(s.images[i]->name).string(), dm.confidence);
@@ -127,7 +133,7 @@ DensifyReport RunDensify(const DensifyOptions& o) {
   }
   RemoveStaleTemporaries(ws.StereoDir());  // a killed run's leftovers, even when all is up to date
   if (todo.empty()) return rep;
-  fs::create_directories(ws.StereoDir());
+  CreateFolder(ws.StereoDir());
   Progress bar("densify", todo.size(), o.quiet);
   double share = 0;
   const auto t0 = Clock::now();

@@ -54,7 +54,12 @@ ExposureToolReport RunExposure(const ExposureToolOptions& o) {
   const Reconstruction rec = ReadColmapModel(ws.SparseDir().string());
   const auto images = rec.ImagesByName();
   std::vector<Image> pixels;
-  for (const ImageRecord* im : images) pixels.push_back(ReadImage(ws.ImagePath(im->name).string()));
+  for (const ImageRecord* im : images) {
+    const std::string path = ws.ImagePath(im->name).string();
+    pixels.push_back(ReadImage(path));
+    const Camera& cam = rec.cameras.at(im->camera_id);
+    RequireImageSize(pixels.back(), path, cam.width, cam.height);
+  }
   const std::vector<ExposureObservation> obs = ObservePoints(rec, images, pixels);
   const std::vector<Exposure> e = FitExposure(obs, images.size(), o.fit);
   WriteExposureTsv(ws.ExposurePath().string(), Rows(images, e, obs));

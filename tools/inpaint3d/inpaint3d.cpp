@@ -191,6 +191,8 @@ void ProcessImage(Run& run, size_t i) {
     ++run.rep.copied;
   } else {
     Image img = ReadImage(src.string());
+    const Camera& cam = run.in.rec.cameras.at(run.in.images[i]->camera_id);
+    RequireImageSize(img, src.string(), cam.width, cam.height);
     CheckMaskSize(img, mask, mp.string());
     Inpainted r = InpaintImage(run, i, src, img, DilateMask(mask, run.o.dilate));
     WriteImage(out.string(), r.image);
@@ -220,6 +222,9 @@ Inpaint3dReport RunInpaint3d(const Inpaint3dOptions& o) {
   const std::vector<size_t> chosen = o.Select().Apply(in.images.size());
   Run run(o, ws, in);
   run.rep.images = chosen.size();
+  // A killed run's leftovers go, even when every output is up to date.
+  RemoveStaleTemporaries(ws.TexturesDir());
+  RemoveStaleTemporaries(ws.TexturesDir() / "provenance");
   Progress bar("inpaint3d", chosen.size(), o.quiet);
   for (size_t i : chosen) {
     ProcessImage(run, i);

@@ -21,6 +21,7 @@
 #include "io/colmap_model.h"
 #include "io/partners.h"
 #include "io/trajectory.h"
+#include "queries.h"
 #include "workspace/workspace.h"
 
 namespace mvtm {
@@ -53,15 +54,27 @@ void PickViewOptions::Check() const {
     throw UsageError("--exclude-self needs the workspace's own images as queries (no QUERIES)");
 }
 
+std::vector<PickViewQuery> ReadPickViewQueries(const std::string& path, std::istream& in) {
+  // Standard input is read as a stream (no temporary copy): the reader detects the format from
+  // the lines it has buffered.
+  const Trajectory tr = path == "-" ? ReadTrajectory(in, "-") : ReadTrajectory(path);
+  std::vector<PickViewQuery> q;
+  char buf[32];
+  for (size_t i = 0; i < tr.poses.size(); ++i) {
+    std::snprintf(buf, sizeof buf, "%06zu", i);
+    Rigid3d w2c = tr.poses[i].pose.Inverse();
+    if (!w2c.t.allFinite() || !w2c.q.coeffs().allFinite())
+      throw Error(path, tr.poses[i].line, "pose is not finite");
+    q.push_back({i < tr.names.size() ? tr.names[i] : buf, w2c});
+  }
+  return q;
+}
+
 namespace {
 
 constexpr size_t kNone = static_cast<size_t>(-1);
 
-struct Query {
-  std::string name;
-  Rigid3d w2c;
-  size_t self = kNone;  // candidate index of the same image (own images only)
-};
+using Query = PickViewQuery;
 
 struct Model {
   std::vector<std::string> names;  // sorted by name
@@ -78,22 +91,6 @@ Model LoadModel(const Workspace& ws) {
     m.w2c.push_back(im->world_to_camera);
   }
   return m;
-}
-
-std::vector<Query> ReadQueries(const std::string& path, std::istream& in) {
-  // Standard input is read as a stream (no temporary copy): the reader detects the format from
-  // the lines it has buffered.
-  const Trajectory tr = path == "-" ? ReadTrajectory(in, "-") : ReadTrajectory(path);
-  std::vector<Query> q;
-  char buf[32];
-  for (size_t i = 0; i < tr.poses.size(); ++i) {
-    std::snprintf(buf, sizeof buf, "%06zu", i);
-    Rigid3d w2c = tr.poses[i].pose.Inverse();
-    if (!w2c.t.allFinite() || !w2c.q.coeffs().allFinite())
-      throw Error(path, tr.poses[i].line, "pose is not finite");
-    q.push_back({i < tr.names.size() ? tr.names[i] : buf, w2c, kNone});
-  }
-  return q;
 }
 
 // The pass of an image: its file name's prefix before the first '_' (mkroad: A_0000.png).
@@ -367,7 +364,7 @@ PickViewReport RunPickView(const PickViewOptions& o, std::ostream& out, std::ist
       for (size_t i = 0; i < model.names.size(); ++i)
         queries.push_back({model.names[i], model.w2c[i], i});
     } else {
-      queries = ReadQueries(o.queries, in);
+      queries = ReadPickViewQueries(o.queries, in);
     }
   }
   rep.queries = queries.size();

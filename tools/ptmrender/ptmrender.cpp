@@ -31,8 +31,9 @@ void PtmRenderOptions::Check() const {
   CheckChoice(mode, kPtmModes, "--mode");
   if (projectors < 1 || projectors > 16) throw UsageError("--projectors: must be 1..16");
   if (!(bias >= 0 && bias < 1)) throw UsageError("--bias: must be in [0, 1)");
-  if (!std::isfinite(lateral) || !std::isfinite(yaw))
-    throw UsageError("--lateral/--yaw must be finite");
+  if (!std::isfinite(lateral)) throw UsageError("--lateral: must be finite");
+  if (!std::isfinite(yaw)) throw UsageError("--yaw: must be finite");
+  if (!size.empty()) ParseImageSize(size);
   CheckWork();
   if (!(selection.ahead_weight >= 0 && std::isfinite(selection.ahead_weight)))
     throw UsageError("--ahead-weight: must be a finite number >= 0");

@@ -96,7 +96,10 @@ void BakeColours(const Workspace& ws, const Reconstruction& rec, const RoadMeshO
   for (const ImageRecord* im : images) {
     const Camera& cam = rec.cameras.at(im->camera_id);
     cam.RequireUndistorted();  // before reading the image: the camera model is the first error
-    baker.Add(cam, im->world_to_camera, ReadImage(ws.SourceImagePath(im->name).string()));
+    const std::string path = ws.SourceImagePath(im->name).string();
+    Image img = ReadImage(path);
+    RequireImageSize(img, path, cam.width, cam.height);
+    baker.Add(cam, im->world_to_camera, img);
     bar.Step();
   }
   rep.coloured = baker.Finish(mesh);
@@ -109,8 +112,8 @@ std::vector<DepthView> LoadStereoViews(const Workspace& ws, const Reconstruction
     const fs::path d = ws.StereoDepthPath(im->name), c = ws.StereoConfidencePath(im->name);
     if (!fs::exists(d)) continue;
     DepthView v;
-    v.depth = ReadImage(d.string());
-    if (fs::exists(c)) v.confidence = ReadImage(c.string());
+    v.depth = ReadFloatMap(d.string());
+    if (fs::exists(c)) v.confidence = ReadFloatMap(c.string());
     const Camera& cam = rec.cameras.at(im->camera_id);
     cam.RequireUndistorted();
     v.camera = cam.Scaled(uint64_t(v.depth.width), uint64_t(v.depth.height));

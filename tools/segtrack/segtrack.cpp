@@ -86,6 +86,7 @@ SegtrackReport RunSegtrack(const SegtrackOptions& o) {
                  });
   }
   const TrackResult res = tracker->Finish();
+  RemoveStaleTemporaries(ws.MasksDir());  // a killed run's leftovers
 
   std::vector<uint8_t> mask;
   Image out(res.width, res.height, 1, 8);

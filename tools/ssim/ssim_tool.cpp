@@ -10,6 +10,7 @@
 #include <optional>
 #include <vector>
 
+#include "base/atomic_file.h"
 #include "base/error.h"
 #include "image/folder.h"
 #include "image/image.h"
@@ -97,9 +98,19 @@ std::string DimsOf(const Image& img) {
          std::to_string(img.channels);
 }
 
+// SSIM, NCC and PSNR are undefined over NaN or inf samples (a float image from a failed render).
+Image ReadFiniteImage(const fs::path& path) {
+  Image img = ReadImage(path.string());
+  for (float v : img.data)
+    if (!std::isfinite(v))
+      throw Error(path.string(), 0,
+                  "image has non-finite samples (NaN or inf): nothing to compare");
+  return img;
+}
+
 Row ComparePair(const PairJob& job, const SsimToolOptions& o) {
-  Image a = ReadImage(job.a.string());
-  Image b = ReadImage(job.b.string());
+  Image a = ReadFiniteImage(job.a);
+  Image b = ReadFiniteImage(job.b);
   if (o.channels == ChannelMode::kGrey) {
     a = ToGrey(a);
     b = ToGrey(b);
@@ -185,7 +196,7 @@ int RunSsim(const SsimToolOptions& options, std::ostream& out) {
   options.Check();
   const std::vector<PairJob> jobs = PlanPairs(options);
   const bool folders = fs::is_directory(options.a);
-  if (folders && !options.map.empty()) fs::create_directories(options.map);
+  if (folders && !options.map.empty()) CreateFolder(options.map);
 
   std::vector<Row> rows;
   for (const PairJob& job : jobs) rows.push_back(ComparePair(job, options));

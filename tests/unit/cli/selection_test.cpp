@@ -31,7 +31,12 @@ TEST(Selection, RangesLikeSlices) {
   EXPECT_EQ(Selection::Frames("-2:").Apply(10), (std::vector<size_t>{8, 9}));
   EXPECT_EQ(Selection::Frames("3").Apply(10), (std::vector<size_t>{3}));
   EXPECT_EQ(Selection::Frames("5:100").Apply(7), (std::vector<size_t>{5, 6}));
-  EXPECT_TRUE(Selection::Frames("5:2").Apply(10).empty());
+  // Counted from the same end, a start after the end is a typo; from different ends it depends
+  // on n and may select nothing.
+  EXPECT_THROW(Selection::Frames("5:2"), UsageError);
+  EXPECT_THROW(Selection::Frames("-2:-5"), UsageError);
+  EXPECT_TRUE(Selection::Frames("5:-8").Apply(10).empty());
+  EXPECT_EQ(Selection::Frames("-3:9").Apply(10), (std::vector<size_t>{7, 8}));
 }
 
 TEST(Selection, BadSpecsAreUsageErrors) {

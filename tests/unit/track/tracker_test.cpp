@@ -237,6 +237,6 @@ TEST(TrackOptions, CheckNamesTheBadValue) {
     o.Check();
     FAIL();
   } catch (const UsageError& e) {
-    EXPECT_STREQ(e.what(), "min-ratio must be in 0..1, got 1.5");
+    EXPECT_STREQ(e.what(), "--min-ratio: must be in 0..1, got 1.5");
   }
 }

@@ -1,0 +1,136 @@
+#include "image/png_io.h"
+
+#include <png.h>
+
+#include <csetjmp>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+#include "base/error.h"
+
+namespace mvtm {
+
+namespace {
+
+struct PngErrors {
+  std::string message;
+};
+
+void OnError(png_structp png, png_const_charp msg) {
+  auto* e = static_cast<PngErrors*>(png_get_error_ptr(png));
+  e->message = msg ? msg : "unknown libpng error";
+  png_longjmp(png, 1);
+}
+
+void OnWarning(png_structp, png_const_charp) {}  // recoverable; never printed
+
+struct File {
+  FILE* f = nullptr;
+  ~File() {
+    if (f) std::fclose(f);
+  }
+};
+
+struct ReadStruct {
+  png_structp png = nullptr;
+  png_infop info = nullptr;
+  ~ReadStruct() { png_destroy_read_struct(&png, info ? &info : nullptr, nullptr); }
+};
+
+struct Header {
+  png_uint_32 w = 0, h = 0;
+  int channels = 0, bits = 8;
+};
+
+// After png_read_info: the transforms that give OpenImageIO's pixels, and the output layout.
+// Plain C calls only (libpng may longjmp out of it).
+void SetTransforms(png_structp png, png_infop info, Header* out) {
+  int depth = 0, colour = 0, interlace = 0;
+  png_get_IHDR(png, info, &out->w, &out->h, &depth, &colour, &interlace, nullptr, nullptr);
+  if (colour == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(png);
+  if (colour == PNG_COLOR_TYPE_GRAY && depth < 8) png_set_expand_gray_1_2_4_to_8(png);
+  if (png_get_valid(png, info, PNG_INFO_tRNS)) png_set_tRNS_to_alpha(png);
+  if (depth == 16) png_set_swap(png);  // host order (little-endian x86/ARM)
+  png_set_interlace_handling(png);
+  png_read_update_info(png, info);
+  out->channels = png_get_channels(png, info);
+  out->bits = png_get_bit_depth(png, info) == 16 ? 16 : 8;
+}
+
+[[noreturn]] void Fail(const std::string& path, const PngErrors& e) {
+  throw Error(path, 0, "cannot read image: " + (e.message.empty() ? "corrupt PNG" : e.message));
+}
+
+}  // namespace
+
+bool IsPngFile(const std::string& path) {
+  File f;
+  f.f = std::fopen(path.c_str(), "rb");
+  unsigned char sig[8];
+  return f.f && std::fread(sig, 1, 8, f.f) == 8 && png_sig_cmp(sig, 0, 8) == 0;
+}
+
+Image ReadPng(const std::string& path, bool header_only) {
+  File f;
+  f.f = std::fopen(path.c_str(), "rb");
+  if (!f.f) throw Error(path, 0, "cannot open");
+  PngErrors errors;
+  ReadStruct rs;
+  rs.png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &errors, OnError, OnWarning);
+  if (rs.png) rs.info = png_create_info_struct(rs.png);
+  if (!rs.png || !rs.info) throw Error(path, 0, "cannot read image: out of memory");
+  // Objects that outlive a longjmp live in this frame, are created before setjmp and are not
+  // changed between setjmp and longjmp except through pointers (and `ok`, volatile).
+  Header hdr;
+  volatile bool ok = false;
+  if (setjmp(png_jmpbuf(rs.png)) == 0) {
+    png_init_io(rs.png, f.f);
+    png_set_user_limits(rs.png, kMaxReadImageSide, kMaxReadImageSide);
+    png_read_info(rs.png, rs.info);
+    SetTransforms(rs.png, rs.info, &hdr);
+    ok = true;
+  }
+  if (!ok) Fail(path, errors);
+  if (hdr.w == 0 || hdr.h == 0 || uint64_t(hdr.w) * hdr.h > kMaxImagePixels)
+    throw Error(path, 0,
+                "image claims " + std::to_string(hdr.w) + "x" + std::to_string(hdr.h) +
+                    ", beyond mvtm's limits (65536 pixels a side, 2^30 pixels)");
+  if (header_only) {
+    Image spec;
+    spec.width = int(hdr.w), spec.height = int(hdr.h), spec.channels = hdr.channels;
+    spec.bits = hdr.bits;
+    return spec;
+  }
+  // Deflate expands at most 1032:1, so a file smaller than that share of its pixel rows is cut
+  // short: refused before the (possibly huge) allocation.
+  const double raw = double(png_get_rowbytes(rs.png, rs.info)) * hdr.h;
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (!ec && raw > 1032.0 * double(size) + 65536)
+    throw Error(path, 0,
+                "cannot read image: the file (" + std::to_string(size) +
+                    " bytes) is too small for its " + std::to_string(hdr.w) + "x" +
+                    std::to_string(hdr.h) + " header (truncated?)");
+  Image img(int(hdr.w), int(hdr.h), hdr.channels, hdr.bits);
+  const size_t rowbytes = png_get_rowbytes(rs.png, rs.info);
+  std::vector<unsigned char> buf(rowbytes * hdr.h);
+  std::vector<png_bytep> rows(hdr.h);
+  for (png_uint_32 y = 0; y < hdr.h; ++y) rows[y] = buf.data() + rowbytes * y;
+  ok = false;
+  if (setjmp(png_jmpbuf(rs.png)) == 0) {
+    png_read_image(rs.png, rows.data());
+    png_read_end(rs.png, nullptr);
+    ok = true;
+  }
+  if (!ok) Fail(path, errors);
+  if (hdr.bits == 16) {
+    const auto* s16 = reinterpret_cast<const uint16_t*>(buf.data());
+    for (size_t i = 0; i < img.data.size(); ++i) img.data[i] = s16[i];
+  } else {
+    for (size_t i = 0; i < img.data.size(); ++i) img.data[i] = buf[i];
+  }
+  return img;
+}
+
+}  // namespace mvtm

@@ -1,0 +1,66 @@
+// drive — steered trajectories for ptmrender: a controls log (steering-wheel angle, speed)
+// through the kinematic bicycle model as exact arcs (drive/bicycle.h), or the recorded path with
+// a smooth lane change (drive/lane_change.h), driven on the workspace's mesh (drive/ground.h).
+// Writes the camera poses as a TUM or KITTI trajectory or a COLMAP text model, for
+// `ptmrender --poses`. The model, the options and their limits: man drive(1).
+//
+// Scale: the car's lengths are metres; `scale` (model units per metre) maps them to the model.
+// It is --scale S, or 1 with --metric or when the workspace records that it is metric
+// (Workspace::MetricRecord: roadmesh --metric); otherwise the run is a UsageError that says so.
+// Time: the controls' own times; with --lane-change, t = 0 at the start image and recorded image
+// k (of the pass, from the start image) at k / frame_rate.
+// Conventions: poses of record are COLMAP's; double precision throughout (UTM coordinates).
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace mvtm {
+
+// --format choices.
+inline const std::vector<std::string> kDriveFormats = {"tum", "colmap", "kitti"};
+
+struct DriveOptions {
+  std::string workspace;
+  std::string controls;        // CONTROLS: time steer speed log (empty with --lane-change)
+  std::string out;             // OUT: a file (tum, kitti) or a folder (colmap)
+  std::string lane_change;     // T0:DURATION:OFFSET (s, s, m): drive the recorded path instead
+  double scale = 0;            // model units per metre, > 0; 0: not given
+  bool metric = false;         // the model is in metres (--scale 1)
+  double wheelbase = 2.7;      // metres, [0.5, 20]
+  double steering_ratio = 15;  // steering-wheel angle per road-wheel angle, [1, 100]
+  double max_steer = 35;       // largest road-wheel angle, degrees, (0, 89]
+  double track = 1.6;          // metres between left and right wheels, [0.2, 5]
+  std::string camera_offset;   // "X,Y,Z" metres forward, left, up of the ground under the rear
+                               // axle centre; empty: 0,0,H (H: recorded height above the mesh)
+  std::string start;           // image whose pose the drive starts at; empty: the first
+  std::string pass;            // the recorded images: names starting with this; empty: all
+  double frame_rate = 10;      // --lane-change: recorded images per second, (0, 1000]
+  double rate = 10;            // output poses per second, (0, 1000]
+  std::string format = "tum";  // one of kDriveFormats
+  bool force = false;          // rewrite OUT when it is newer than its inputs
+  bool quiet = false;
+
+  // Throws UsageError naming the bad value and the allowed range.
+  void Check() const;
+};
+
+struct DriveReport {
+  bool up_to_date = false;
+  size_t poses = 0;
+  double duration = 0;                       // seconds
+  double length = 0;                         // metres along the rear axle's path (steered), else 0
+  double scale = 1;                          // model units per metre used
+  std::string scale_source;                  // "--scale", "--metric", or the metric record's path
+  std::vector<std::string> ignored_columns;  // CONTROLS columns not read
+  size_t clamped = 0;        // control samples whose steering was clamped to --max-steer
+  double camera_height = 0;  // metres: the camera offset's up part
+  bool height_from_workspace = false;
+  size_t height_cameras = 0;  // recorded cameras above the mesh (for the default height)
+  double max_pitch_deg = 0, max_roll_deg = 0;  // largest |pitch|, |roll| of the car
+  std::string output;                          // the file written (colmap: OUT/images.txt)
+};
+
+DriveReport RunDrive(const DriveOptions& options);
+
+}  // namespace mvtm
