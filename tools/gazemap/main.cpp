@@ -1,5 +1,8 @@
 // gazemap — thin main: option table, then RunGazemap().
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
 
 #include "cli/app.h"
 #include "cli/options.h"
@@ -80,6 +83,9 @@ int main(int argc, char** argv) {
                    cols.c_str());
     }
     if (r.up_to_date) {
+      // The table of the run that wrote OUT, as a fresh run prints it.
+      std::ifstream table(std::filesystem::path(o.out) / "aoi.tsv");
+      std::cout << table.rdbuf() << std::flush;
       if (!o.quiet)
         std::fprintf(stderr, "gazemap: %s is up to date (--force rewrites)\n", o.out.c_str());
       return 0;
