@@ -77,6 +77,9 @@ std::vector<SourceHit> SourcesOf(const Eigen::Vector3d& X, const Eigen::Vector3d
     const Image* map = depth ? depth(i) : nullptr;
     double lo = 0, hi = 0;
     if (map) NeighbourhoodDepth(*map, px.x(), px.y(), lo, hi);
+    // No finite depth around the point (NaN, or +inf "no surface" although X is on the mesh):
+    // the map has nothing to say there, a ray decides.
+    if (map && !(std::isfinite(lo) && lo <= hi)) map = nullptr;
     const double zt = xc.z() / (1 + o.depth_tolerance);
     if (map && zt <= lo) {
       h.by_depth = true;

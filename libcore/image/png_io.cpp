@@ -13,13 +13,14 @@ namespace mvtm {
 
 namespace {
 
+// Filled inside libpng's C frames, so no allocation (an exception there would cross C code).
 struct PngErrors {
-  std::string message;
+  char message[256] = "";
 };
 
 void OnError(png_structp png, png_const_charp msg) {
   auto* e = static_cast<PngErrors*>(png_get_error_ptr(png));
-  e->message = msg ? msg : "unknown libpng error";
+  std::snprintf(e->message, sizeof e->message, "%s", msg ? msg : "unknown libpng error");
   png_longjmp(png, 1);
 }
 
@@ -51,7 +52,6 @@ void SetTransforms(png_structp png, png_infop info, Header* out) {
   if (colour == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(png);
   if (colour == PNG_COLOR_TYPE_GRAY && depth < 8) png_set_expand_gray_1_2_4_to_8(png);
   if (png_get_valid(png, info, PNG_INFO_tRNS)) png_set_tRNS_to_alpha(png);
-  if (depth == 16) png_set_swap(png);  // host order (little-endian x86/ARM)
   png_set_interlace_handling(png);
   png_read_update_info(png, info);
   out->channels = png_get_channels(png, info);
@@ -59,7 +59,8 @@ void SetTransforms(png_structp png, png_infop info, Header* out) {
 }
 
 [[noreturn]] void Fail(const std::string& path, const PngErrors& e) {
-  throw Error(path, 0, "cannot read image: " + (e.message.empty() ? "corrupt PNG" : e.message));
+  throw Error(path, 0,
+              "cannot read image: " + std::string(e.message[0] ? e.message : "corrupt PNG"));
 }
 
 }  // namespace
@@ -124,9 +125,9 @@ Image ReadPng(const std::string& path, bool header_only) {
     ok = true;
   }
   if (!ok) Fail(path, errors);
-  if (hdr.bits == 16) {
-    const auto* s16 = reinterpret_cast<const uint16_t*>(buf.data());
-    for (size_t i = 0; i < img.data.size(); ++i) img.data[i] = s16[i];
+  if (hdr.bits == 16) {  // PNG stores big-endian samples
+    for (size_t i = 0; i < img.data.size(); ++i)
+      img.data[i] = float((unsigned(buf[2 * i]) << 8) | buf[2 * i + 1]);
   } else {
     for (size_t i = 0; i < img.data.size(); ++i) img.data[i] = buf[i];
   }

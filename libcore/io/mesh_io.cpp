@@ -170,6 +170,8 @@ void CheckPlyCounts(const PlyHeader& h, uint64_t file_size, const std::string& p
   uint64_t body = file_size > h.bytes ? file_size - h.bytes : 0, need = 0;
   for (const auto& e : h.elements) {
     uint64_t each = ascii ? 2 * e.props.size() : e.MinBytes();
+    if (e.props.empty() && e.count > 0)
+      throw Error(path, e.line, "element " + e.name + " declares no properties");
     need += each * e.count;
     if (each > 0 && (e.count > body / each || need > body))
       throw Error(path, e.line,
@@ -257,12 +259,15 @@ class PlyBodyReader {
   long line_;
 };
 
-void ReadPlyVertices(PlyBodyReader& r, const PlyElement& e, Mesh& m) {
+void ReadPlyVertices(PlyBodyReader& r, const PlyElement& e, Mesh& m, const std::string& path) {
   bool has_n = false, has_c = false;
+  int xyz = 0;
   for (const auto& p : e.props) {
     has_n |= p.name == "nx";
     has_c |= p.name == "red";
+    xyz += !p.is_list && (p.name == "x" || p.name == "y" || p.name == "z");
   }
+  if (xyz != 3) throw Error(path, e.line, "element vertex needs the properties x, y and z");
   m.vertices.reserve(e.count);
   for (size_t i = 0; i < e.count; ++i) {
     Eigen::Vector3d v(0, 0, 0);
@@ -321,7 +326,7 @@ Mesh ReadPlyBody(std::istream& in, const PlyHeader& h, const std::string& path) 
   bool seen_vertices = false;
   for (const auto& e : h.elements) {
     if (e.name == "vertex") {
-      ReadPlyVertices(r, e, m);
+      ReadPlyVertices(r, e, m, path);
       seen_vertices = true;
     } else if (e.name == "face") {
       if (!seen_vertices) throw Error(path, e.line, "element face comes before element vertex");

@@ -100,7 +100,12 @@ struct MeshRaycaster::Impl {
       h.u = T.dot(p) * inv;
       h.v = d.dot(q) * inv;
       h.t = e2.dot(q) * inv;
-    } else {  // the ray lies in the triangle's plane: only the float answer exists
+    }
+    // A ray in (or nearly in) the triangle's plane makes the plane intersection ill-conditioned:
+    // keep the double answer only where it refines the float one (1e-3 relative), else
+    // Embree's hit stands.
+    if (!(det != 0 && std::isfinite(h.t) &&
+          std::abs(h.t - double(t_float)) <= 1e-3 * std::abs(double(t_float)) + 1e-9)) {
       h.u = u_float;
       h.v = v_float;
       h.t = t_float;

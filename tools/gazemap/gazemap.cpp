@@ -358,6 +358,10 @@ GazemapReport RunGazemap(const GazemapOptions& o) {
   std::vector<fs::path> inputs = ws.SparseModelFiles();
   for (const std::string& p : {ws.MeshPath().string(), o.frames, o.gaze, o.aoi_boxes})
     if (!p.empty()) inputs.emplace_back(p);
+  // Baked depth and labels decide sources and AOIs; their folders change with every atomic
+  // rename of a file in them (a rerun of bakedepth or segtrack).
+  inputs.push_back(ws.DepthDir());
+  inputs.push_back(ws.LabelsDir());
   const fs::path out(o.out);
   if (!o.force && IsUpToDate(out / "fixations.tsv", inputs)) {
     rep.up_to_date = true;
