@@ -134,7 +134,7 @@ CarPath LaneChangeCarPath(const Recorded& r, const RoadFrame& frame, const Drive
     if (steps[k] > 5 * typical)
       throw UsageError("--lane-change: the recorded path jumps from " +
                        r.images[r.start + k]->name + " to " + r.images[r.start + k + 1]->name +
-                       " (" + FormatDouble(steps[k] / typical) +
+                       " (" + std::to_string(std::lround(steps[k] / typical)) +
                        " times the median spacing): choose one drive with --pass");
   const LaneChange lc = LaneChange::Parse(o.lane_change);
   CarPath c;
