@@ -125,17 +125,26 @@ CarPath LaneChangeCarPath(const Recorded& r, const RoadFrame& frame, const Drive
         {static_cast<double>(i - r.start) / o.frame_rate, PlanarCamera(frame, r.w2c[i])});
   if (samples->size() < 2)
     throw UsageError("--lane-change: the recorded path from the start image has one image");
-  // Images of several drives in name order (no --pass) make a path that jumps between them.
-  std::vector<double> steps;
-  for (size_t i = r.start + 1; i < r.w2c.size(); ++i)
-    steps.push_back((r.w2c[i].Centre() - r.w2c[i - 1].Centre()).norm());
-  const double typical = Median(steps);
-  for (size_t k = 0; k < steps.size(); ++k)
-    if (steps[k] > 5 * typical)
-      throw UsageError("--lane-change: the recorded path jumps from " +
+  // Images of several drives in name order (no --pass) make a path that jumps between them or
+  // turns back on itself.
+  std::vector<Eigen::Vector3d> steps;
+  std::vector<double> lengths;
+  for (size_t i = r.start + 1; i < r.w2c.size(); ++i) {
+    steps.push_back(r.w2c[i].Centre() - r.w2c[i - 1].Centre());
+    lengths.push_back(steps.back().norm());
+  }
+  const double typical = Median(lengths);
+  for (size_t k = 0; k < steps.size(); ++k) {
+    // (Steps much shorter than usual, a car standing still in pose noise, never count as back.)
+    const bool jump = lengths[k] > 5 * typical,
+               back = k > 0 && std::min(lengths[k], lengths[k - 1]) > 0.2 * typical &&
+                      steps[k].dot(steps[k - 1]) < 0;
+    if (jump || back)
+      throw UsageError("--lane-change: the recorded path " +
+                       std::string(jump ? "jumps" : "turns back") + " from " +
                        r.images[r.start + k]->name + " to " + r.images[r.start + k + 1]->name +
-                       " (" + std::to_string(std::lround(steps[k] / typical)) +
-                       " times the median spacing): choose one drive with --pass");
+                       ": choose one drive with --pass");
+  }
   const LaneChange lc = LaneChange::Parse(o.lane_change);
   CarPath c;
   c.times = SampleTimes(0, samples->back().time, o.rate);
