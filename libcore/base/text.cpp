@@ -3,6 +3,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <map>
 
 #include "base/error.h"
 
@@ -129,6 +130,46 @@ std::string FormatDouble(double v) {
   // to_chars is locale-independent; with a precision of 17 it prints like "%.17g".
   auto r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::general, 17);
   return std::string(buf, r.ptr);
+}
+
+std::string FormatShort(double v) {
+  char buf[32];
+  return std::string(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
+}
+
+ColumnHeader ReadColumnHeader(LineReader& r, const std::vector<std::string>& required,
+                              const std::vector<std::string>& optional,
+                              const std::string& expected) {
+  const std::string want = "a header naming the columns '" + expected + "'";
+  std::string line;
+  if (!r.Next(line)) r.Fail("empty file: expected " + want);
+  const auto head = SplitBlank(line);
+  double number = 0;
+  if (!head.empty() && ToDouble(head[0], number))
+    r.Fail("expected " + want + ", found a row of numbers");
+  std::map<std::string, size_t> at;
+  for (size_t i = 0; i < head.size(); ++i)
+    if (!at.emplace(std::string(head[i]), i).second)
+      r.Fail("the header names the column '" + std::string(head[i]) + "' twice");
+  ColumnHeader h;
+  h.fields = head.size();
+  auto take = [&](const std::string& name, bool needed) {
+    const auto it = at.find(name);
+    if (it == at.end()) {
+      if (needed)
+        r.Fail("the header has no column '" + name + "' (expected a header naming '" + expected +
+               "')");
+      h.index.push_back(-1);
+      return;
+    }
+    h.index.push_back(static_cast<long>(it->second));
+    at.erase(it);
+  };
+  for (const auto& name : required) take(name, true);
+  for (const auto& name : optional) take(name, false);
+  for (const auto& name : head)
+    if (at.count(std::string(name))) h.ignored.emplace_back(name);
+  return h;
 }
 
 }  // namespace mvtm

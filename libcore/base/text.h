@@ -57,7 +57,24 @@ int64_t ParseInt(std::string_view token, const LineReader& at, const char* field
 double ParseDoubleArg(std::string_view token, const std::string& what);
 int64_t ParseIntArg(std::string_view token, const std::string& what);
 
+// A header row naming columns (TSV logs: drive's controls, gazemap's gaze). Reads the first
+// non-comment line of `r`: it must name columns, not be a row of numbers; no name twice; every
+// `required` name present. Returns the column index of each of `required` then `optional`
+// (-1 for an optional column absent) and the number of fields; other names go to `ignored`.
+// `expected` ("time steer speed") is shown in messages.
+struct ColumnHeader {
+  size_t fields = 0;
+  std::vector<long> index;
+  std::vector<std::string> ignored;
+};
+ColumnHeader ReadColumnHeader(LineReader& r, const std::vector<std::string>& required,
+                              const std::vector<std::string>& optional,
+                              const std::string& expected);
+
 // "%.17g" — round-trips every double exactly, locale-independent.
 std::string FormatDouble(double v);
+// The shortest text that reads back as v ("0.1", where FormatDouble gives
+// "0.10000000000000001"): for messages.
+std::string FormatShort(double v);
 
 }  // namespace mvtm

@@ -1,6 +1,8 @@
 #include "cli/work.h"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 
 #include "base/error.h"
 #include "base/text.h"
@@ -21,6 +23,13 @@ Selection WorkOptions::Select() const {
 std::string WorkOptions::ProvenanceName(const std::string& tool) const {
   if (shard.empty()) return tool;
   return tool + "-shard-" + std::to_string(Selection::Shard(shard).shard_index);
+}
+
+void CheckRange(double v, double lo, double hi, bool lo_open, const std::string& option) {
+  if (std::isfinite(v) && v <= hi && v >= lo && !(lo_open && v == lo)) return;
+  char range[64];
+  std::snprintf(range, sizeof range, "%s%g, %g]", lo_open ? "(" : "[", lo, hi);
+  throw UsageError(option + ": must be in " + range);
 }
 
 ImageSize ParseImageSize(const std::string& spec, const std::string& option) {

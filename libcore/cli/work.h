@@ -36,6 +36,10 @@ struct ImageSize {
   uint64_t width = 0, height = 0;
 };
 
+// Throws UsageError("OPTION: must be in [lo, hi]" or "(lo, hi]" when lo_open) unless v is a
+// finite number in that range.
+void CheckRange(double v, double lo, double hi, bool lo_open, const std::string& option);
+
 // Parses "WxH" (1..kMaxImageSide each). `option` names the option in messages ("--size").
 ImageSize ParseImageSize(const std::string& spec, const std::string& option = "--size");
 

@@ -3,19 +3,12 @@
 #include <charconv>
 #include <cmath>
 #include <istream>
-#include <map>
 
 #include "base/text.h"
 
 namespace mvtm {
 
 namespace {
-
-// Shortest text that reads back as v ("0.1", not FormatDouble's "0.10000000000000001").
-std::string Short(double v) {
-  char buf[32];
-  return std::string(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
-}
 
 struct Columns {
   size_t fields = 0;
@@ -24,37 +17,14 @@ struct Columns {
 };
 
 Columns ReadHeader(LineReader& r, std::vector<std::string>& ignored) {
-  std::string line;
-  if (!r.Next(line)) r.Fail("empty file: expected a header naming the columns 'time x y [valid]'");
-  const auto head = SplitBlank(line);
-  double number = 0;
-  if (!head.empty() &&
-      std::from_chars(head[0].data(), head[0].data() + head[0].size(), number).ec == std::errc())
-    r.Fail("expected a header naming the columns 'time x y [valid]', found a row of numbers");
-  std::map<std::string, size_t> at;
-  for (size_t i = 0; i < head.size(); ++i)
-    if (!at.emplace(std::string(head[i]), i).second)
-      r.Fail("the header names the column '" + std::string(head[i]) + "' twice");
+  const ColumnHeader h = ReadColumnHeader(r, {"time", "x", "y"}, {"valid"}, "time x y [valid]");
+  ignored = h.ignored;
   Columns c;
-  c.fields = head.size();
-  auto take = [&](const char* name, bool required) -> long {
-    const auto it = at.find(name);
-    if (it == at.end()) {
-      if (required)
-        r.Fail(std::string("the header has no column '") + name +
-               "' (expected a header naming 'time x y [valid]')");
-      return -1;
-    }
-    const long i = static_cast<long>(it->second);
-    at.erase(it);
-    return i;
-  };
-  c.time = static_cast<size_t>(take("time", true));
-  c.x = static_cast<size_t>(take("x", true));
-  c.y = static_cast<size_t>(take("y", true));
-  c.valid = take("valid", false);
-  for (size_t i = 0; i < head.size(); ++i)
-    if (at.count(std::string(head[i]))) ignored.emplace_back(head[i]);
+  c.fields = h.fields;
+  c.time = static_cast<size_t>(h.index[0]);
+  c.x = static_cast<size_t>(h.index[1]);
+  c.y = static_cast<size_t>(h.index[2]);
+  c.valid = h.index[3];
   return c;
 }
 
@@ -86,10 +56,10 @@ GazeTrace ReadTrace(LineReader& r) {
     if (!g.samples.empty()) {
       const GazeSample& prev = g.samples.back();
       if (s.time == prev.time)
-        r.Fail("time " + Short(s.time) + " repeats line " + std::to_string(prev.line));
+        r.Fail("time " + FormatShort(s.time) + " repeats line " + std::to_string(prev.line));
       if (s.time < prev.time)
-        r.Fail("time " + Short(s.time) + " is before line " + std::to_string(prev.line) + "'s " +
-               Short(prev.time) + ": samples must be in time order");
+        r.Fail("time " + FormatShort(s.time) + " is before line " + std::to_string(prev.line) +
+               "'s " + FormatShort(prev.time) + ": samples must be in time order");
     }
     g.samples.push_back(s);
   }

@@ -49,14 +49,6 @@ void FillGaps(std::vector<GazeSample>& s, double max_gap, IvtResult& r) {
   }
 }
 
-double MedianOf(std::vector<double>& v) {
-  const size_t n = v.size(), h = n / 2;
-  std::nth_element(v.begin(), v.begin() + h, v.end());
-  if (n % 2) return v[h];
-  const double hi = v[h];
-  return 0.5 * (*std::max_element(v.begin(), v.begin() + h) + hi);
-}
-
 void MedianFilter(std::vector<GazeSample>& s, int window) {
   if (window <= 1) return;
   const std::vector<GazeSample> in = s;
@@ -71,8 +63,8 @@ void MedianFilter(std::vector<GazeSample>& s, int window) {
         xs.push_back(in[j].x);
         ys.push_back(in[j].y);
       }
-    s[i].x = MedianOf(xs);
-    s[i].y = MedianOf(ys);
+    s[i].x = MiddleMedian(xs);
+    s[i].y = MiddleMedian(ys);
   }
 }
 

@@ -25,13 +25,6 @@ namespace mvtm {
 
 namespace {
 
-void CheckRange(double v, double lo, double hi, bool lo_open, const char* what) {
-  if (std::isfinite(v) && v <= hi && v >= lo && !(lo_open && v == lo)) return;
-  char range[64];
-  std::snprintf(range, sizeof range, "%s%g, %g]", lo_open ? "(" : "[", lo, hi);
-  throw UsageError(std::string(what) + ": must be in " + range);
-}
-
 Eigen::Vector3d ParseOffset(const std::string& text) {
   const auto f = SplitChar(text, ',');
   if (f.size() != 3)

@@ -26,13 +26,6 @@ namespace mvtm {
 
 namespace {
 
-void CheckRange(double v, double lo, double hi, bool lo_open, const std::string& what) {
-  if (std::isfinite(v) && v <= hi && v >= lo && !(lo_open && v == lo)) return;
-  char range[64];
-  std::snprintf(range, sizeof range, "%s%g, %g]", lo_open ? "(" : "[", lo, hi);
-  throw UsageError(what + ": must be in " + range);
-}
-
 // "WxH" with decimals allowed, both > 0.
 Eigen::Vector2d ParseWH(const std::string& text, const std::string& option) {
   const auto f = SplitChar(text, 'x');
@@ -40,11 +33,6 @@ Eigen::Vector2d ParseWH(const std::string& text, const std::string& option) {
   const Eigen::Vector2d v(ParseDoubleArg(f[0], option), ParseDoubleArg(f[1], option));
   if (!(v.x() > 0 && v.y() > 0)) throw UsageError(option + ": W and H must be > 0");
   return v;
-}
-
-std::string Short(double v) {
-  char buf[32];
-  return std::string(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
 }
 
 std::string Fmt(const char* format, double v) {
@@ -89,8 +77,8 @@ Frames LoadFrames(const GazemapOptions& o) {
     const double t = o.frame_rate > 0 ? static_cast<double>(i) / o.frame_rate : p.time;
     if (i && !(t > times.back()))
       throw Error(o.frames, p.line,
-                  "time " + Short(t) + " is not after the previous frame's " + Short(times.back()) +
-                      ": display times must increase");
+                  "time " + FormatShort(t) + " is not after the previous frame's " +
+                      FormatShort(times.back()) + ": display times must increase");
     times.push_back(t);
     f.w2c.push_back(p.pose.Inverse());
   }
@@ -102,9 +90,9 @@ void CheckGazeTimes(const GazeTrace& g, const FrameClock& clock, const GazemapOp
   for (const GazeSample& s : g.samples)
     if (!clock.FrameAt(s.time))
       throw Error(o.gaze, s.line,
-                  "time " + Short(s.time) + " is outside the frames' display times [" +
-                      Short(clock.begin()) + ", " + Short(clock.end()) + ") of " + o.frames +
-                      " (same clock and unit, seconds?)");
+                  "time " + FormatShort(s.time) + " is outside the frames' display times [" +
+                      FormatShort(clock.begin()) + ", " + FormatShort(clock.end()) + ") of " +
+                      o.frames + " (same clock and unit, seconds?)");
 }
 
 std::vector<SourceView> LoadViews(const Reconstruction& rec) {
