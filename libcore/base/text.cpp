@@ -137,6 +137,14 @@ std::string FormatShort(double v) {
   return std::string(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
 }
 
+void CheckTimeAfter(const LineReader& r, double t, double prev_time, long prev_line) {
+  if (t == prev_time)
+    r.Fail("time " + FormatShort(t) + " repeats line " + std::to_string(prev_line));
+  if (t < prev_time)
+    r.Fail("time " + FormatShort(t) + " is before line " + std::to_string(prev_line) + "'s " +
+           FormatShort(prev_time) + ": samples must be in time order");
+}
+
 ColumnHeader ReadColumnHeader(LineReader& r, const std::vector<std::string>& required,
                               const std::vector<std::string>& optional,
                               const std::string& expected) {

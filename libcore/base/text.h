@@ -71,6 +71,11 @@ ColumnHeader ReadColumnHeader(LineReader& r, const std::vector<std::string>& req
                               const std::vector<std::string>& optional,
                               const std::string& expected);
 
+// For logs whose rows must be in strictly increasing time: fails at r's current line with
+// "time T repeats line L" or "time T is before line L's P: samples must be in time order"
+// unless t > prev_time (the time of line prev_line).
+void CheckTimeAfter(const LineReader& r, double t, double prev_time, long prev_line);
+
 // "%.17g" — round-trips every double exactly, locale-independent.
 std::string FormatDouble(double v);
 // The shortest text that reads back as v ("0.1", where FormatDouble gives

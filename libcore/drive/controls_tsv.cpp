@@ -25,14 +25,8 @@ ControlsLog ReadLog(LineReader& r) {
     c.steer_deg = ParseDouble(f[idx[1]], r, "steer");
     c.speed = ParseDouble(f[idx[2]], r, "speed");
     c.line = r.line();
-    if (!log.samples.empty()) {
-      const ControlSample& prev = log.samples.back();
-      if (c.time == prev.time)
-        r.Fail("time " + FormatDouble(c.time) + " repeats line " + std::to_string(prev.line));
-      if (c.time < prev.time)
-        r.Fail("time " + FormatDouble(c.time) + " is before line " + std::to_string(prev.line) +
-               "'s " + FormatDouble(prev.time) + ": samples must be in time order");
-    }
+    if (!log.samples.empty())
+      CheckTimeAfter(r, c.time, log.samples.back().time, log.samples.back().line);
     log.samples.push_back(c);
   }
   if (log.samples.size() < 2)

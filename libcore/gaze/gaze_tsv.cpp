@@ -53,14 +53,7 @@ GazeTrace ReadTrace(LineReader& r) {
       s.valid = false;
       ++g.invalid_nonfinite;
     }
-    if (!g.samples.empty()) {
-      const GazeSample& prev = g.samples.back();
-      if (s.time == prev.time)
-        r.Fail("time " + FormatShort(s.time) + " repeats line " + std::to_string(prev.line));
-      if (s.time < prev.time)
-        r.Fail("time " + FormatShort(s.time) + " is before line " + std::to_string(prev.line) +
-               "'s " + FormatShort(prev.time) + ": samples must be in time order");
-    }
+    if (!g.samples.empty()) CheckTimeAfter(r, s.time, g.samples.back().time, g.samples.back().line);
     g.samples.push_back(s);
   }
   if (g.samples.size() < 2)
