@@ -4,7 +4,6 @@
 #include <flann/algorithms/kdtree_index.h>
 #include <flann/algorithms/kdtree_single_index.h>
 #include <flann/general.h>
-#include <flann/util/random.h>
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -220,7 +219,6 @@ PoseIndex::PoseIndex(const std::vector<Rigid3d>& cands, const ViewSelectionOptio
     }
     case SearchMethod::kFlann: {
       if (options.checks < 1) throw UsageError("--checks: must be at least 1");
-      flann::seed_random(options.seed);
       flann::Matrix<double> data(m.flat.data(), n, 3);
       m.forest = std::make_unique<flann::KDTreeIndex<Impl::Dist>>(
           data, flann::KDTreeIndexParams(std::max(1, options.trees)));

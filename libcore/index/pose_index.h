@@ -13,8 +13,10 @@
 //            when fewer than K candidates are admissible it degrades to visiting every centre.
 //   kFlann   approximate. FLANN's randomised KD-trees (flann::KDTreeIndex, `trees` trees) with
 //            the same scoring result set, stopping after `checks` leaves once K admissible
-//            candidates are held. Deterministic: building seeds FLANN's generator
-//            (flann::seed_random, i.e. std::srand) with `seed`.
+//            candidates are held. Not reproducible: FLANN 1.9 (Debian's libflann) shuffles the
+//            points of each tree with a std::mt19937 seeded from std::random_device
+//            (kdtree_index.h, buildIndexImpl), so two builds choose different splits and may
+//            return different candidates. Use kKdTree for reproducible output.
 //   kGrid9   approximate; the thesis's nine-way grid search (§D.2.1) as the historical baseline.
 //            Camera centres are projected on the ground plane (normal: the mean camera up
 //            vector, −y of the camera axes; the least-variance axis of the centres if the up
@@ -57,7 +59,6 @@ struct PoseIndexOptions {
   int trees = 4;         // flann: randomised trees
   int leaf_size = 8;     // kdtree: centres per leaf
   double grid_cell = 0;  // grid9: cell side in the poses' length unit; 0 = automatic
-  unsigned seed = 1;     // flann: tree randomisation seed
 };
 
 class PoseIndex {

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -156,7 +157,9 @@ TEST(PoseIndex, FewerAdmissibleThanKAndEmpty) {
 }
 
 // Approximate methods: bounded miss rates on a trajectory-like set; grid9 and flann with
-// everything in reach are exact.
+// everything in reach are exact. FLANN's trees are shuffled from std::random_device (not
+// reproducible), so its miss rates are judged by the median over five independent builds: one
+// build's rate has a long tail (0.03 % to 9 % measured with 128 checks).
 TEST(PoseIndex, ApproximateMethodsAreCloseAndConvergeToExact) {
   std::mt19937 g(5);
   std::normal_distribution<double> n(0, 1);
@@ -174,29 +177,40 @@ TEST(PoseIndex, ApproximateMethodsAreCloseAndConvergeToExact) {
   ViewSelectionOptions o{4, 45, 0, 0};
   PoseIndex exact(cands, o, {SearchMethod::kKdTree});
   PoseIndex grid(cands, o, {SearchMethod::kGrid9});
-  PoseIndex flann_few(cands, o, {SearchMethod::kFlann, 8});
-  PoseIndex flann_more(cands, o, {SearchMethod::kFlann, 128});
-  PoseIndex flann_all(cands, o, {SearchMethod::kFlann, 100000});
   PoseIndex grid_one(cands, o, {SearchMethod::kGrid9, 32, 4, 8, 1e7});
   EXPECT_GT(grid.grid_cell(), 0.1);
   EXPECT_LT(grid.grid_cell(), 20);
-  SelectionDiff dg, df, dfm, dfa, dgo;
+  std::vector<std::vector<Candidate>> truth;
+  SelectionDiff dg, dgo;
   for (const auto& q : queries) {
-    auto e = exact.Select(q);
-    dg.Add(e, grid.Select(q));
-    df.Add(e, flann_few.Select(q));
-    dfm.Add(e, flann_more.Select(q));
-    dfa.Add(e, flann_all.Select(q));
-    dgo.Add(e, grid_one.Select(q));
+    truth.push_back(exact.Select(q));
+    dg.Add(truth.back(), grid.Select(q));
+    dgo.Add(truth.back(), grid_one.Select(q));
   }
   EXPECT_EQ(dg.slots, queries.size() * 4);
   EXPECT_LT(dg.MissRate(), 0.05);
-  EXPECT_GT(df.MissRate(), dfm.MissRate());
-  EXPECT_LT(dfm.MissRate(), 0.05);
-  EXPECT_GE(df.extra_cost, 0);
-  EXPECT_EQ(dfa.misses, 0u);
   EXPECT_EQ(dgo.misses, 0u);
   EXPECT_EQ(dgo.wrong_rank, 0u);
+
+  auto flann_miss = [&](int checks) {
+    PoseIndex idx(cands, o, {SearchMethod::kFlann, checks});
+    SelectionDiff d;
+    for (size_t i = 0; i < queries.size(); ++i) d.Add(truth[i], idx.Select(queries[i]));
+    EXPECT_GE(d.extra_cost, 0);
+    return d;
+  };
+  std::vector<double> few, more;
+  for (int build = 0; build < 5; ++build) {
+    few.push_back(flann_miss(8).MissRate());
+    more.push_back(flann_miss(128).MissRate());
+  }
+  std::nth_element(few.begin(), few.begin() + 2, few.end());
+  std::nth_element(more.begin(), more.begin() + 2, more.end());
+  EXPECT_GT(few[2], more[2]);
+  EXPECT_LT(more[2], 0.05);
+  // Every leaf in reach: exact whatever the trees.
+  SelectionDiff all = flann_miss(100000);
+  EXPECT_EQ(all.misses, 0u);
 }
 
 // KITTI 00 ground truth (4541 poses): every pose against all the others.
