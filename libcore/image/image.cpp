@@ -1,90 +1,111 @@
 #include "image/image.h"
 
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
+#include <dlfcn.h>
+#include <unistd.h>
 
 #include <algorithm>
-#include <cmath>
-#include <cstring>
+#include <cstdlib>
+#include <filesystem>
+#include <mutex>
 
 #include "base/atomic_file.h"
 #include "base/error.h"
+#include "image/codec.h"
+#include "image/exr_io.h"
+#include "image/jpeg_io.h"
+#include "image/oiio_plugin.h"
 #include "image/png_io.h"
+
+#ifndef MVTM_PLUGIN_BUILD_DIR
+#define MVTM_PLUGIN_BUILD_DIR ""
+#endif
+#ifndef MVTM_PLUGIN_INSTALL_DIR
+#define MVTM_PLUGIN_INSTALL_DIR ""
+#endif
 
 namespace mvtm {
 
-namespace OIIO = OIIO_NAMESPACE;
-
 namespace {
-int BitsOf(const OIIO::TypeDesc& t) {
-  if (t == OIIO::TypeDesc::UINT8 || t == OIIO::TypeDesc::INT8) return 8;
-  if (t == OIIO::TypeDesc::UINT16 || t == OIIO::TypeDesc::INT16) return 16;
-  return 32;
+
+constexpr const char* kPluginName = "libmvtm_oiio.so";
+
+// Where the plugin may be: $MVTM_PLUGIN_DIR, beside the program's folder (bin/ → lib/mvtm/, as
+// built and as installed), then the build and install folders this library was built for.
+std::vector<std::filesystem::path> PluginCandidates() {
+  std::vector<std::filesystem::path> dirs;
+  if (const char* env = std::getenv("MVTM_PLUGIN_DIR"); env && *env) dirs.emplace_back(env);
+  std::error_code ec;
+  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (!ec) dirs.push_back(exe.parent_path().parent_path() / "lib" / "mvtm");
+  for (const char* d : {MVTM_PLUGIN_BUILD_DIR, MVTM_PLUGIN_INSTALL_DIR})
+    if (*d) dirs.emplace_back(d);
+  std::vector<std::filesystem::path> out;
+  for (const auto& d : dirs) out.push_back(d / kPluginName);
+  return out;
 }
 
-// OpenImageIO's messages can span lines ("PNG write error...\n..."); one line for the user.
-std::string OneLine(std::string s) {
-  for (char& c : s)
-    if (c == '\n' || c == '\r') c = ' ';
-  while (!s.empty() && s.back() == ' ') s.pop_back();
-  // Library prefixes say nothing to a user ("OpenEXR exception: Cannot read image file ...").
-  for (const char* prefix : {"OpenEXR exception: ", "Iex::BaseExc: "})
-    if (s.rfind(prefix, 0) == 0) s = "corrupt or truncated file: " + s.substr(std::strlen(prefix));
-  return s.empty() ? "unknown error" : s;
-}
-}  // namespace
-
-// Refuses sizes no real image has before anything is allocated (a 58-byte PNG may claim
-// 10^6 x 10^6 pixels).
-void CheckImageSize(const std::string& path, const OIIO::ImageSpec& spec) {
-  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
-    throw Error(path, 0, "image has no pixels");
-  const uint64_t pixels = uint64_t(spec.width) * uint64_t(spec.height);
-  if (spec.width > kMaxReadImageSide || spec.height > kMaxReadImageSide || spec.nchannels > 16 ||
-      pixels > kMaxImagePixels)
+// Opens the plugin once per process. Throws Error(path, 0, ...) naming the file that needed it.
+const OiioPlugin& Plugin(const std::string& path) {
+  static std::once_flag once;
+  static const OiioPlugin* plugin = nullptr;
+  static std::string failure;
+  std::call_once(once, [] {
+    std::string tried;
+    for (const auto& candidate : PluginCandidates()) {
+      std::error_code ec;
+      if (!std::filesystem::is_regular_file(candidate, ec)) {
+        tried += (tried.empty() ? "" : ", ") + candidate.string();
+        continue;
+      }
+      void* lib = dlopen(candidate.c_str(), RTLD_NOW | RTLD_LOCAL);
+      if (!lib) {
+        failure = LibraryText(dlerror());
+        return;
+      }
+      auto entry = reinterpret_cast<const OiioPlugin* (*)()>(dlsym(lib, "mvtm_oiio_plugin"));
+      const OiioPlugin* p = entry ? entry() : nullptr;
+      if (!p || p->abi != kOiioPluginAbi) {
+        failure = candidate.string() + " is not this mvtm's OpenImageIO plugin";
+        return;
+      }
+      plugin = p;  // kept loaded for the life of the process
+      return;
+    }
+    failure = "mvtm's OpenImageIO plugin is not installed (looked for " + tried + ")";
+  });
+  if (!plugin)
     throw Error(path, 0,
-                "image claims " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
-                    "x" + std::to_string(spec.nchannels) +
-                    ", beyond mvtm's limits (65536 pixels a side, 2^30 pixels, 16 channels)");
+                "this image format needs OpenImageIO, which could not be loaded: " + failure);
+  return *plugin;
 }
 
-ImageSpecInfo ReadImageSpec(const std::string& path) {
-  if (IsPngFile(path)) {
-    Image h = ReadPng(path, true);
-    return {h.width, h.height, h.channels, h.bits};
-  }
-  auto in = OIIO::ImageInput::open(path);
-  if (!in) throw Error(path, 0, "cannot read image: " + OneLine(OIIO::geterror()));
-  const OIIO::ImageSpec& spec = in->spec();
-  CheckImageSize(path, spec);
-  return {spec.width, spec.height, spec.nchannels, BitsOf(spec.format)};
-}
-
-Image ReadImage(const std::string& path) {
-  if (IsPngFile(path)) return ReadPng(path);
-  // Keep colour values as stored: no premultiplication by alpha.
-  OIIO::ImageSpec config;
-  config.attribute("oiio:UnassociatedAlpha", 1);
-  auto in = OIIO::ImageInput::open(path, &config);
-  if (!in) throw Error(path, 0, "cannot read image: " + OneLine(OIIO::geterror()));
-  const OIIO::ImageSpec& spec = in->spec();
-  CheckImageSize(path, spec);
-  Image img(spec.width, spec.height, spec.nchannels, BitsOf(spec.format));
-  bool ok;
-  if (img.bits == 32) {
-    ok = in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, img.data.data());
-  } else if (img.bits == 16) {
-    std::vector<uint16_t> buf(img.data.size());
-    ok = in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::UINT16, buf.data());
-    std::copy(buf.begin(), buf.end(), img.data.begin());
-  } else {
-    std::vector<uint8_t> buf(img.data.size());
-    ok = in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::UINT8, buf.data());
-    std::copy(buf.begin(), buf.end(), img.data.begin());
-  }
-  if (!ok) throw Error(path, 0, "cannot read image: " + OneLine(in->geterror()));
+// Reads through the format's own library when it takes the file, else through OpenImageIO.
+Image Read(const std::string& path, bool header_only) {
+  Image img;
+  if (IsPngFile(path)) return ReadPng(path, header_only);
+  if (IsExrFile(path) && ReadExr(path, header_only, &img)) return img;
+  if (IsJpegFile(path) && ReadJpeg(path, header_only, &img)) return img;
+  if (!std::filesystem::exists(path)) throw Error(path, 0, "cannot read image: no such file");
+  const std::string err = Plugin(path).read(path, header_only, &img);
+  if (!err.empty()) throw Error(path, 0, err);
   return img;
 }
+
+std::string Extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
+  return ext;
+}
+
+}  // namespace
+
+ImageSpecInfo ReadImageSpec(const std::string& path) {
+  Image h = Read(path, true);
+  return {h.width, h.height, h.channels, h.bits};
+}
+
+Image ReadImage(const std::string& path) { return Read(path, false); }
 
 Image ReadFloatMap(const std::string& path) {
   Image m = ReadImage(path);
@@ -103,59 +124,31 @@ void RequireImageSize(const Image& img, const std::string& path, uint64_t w, uin
                     " but its camera is " + std::to_string(w) + "x" + std::to_string(h));
 }
 
-namespace {
-// Encodes `img` through `o` (already created for the path's format) into the file or proxy
-// `target`. Returns false with o->geterror() set on failure.
-bool Encode(OIIO::ImageOutput& o, const std::string& target, const Image& img) {
-  OIIO::TypeDesc type = img.bits == 8    ? OIIO::TypeDesc::UINT8
-                        : img.bits == 16 ? OIIO::TypeDesc::UINT16
-                                         : OIIO::TypeDesc::FLOAT;
-  OIIO::ImageSpec spec(img.width, img.height, img.channels, type);
-  if (img.bits == 32) spec.attribute("compression", "zip");
-  // OpenImageIO stamps the current time into EXR headers (capDate) unless DateTime is set; a
-  // fixed value keeps outputs byte-identical across runs and shards.
-  spec.attribute("DateTime", "1970:01:01 00:00:00");
-  if (!o.open(target, spec)) return false;
-  bool ok;
-  if (img.bits == 32) {
-    ok = o.write_image(OIIO::TypeDesc::FLOAT, img.data.data());
-  } else {
-    double maxv = img.MaxValue();
-    if (img.bits == 16) {
-      std::vector<uint16_t> buf(img.data.size());
-      for (size_t i = 0; i < buf.size(); ++i)
-        buf[i] = static_cast<uint16_t>(std::clamp(std::nearbyint(double(img.data[i])), 0.0, maxv));
-      ok = o.write_image(OIIO::TypeDesc::UINT16, buf.data());
-    } else {
-      std::vector<uint8_t> buf(img.data.size());
-      for (size_t i = 0; i < buf.size(); ++i)
-        buf[i] = static_cast<uint8_t>(std::clamp(std::nearbyint(double(img.data[i])), 0.0, maxv));
-      ok = o.write_image(OIIO::TypeDesc::UINT8, buf.data());
-    }
-  }
-  return o.close() && ok;
-}
-
-}  // namespace
-
 void WriteImage(const std::string& path, const Image& img) {
   if (img.empty()) throw Error(path, 0, "refusing to write an empty image");
-  auto o = OIIO::ImageOutput::create(path);
-  if (!o) throw Error(path, 0, "no image writer for this extension: " + OneLine(OIIO::geterror()));
-  if (o->supports("ioproxy")) {
-    // Encode in memory, then write the bytes with every write checked: OpenImageIO's file
-    // writers do not report a full disk, which would leave a truncated file under its name.
-    std::vector<unsigned char> bytes;
-    OIIO::Filesystem::IOVecOutput proxy(bytes);
-    if (!o->set_ioproxy(&proxy) || !Encode(*o, path, img))
-      throw Error(path, 0, "cannot encode image: " + OneLine(o->geterror()));
+  const std::string ext = Extension(path);
+  // The pipeline's formats: encoded in memory by their own library, then written with every
+  // write() and the close() checked, so a full disk never leaves a truncated file in place.
+  if (ext == ".png" && (img.bits == 8 || img.bits == 16) && img.channels <= 4) {
+    const auto bytes = EncodePng(path, img);
     WriteBytesAtomic(path, bytes.data(), bytes.size());
     return;
   }
-  // Other formats write their own file; read it back before it takes the final name.
+  if (ext == ".exr" && img.bits == 32 && img.channels <= 4) {
+    const auto bytes = EncodeExr(path, img);
+    WriteBytesAtomic(path, bytes.data(), bytes.size());
+    return;
+  }
+  // Everything else through OpenImageIO: in memory when its writer can, else into a temporary
+  // file that must read back before it takes the final name.
   AtomicFile out(path);
-  if (!Encode(*o, out.temp_path().string(), img))
-    throw Error(path, 0, "cannot write image: " + OneLine(o->geterror()));
+  std::vector<unsigned char> bytes;
+  const std::string err = Plugin(path).write(path, img, out.temp_path().string(), &bytes);
+  if (!err.empty()) throw Error(path, 0, err);
+  if (!bytes.empty()) {
+    WriteBytesAtomic(path, bytes.data(), bytes.size());
+    return;
+  }
   try {
     ReadImage(out.temp_path().string());
   } catch (const Error&) {

@@ -1,11 +1,15 @@
 #include "image/png_io.h"
 
 #include <png.h>
+#include <zlib.h>
 
+#include <algorithm>
+#include <cmath>
 #include <csetjmp>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <new>
 
 #include "base/error.h"
 
@@ -132,6 +136,85 @@ Image ReadPng(const std::string& path, bool header_only) {
     for (size_t i = 0; i < img.data.size(); ++i) img.data[i] = buf[i];
   }
   return img;
+}
+
+namespace {
+struct WriteStruct {
+  png_structp png = nullptr;
+  png_infop info = nullptr;
+  ~WriteStruct() { png_destroy_write_struct(&png, info ? &info : nullptr); }
+};
+
+void AppendBytes(png_structp png, png_bytep data, png_size_t n) {
+  auto* out = static_cast<std::vector<unsigned char>*>(png_get_io_ptr(png));
+  bool grown = true;
+  try {  // no exception may cross libpng's C frames
+    out->insert(out->end(), data, data + n);
+  } catch (const std::bad_alloc&) {
+    grown = false;
+  }
+  if (!grown) png_error(png, "out of memory");
+}
+void Flush(png_structp) {}
+
+// Plain C calls only (libpng may longjmp out of it).
+void WritePngRows(png_structp png, png_infop info, png_uint_32 w, png_uint_32 h, int bits,
+                  int colour, png_bytepp rows) {
+  png_set_compression_level(png, 6);
+  png_set_compression_strategy(png, Z_DEFAULT_STRATEGY);
+  png_set_IHDR(png, info, w, h, bits, colour, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+               PNG_FILTER_TYPE_DEFAULT);
+  png_set_oFFs(png, info, 0, 0, PNG_OFFSET_PIXEL);
+  png_time epoch{};
+  epoch.year = 1970, epoch.month = 1, epoch.day = 1;
+  png_set_tIME(png, info, &epoch);
+  png_write_info(png, info);
+  png_write_image(png, rows);
+  png_write_end(png, nullptr);
+}
+}  // namespace
+
+std::vector<unsigned char> EncodePng(const std::string& path, const Image& img) {
+  if (img.bits != 8 && img.bits != 16)
+    throw Error(path, 0, "PNG holds 8 or 16 bits per sample, not " + std::to_string(img.bits));
+  if (img.channels < 1 || img.channels > 4)
+    throw Error(path, 0, "PNG holds 1 to 4 channels, not " + std::to_string(img.channels));
+  static constexpr int kColour[] = {PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA,
+                                    PNG_COLOR_TYPE_RGB, PNG_COLOR_TYPE_RGB_ALPHA};
+  const size_t bytes_per_sample = img.bits / 8;
+  const size_t rowbytes = size_t(img.width) * img.channels * bytes_per_sample;
+  std::vector<unsigned char> buf(rowbytes * img.height);
+  const double maxv = img.MaxValue();
+  for (size_t i = 0; i < img.data.size(); ++i) {
+    const auto v = unsigned(std::clamp(std::nearbyint(double(img.data[i])), 0.0, maxv));
+    if (bytes_per_sample == 2) {  // big-endian samples
+      buf[2 * i] = (unsigned char)(v >> 8);
+      buf[2 * i + 1] = (unsigned char)(v & 0xff);
+    } else {
+      buf[i] = (unsigned char)v;
+    }
+  }
+  std::vector<png_bytep> rows(img.height);
+  for (int y = 0; y < img.height; ++y) rows[y] = buf.data() + rowbytes * y;
+
+  std::vector<unsigned char> out;
+  out.reserve(buf.size() / 2 + 1024);
+  PngErrors errors;
+  WriteStruct ws;
+  ws.png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &errors, OnError, OnWarning);
+  if (ws.png) ws.info = png_create_info_struct(ws.png);
+  if (!ws.png || !ws.info) throw Error(path, 0, "cannot encode image: out of memory");
+  volatile bool ok = false;
+  if (setjmp(png_jmpbuf(ws.png)) == 0) {
+    png_set_write_fn(ws.png, &out, AppendBytes, Flush);
+    WritePngRows(ws.png, ws.info, png_uint_32(img.width), png_uint_32(img.height), img.bits,
+                 kColour[img.channels - 1], rows.data());
+    ok = true;
+  }
+  if (!ok)
+    throw Error(path, 0,
+                "cannot encode image: " + std::string(errors.message[0] ? errors.message : "?"));
+  return out;
 }
 
 }  // namespace mvtm

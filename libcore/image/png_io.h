@@ -9,6 +9,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "image/image.h"
 
@@ -20,5 +21,13 @@ bool IsPngFile(const std::string& path);
 // Reads a PNG. `header_only` fills width/height/channels/bits and leaves the pixels empty.
 // Throws Error(path, 0, "...") for a corrupt, truncated or oversized file.
 Image ReadPng(const std::string& path, bool header_only = false);
+
+// Encodes an 8- or 16-bit image of 1 to 4 channels (grey, grey+alpha, RGB, RGBA) as PNG bytes,
+// with OpenImageIO 2.4's settings, so the bytes are the ones its PNG writer produced for mvtm
+// (checked by png_io_test): zlib level 6 with the default strategy, libpng's adaptive filters,
+// an oFFs chunk (0, 0) and a tIME chunk fixed at 1970-01-01 00:00:00 (no clock in the output).
+// Samples are rounded to nearest and clamped; colour is written as stored (unassociated alpha,
+// so a PNG read and written again keeps its pixels). Throws Error(path, 0, ...).
+std::vector<unsigned char> EncodePng(const std::string& path, const Image& img);
 
 }  // namespace mvtm

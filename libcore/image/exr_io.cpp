@@ -1,0 +1,148 @@
+#include "image/exr_io.h"
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfIO.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <ImfStringAttribute.h>
+#include <ImfVersion.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <fstream>
+
+#include "base/error.h"
+#include "image/codec.h"
+
+namespace mvtm {
+
+namespace {
+
+// The first 8 bytes: the magic number and the version field with its flags.
+bool ReadMagic(const std::string& path, unsigned char head[8]) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return false;
+  const bool ok = std::fread(head, 1, 8, f) == 8;
+  std::fclose(f);
+  return ok && Imf::isImfMagic(reinterpret_cast<const char*>(head));
+}
+
+// The channel names in the order mvtm returns them, or empty when OpenImageIO should read it.
+std::vector<std::string> ChannelOrder(const Imf::ChannelList& list, Imf::PixelType* type) {
+  std::vector<std::string> names;
+  bool first = true;
+  for (auto it = list.begin(); it != list.end(); ++it) {
+    const Imf::Channel& c = it.channel();
+    if (c.xSampling != 1 || c.ySampling != 1 || (c.type != Imf::HALF && c.type != Imf::FLOAT))
+      return {};
+    if (!first && c.type != *type) return {};
+    *type = c.type, first = false;
+    names.push_back(it.name());
+  }
+  if (names.size() == 1) return names;
+  // OpenImageIO orders R, G, B, A first; the sets mvtm writes are exactly these prefixes.
+  static const std::vector<std::string> kRgba = {"R", "G", "B", "A"};
+  if (names.size() < 2 || names.size() > 4) return {};
+  std::vector<std::string> want(kRgba.begin(), kRgba.begin() + long(names.size()));
+  std::vector<std::string> sorted = want;
+  std::sort(sorted.begin(), sorted.end());
+  return names == sorted ? want : std::vector<std::string>{};  // the file lists them sorted
+}
+
+// An in-memory output stream for Imf::OutputFile (it seeks back to write the offset table).
+class MemoryStream : public Imf::OStream {
+ public:
+  explicit MemoryStream(std::vector<unsigned char>* out) : Imf::OStream("memory"), out_(out) {}
+  void write(const char c[], int n) override {
+    if (pos_ + size_t(n) > out_->size()) out_->resize(pos_ + size_t(n));
+    std::memcpy(out_->data() + pos_, c, size_t(n));
+    pos_ += size_t(n);
+  }
+  uint64_t tellp() override { return pos_; }
+  void seekp(uint64_t pos) override { pos_ = size_t(pos); }
+
+ private:
+  std::vector<unsigned char>* out_;
+  size_t pos_ = 0;
+};
+
+}  // namespace
+
+bool IsExrFile(const std::string& path) {
+  unsigned char head[8];
+  return ReadMagic(path, head);
+}
+
+bool ReadExr(const std::string& path, bool header_only, Image* img) {
+  unsigned char head[8];
+  if (!ReadMagic(path, head)) return false;
+  const int version = head[4] | (head[5] << 8) | (head[6] << 16) | (head[7] << 24);
+  if (Imf::isMultiPart(version) || Imf::isNonImage(version)) return false;
+  try {
+    Imf::InputFile file(path.c_str());
+    const Imf::Header& h = file.header();
+    Imf::PixelType type = Imf::FLOAT;
+    const std::vector<std::string> names = ChannelOrder(h.channels(), &type);
+    if (names.empty()) return false;
+    const Imath::Box2i dw = h.dataWindow();
+    const int64_t w = int64_t(dw.max.x) - dw.min.x + 1, hgt = int64_t(dw.max.y) - dw.min.y + 1;
+    CheckImageDims(path, w, hgt, int64_t(names.size()));
+    Image out;
+    out.width = int(w), out.height = int(hgt), out.channels = int(names.size()), out.bits = 32;
+    if (!header_only) {
+      out.data.assign(out.pixels() * size_t(out.channels), 0.f);
+      const size_t xs = sizeof(float) * size_t(out.channels), ys = xs * size_t(w);
+      Imf::FrameBuffer fb;
+      for (size_t c = 0; c < names.size(); ++c)
+        fb.insert(names[c], Imf::Slice::Make(Imf::FLOAT, out.data.data() + c, dw, xs, ys));
+      file.setFrameBuffer(fb);
+      file.readPixels(dw.min.y, dw.max.y);
+    }
+    *img = std::move(out);
+    return true;
+  } catch (const Error&) {
+    throw;
+  } catch (const std::bad_alloc&) {
+    throw Error(path, 0, "cannot read image: out of memory");
+  } catch (const std::exception& e) {
+    throw Error(path, 0, "cannot read image: corrupt or truncated file: " + LibraryText(e.what()));
+  }
+}
+
+std::vector<unsigned char> EncodeExr(const std::string& path, const Image& img) {
+  if (img.bits != 32) throw Error(path, 0, "mvtm writes EXR as 32-bit float");
+  static const char* kNames[4][4] = {{"Y"}, {"R", "G"}, {"R", "G", "B"}, {"R", "G", "B", "A"}};
+  if (img.channels < 1 || img.channels > 4)
+    throw Error(path, 0,
+                "mvtm writes EXR with 1 to 4 channels, not " + std::to_string(img.channels));
+  std::vector<unsigned char> bytes;
+  try {
+    Imf::Header h(img.width, img.height);
+    h.compression() = Imf::ZIP_COMPRESSION;
+    h.insert("capDate", Imf::StringAttribute("1970:01:01 00:00:00"));
+    for (int c = 0; c < img.channels; ++c)
+      h.channels().insert(kNames[img.channels - 1][c], Imf::Channel(Imf::FLOAT));
+    const size_t xs = sizeof(float) * size_t(img.channels), ys = xs * size_t(img.width);
+    Imf::FrameBuffer fb;
+    for (int c = 0; c < img.channels; ++c)
+      fb.insert(kNames[img.channels - 1][c],
+                Imf::Slice(Imf::FLOAT,
+                           const_cast<char*>(reinterpret_cast<const char*>(img.data.data() + c)),
+                           xs, ys));
+    MemoryStream stream(&bytes);
+    Imf::OutputFile out(stream, h);
+    out.setFrameBuffer(fb);
+    out.writePixels(img.height);
+  } catch (const std::bad_alloc&) {
+    throw Error(path, 0, "cannot encode image: out of memory");
+  } catch (const std::exception& e) {
+    throw Error(path, 0, "cannot encode image: " + LibraryText(e.what()));
+  }
+  return bytes;
+}
+
+}  // namespace mvtm

@@ -1,0 +1,142 @@
+#include "image/jpeg_io.h"
+
+// jpeglib.h needs size_t and FILE declared first.
+#include <cstddef>
+#include <cstdio>
+// clang-format off
+#include <jpeglib.h>
+#include <jerror.h>
+// clang-format on
+
+#include <csetjmp>
+#include <filesystem>
+
+#include "base/error.h"
+#include "image/codec.h"
+
+namespace mvtm {
+
+namespace {
+
+// libjpeg reports through this manager; errors longjmp back, nothing is printed.
+struct ErrorManager {
+  jpeg_error_mgr mgr;
+  std::jmp_buf jump;
+  char message[JMSG_LENGTH_MAX] = "";
+  bool truncated = false;
+};
+
+void OnError(j_common_ptr cinfo) {
+  auto* e = reinterpret_cast<ErrorManager*>(cinfo->err);
+  (*cinfo->err->format_message)(cinfo, e->message);
+  std::longjmp(e->jump, 1);
+}
+
+// Warnings: a premature end of data is kept (the file was cut short), the rest is ignored.
+void OnMessage(j_common_ptr cinfo, int level) {
+  auto* e = reinterpret_cast<ErrorManager*>(cinfo->err);
+  if (level < 0 && cinfo->err->msg_code == JWRN_JPEG_EOF) e->truncated = true;
+}
+
+struct Decompress {
+  jpeg_decompress_struct cinfo{};
+  bool created = false;
+  ~Decompress() {
+    if (created) jpeg_destroy_decompress(&cinfo);
+  }
+};
+
+struct File {
+  std::FILE* f = nullptr;
+  ~File() {
+    if (f) std::fclose(f);
+  }
+};
+
+}  // namespace
+
+bool IsJpegFile(const std::string& path) {
+  File f;
+  f.f = std::fopen(path.c_str(), "rb");
+  unsigned char head[3];
+  return f.f && std::fread(head, 1, 3, f.f) == 3 && head[0] == 0xFF && head[1] == 0xD8 &&
+         head[2] == 0xFF;
+}
+
+namespace {
+// The libjpeg calls, in frames that hold no C++ object (a longjmp skips destructors).
+// Returns false when libjpeg reported an error (message in `e`).
+bool ReadHeader(jpeg_decompress_struct* cinfo, ErrorManager* e, std::FILE* f, bool* created,
+                bool* leave_to_oiio) {
+  if (setjmp(e->jump) != 0) return false;
+  jpeg_create_decompress(cinfo);
+  *created = true;
+  jpeg_stdio_src(cinfo, f);
+  jpeg_read_header(cinfo, TRUE);
+  const J_COLOR_SPACE cs = cinfo->jpeg_color_space;
+  if (cs == JCS_CMYK || cs == JCS_YCCK || cinfo->num_components == 2 || cinfo->num_components > 4) {
+    *leave_to_oiio = true;
+    return true;
+  }
+  cinfo->out_color_space = cinfo->num_components == 1 ? JCS_GRAYSCALE : JCS_RGB;
+  jpeg_calc_output_dimensions(cinfo);
+  return true;
+}
+
+bool Decode(jpeg_decompress_struct* cinfo, ErrorManager* e, JSAMPROW* rows) {
+  if (setjmp(e->jump) != 0) return false;
+  jpeg_start_decompress(cinfo);
+  while (cinfo->output_scanline < cinfo->output_height)
+    jpeg_read_scanlines(cinfo, rows + cinfo->output_scanline,
+                        cinfo->output_height - cinfo->output_scanline);
+  jpeg_finish_decompress(cinfo);
+  return true;
+}
+
+[[noreturn]] void Fail(const std::string& path, const ErrorManager& e) {
+  throw Error(path, 0, std::string("cannot read image: ") + (e.message[0] ? e.message : "?"));
+}
+}  // namespace
+
+bool ReadJpeg(const std::string& path, bool header_only, Image* img) {
+  File f;
+  f.f = std::fopen(path.c_str(), "rb");
+  if (!f.f) throw Error(path, 0, "cannot open");
+  ErrorManager errors;
+  Decompress d;
+  d.cinfo.err = jpeg_std_error(&errors.mgr);
+  errors.mgr.error_exit = OnError;
+  errors.mgr.emit_message = OnMessage;
+  bool leave_to_oiio = false;
+  if (!ReadHeader(&d.cinfo, &errors, f.f, &d.created, &leave_to_oiio)) Fail(path, errors);
+  if (leave_to_oiio) return false;
+  CheckImageDims(path, d.cinfo.output_width, d.cinfo.output_height, d.cinfo.output_components);
+  Image out;
+  out.width = int(d.cinfo.output_width), out.height = int(d.cinfo.output_height);
+  out.channels = d.cinfo.output_components, out.bits = 8;
+  if (header_only) {
+    *img = std::move(out);
+    return true;
+  }
+  // A JPEG compresses at most about 1:5000 (an all-grey image); smaller than that share of its
+  // pixels, the file was cut short: refused before the allocation.
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (!ec && double(out.pixels()) * out.channels > 10000.0 * double(size) + (1 << 20))
+    throw Error(path, 0,
+                "cannot read image: the file (" + std::to_string(size) +
+                    " bytes) is too small for its " + std::to_string(out.width) + "x" +
+                    std::to_string(out.height) + " header (truncated?)");
+  const size_t rowbytes = size_t(out.width) * size_t(out.channels);
+  std::vector<unsigned char> buf(rowbytes * size_t(out.height));
+  std::vector<JSAMPROW> rows(size_t(out.height));
+  for (int y = 0; y < out.height; ++y) rows[size_t(y)] = buf.data() + rowbytes * size_t(y);
+  if (!Decode(&d.cinfo, &errors, rows.data())) Fail(path, errors);
+  if (errors.truncated)
+    throw Error(path, 0, "cannot read image: corrupt or truncated file: premature end of data");
+  out.data.assign(buf.begin(), buf.end());
+  *img = std::move(out);
+  return true;
+}
+
+}  // namespace mvtm
