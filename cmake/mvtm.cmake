@@ -24,7 +24,7 @@ function(mvtm_add_tool name)
   add_executable(${name} main.cpp)
   target_link_libraries(${name} PRIVATE mvtm_tool_${name} mvtm_flags)
   set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR}/bin)
-  add_dependencies(${name} mvtm_oiio)  # opened with dlopen for formats beyond PNG/JPEG/EXR
+  add_dependencies(${name} mvtm_plugins)  # modules opened with dlopen (base/plugin.h)
   install(TARGETS ${name} RUNTIME DESTINATION bin)
   install(FILES ${PROJECT_SOURCE_DIR}/man/${name}.1 DESTINATION share/man/man1 OPTIONAL)
 endfunction()
@@ -37,7 +37,7 @@ function(mvtm_add_unit_test name)
   target_compile_definitions(${name} PRIVATE
     MVTM_SOURCE_DIR="${PROJECT_SOURCE_DIR}" MVTM_BINARY_DIR="${PROJECT_BINARY_DIR}")
   set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR}/tests)
-  add_dependencies(${name} mvtm_oiio)
+  add_dependencies(${name} mvtm_plugins)
   add_test(NAME ${name} COMMAND ${name})
   set_tests_properties(${name} PROPERTIES LABELS "unit;${A_LABELS}"
     ENVIRONMENT "MVTM_BIN=${PROJECT_BINARY_DIR}/bin;MVTM_SOURCE=${PROJECT_SOURCE_DIR}")

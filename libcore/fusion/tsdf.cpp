@@ -1,70 +1,42 @@
-#include <openvdb/math/DDA.h>
-#include <openvdb/math/Ray.h>
-#include <openvdb/openvdb.h>
-#include <openvdb/tools/VolumeToMesh.h>
-
-#include <algorithm>
+// TsdfVolume: argument checks here, the volume itself in libmvtm_vdb.so (tsdf_backend.h).
 #include <cmath>
+#include <mutex>
 #include <string>
 
 #include "base/error.h"
+#include "base/plugin.h"
 #include "fusion/fusion.h"
+#include "fusion/tsdf_backend.h"
 
 namespace mvtm {
+
 namespace {
-
-using RayD = openvdb::math::Ray<double>;
-using DdaD = openvdb::math::DDA<RayD, 0>;
-
-double PixelWeight(const DepthView& v, int x, int y) {
-  return v.confidence.empty() ? 1.0 : static_cast<double>(v.confidence.at(x, y));
+const VdbPlugin& Plugin() {
+  static std::once_flag once;
+  static const VdbPlugin* plugin = nullptr;
+  static std::string failure;
+  std::call_once(once, [] {
+    auto entry = reinterpret_cast<const VdbPlugin* (*)()>(
+        PluginEntry("libmvtm_vdb.so", "mvtm_vdb_plugin", &failure));
+    const VdbPlugin* p = entry ? entry() : nullptr;
+    if (p && p->abi != kVdbPluginAbi)
+      failure = "libmvtm_vdb.so is not this mvtm's module";
+    else
+      plugin = p;
+  });
+  if (!plugin) throw Error("depth fusion needs OpenVDB, which could not be loaded: " + failure);
+  return *plugin;
 }
 
-// Keeps a polygon only where every vertex lies in a cell whose 8 corner voxels were observed:
-// next to unobserved voxels (background +truncation) the sign change is an artefact of the band's
-// edge, not a surface.
-bool ObservedCell(const openvdb::FloatGrid::ConstAccessor& weights, const openvdb::Vec3s& p,
-                  double min_weight) {
-  const openvdb::Coord c = openvdb::Coord::floor(p);
-  for (int dz = 0; dz <= 1; ++dz) {
-    for (int dy = 0; dy <= 1; ++dy) {
-      for (int dx = 0; dx <= 1; ++dx) {
-        if (!(weights.getValue(c.offsetBy(dx, dy, dz)) > min_weight)) return false;
-      }
-    }
-  }
-  return true;
+void Check(const std::string& error) {
+  if (!error.empty()) throw Error(error);
 }
-
 }  // namespace
 
 struct TsdfVolume::Impl {
+  std::unique_ptr<TsdfBackend> backend;
   Eigen::Vector3d origin;
   double voxel = 1;
-  double truncation = 3;  // voxels
-  openvdb::FloatGrid::Ptr tsdf;
-  openvdb::FloatGrid::Ptr weight;
-
-  // One ray in index space: from the camera centre c along the unit direction u, the surface at
-  // distance d (voxels). Voxel cells are centred on integer coordinates, hence the half shift.
-  void IntegrateRay(const Eigen::Vector3d& c, const Eigen::Vector3d& u, double d, float w,
-                    openvdb::FloatGrid::Accessor& tacc, openvdb::FloatGrid::Accessor& wacc) {
-    const double t0 = std::max(0.0, d - truncation), t1 = d + truncation;
-    const RayD ray(openvdb::Vec3d(c.x() + 0.5, c.y() + 0.5, c.z() + 0.5),
-                   openvdb::Vec3d(u.x(), u.y(), u.z()));
-    DdaD dda(ray, t0, t1);
-    do {
-      const openvdb::Coord& v = dda.voxel();
-      const double dist = (Eigen::Vector3d(v.x(), v.y(), v.z()) - c).norm();
-      const double sdf = d - dist;
-      if (sdf < -truncation) continue;
-      const float value = static_cast<float>(std::min(sdf, truncation));
-      const float w_old = wacc.getValue(v);
-      const float w_new = w_old + w;
-      tacc.setValue(v, (tacc.getValue(v) * w_old + value * w) / w_new);
-      wacc.setValue(v, w_new);
-    } while (dda.step());
-  }
 };
 
 TsdfVolume::TsdfVolume(const Eigen::Vector3d& origin, double voxel_size, double truncation_voxels)
@@ -75,12 +47,11 @@ TsdfVolume::TsdfVolume(const Eigen::Vector3d& origin, double voxel_size, double 
   if (!(truncation_voxels >= 1) || !std::isfinite(truncation_voxels)) {
     throw UsageError("truncation must be >= 1 voxel, got " + std::to_string(truncation_voxels));
   }
-  openvdb::initialize();
+  std::string error;
+  impl_->backend.reset(Plugin().create(origin, voxel_size, truncation_voxels, &error));
+  Check(error);
   impl_->origin = origin;
   impl_->voxel = voxel_size;
-  impl_->truncation = truncation_voxels;
-  impl_->tsdf = openvdb::FloatGrid::create(static_cast<float>(truncation_voxels));
-  impl_->weight = openvdb::FloatGrid::create(0.f);
 }
 
 TsdfVolume::~TsdfVolume() = default;
@@ -89,58 +60,16 @@ TsdfVolume& TsdfVolume::operator=(TsdfVolume&&) noexcept = default;
 
 void TsdfVolume::Integrate(const DepthView& view, double max_depth) {
   CheckDepthView(view, 0);
-  Impl& m = *impl_;
-  const Eigen::Matrix3d r_t = view.world_to_camera.R().transpose();
-  const Eigen::Vector3d c = (view.world_to_camera.Centre() - m.origin) / m.voxel;
-  auto tacc = m.tsdf->getAccessor();
-  auto wacc = m.weight->getAccessor();
-  for (int y = 0; y < view.depth.height; ++y) {
-    for (int x = 0; x < view.depth.width; ++x) {
-      const float z = view.depth.at(x, y);
-      const float w = static_cast<float>(PixelWeight(view, x, y));
-      if (!(std::isfinite(z) && z > 0 && z < max_depth && w > 0)) continue;
-      const Eigen::Vector3d ray = r_t * view.camera.Unproject({x + 0.5, y + 0.5}, z) / m.voxel;
-      const double d = ray.norm();
-      m.IntegrateRay(c, ray / d, d, w, tacc, wacc);
-    }
-  }
+  Check(impl_->backend->Integrate(view, max_depth));
 }
 
 Mesh TsdfVolume::ExtractMesh(double min_weight) const {
-  const Impl& m = *impl_;
-  std::vector<openvdb::Vec3s> points;
-  std::vector<openvdb::Vec3I> triangles;
-  std::vector<openvdb::Vec4I> quads;
-  openvdb::tools::volumeToMesh(*m.tsdf, points, triangles, quads, 0.0, 0.0);
-  const auto wacc = m.weight->getConstAccessor();
-  std::vector<char> observed(points.size());
-  for (size_t i = 0; i < points.size(); ++i)
-    observed[i] = ObservedCell(wacc, points[i], min_weight);
-  std::vector<uint32_t> remap(points.size(), UINT32_MAX);
   Mesh mesh;
-  auto add = [&](uint32_t a, uint32_t b, uint32_t c) {
-    if (!observed[a] || !observed[b] || !observed[c]) return;
-    std::array<uint32_t, 3> f{a, b, c};
-    for (uint32_t& i : f) {
-      if (remap[i] == UINT32_MAX) {
-        remap[i] = static_cast<uint32_t>(mesh.vertices.size());
-        const openvdb::Vec3s& p = points[i];
-        mesh.vertices.push_back(m.origin + m.voxel * Eigen::Vector3d(p.x(), p.y(), p.z()));
-      }
-      i = remap[i];
-    }
-    mesh.faces.push_back(f);  // volumeToMesh winds counter-clockwise seen from the free side
-  };
-  for (const openvdb::Vec3I& t : triangles) add(t[0], t[1], t[2]);
-  for (const openvdb::Vec4I& q : quads) {
-    add(q[0], q[1], q[2]);
-    add(q[0], q[2], q[3]);
-  }
-  if (!mesh.faces.empty()) mesh.ComputeNormals();
+  Check(impl_->backend->ExtractMesh(min_weight, &mesh));
   return mesh;
 }
 
-size_t TsdfVolume::ActiveVoxels() const { return impl_->tsdf->activeVoxelCount(); }
+size_t TsdfVolume::ActiveVoxels() const { return impl_->backend->ActiveVoxels(); }
 double TsdfVolume::voxel_size() const { return impl_->voxel; }
 const Eigen::Vector3d& TsdfVolume::origin() const { return impl_->origin; }
 

@@ -1,77 +1,36 @@
 #include "image/image.h"
 
-#include <dlfcn.h>
-#include <unistd.h>
-
 #include <algorithm>
-#include <cstdlib>
 #include <filesystem>
 #include <mutex>
 
 #include "base/atomic_file.h"
 #include "base/error.h"
+#include "base/plugin.h"
 #include "image/codec.h"
 #include "image/exr_io.h"
 #include "image/jpeg_io.h"
 #include "image/oiio_plugin.h"
 #include "image/png_io.h"
 
-#ifndef MVTM_PLUGIN_BUILD_DIR
-#define MVTM_PLUGIN_BUILD_DIR ""
-#endif
-#ifndef MVTM_PLUGIN_INSTALL_DIR
-#define MVTM_PLUGIN_INSTALL_DIR ""
-#endif
-
 namespace mvtm {
 
 namespace {
 
-constexpr const char* kPluginName = "libmvtm_oiio.so";
-
-// Where the plugin may be: $MVTM_PLUGIN_DIR, beside the program's folder (bin/ → lib/mvtm/, as
-// built and as installed), then the build and install folders this library was built for.
-std::vector<std::filesystem::path> PluginCandidates() {
-  std::vector<std::filesystem::path> dirs;
-  if (const char* env = std::getenv("MVTM_PLUGIN_DIR"); env && *env) dirs.emplace_back(env);
-  std::error_code ec;
-  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-  if (!ec) dirs.push_back(exe.parent_path().parent_path() / "lib" / "mvtm");
-  for (const char* d : {MVTM_PLUGIN_BUILD_DIR, MVTM_PLUGIN_INSTALL_DIR})
-    if (*d) dirs.emplace_back(d);
-  std::vector<std::filesystem::path> out;
-  for (const auto& d : dirs) out.push_back(d / kPluginName);
-  return out;
-}
-
-// Opens the plugin once per process. Throws Error(path, 0, ...) naming the file that needed it.
+// The OpenImageIO plugin, opened once per process. Throws Error(path, 0, ...) naming the file
+// that needed it.
 const OiioPlugin& Plugin(const std::string& path) {
   static std::once_flag once;
   static const OiioPlugin* plugin = nullptr;
   static std::string failure;
   std::call_once(once, [] {
-    std::string tried;
-    for (const auto& candidate : PluginCandidates()) {
-      std::error_code ec;
-      if (!std::filesystem::is_regular_file(candidate, ec)) {
-        tried += (tried.empty() ? "" : ", ") + candidate.string();
-        continue;
-      }
-      void* lib = dlopen(candidate.c_str(), RTLD_NOW | RTLD_LOCAL);
-      if (!lib) {
-        failure = LibraryText(dlerror());
-        return;
-      }
-      auto entry = reinterpret_cast<const OiioPlugin* (*)()>(dlsym(lib, "mvtm_oiio_plugin"));
-      const OiioPlugin* p = entry ? entry() : nullptr;
-      if (!p || p->abi != kOiioPluginAbi) {
-        failure = candidate.string() + " is not this mvtm's OpenImageIO plugin";
-        return;
-      }
-      plugin = p;  // kept loaded for the life of the process
-      return;
-    }
-    failure = "mvtm's OpenImageIO plugin is not installed (looked for " + tried + ")";
+    auto entry = reinterpret_cast<const OiioPlugin* (*)()>(
+        PluginEntry("libmvtm_oiio.so", "mvtm_oiio_plugin", &failure));
+    const OiioPlugin* p = entry ? entry() : nullptr;
+    if (p && p->abi != kOiioPluginAbi)
+      failure = "libmvtm_oiio.so is not this mvtm's plugin";
+    else
+      plugin = p;
   });
   if (!plugin)
     throw Error(path, 0,

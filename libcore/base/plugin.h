@@ -1,0 +1,20 @@
+// mvtm — plugin modules opened with dlopen on first use.
+//
+// Some libraries cost every program that links them tens or hundreds of milliseconds at
+// start-up (OpenImageIO ~0.47 s and 260 libraries, OpenVDB ~50 ms) while only a few runs need
+// them. Their code lives in modules of mvtm's own (libmvtm_oiio.so, libmvtm_vdb.so) that a
+// program opens only when it needs one. Modules are looked for in $MVTM_PLUGIN_DIR, in
+// lib/mvtm/ beside the program's bin/ folder (as built and as installed), then in the build and
+// install folders mvtm was configured with.
+#pragma once
+
+#include <string>
+
+namespace mvtm {
+
+// Opens `module` (a file name such as "libmvtm_vdb.so") once per process and returns the
+// address of its extern "C" function `entry`, or nullptr with *failure saying why (not found,
+// with the folders tried; not loadable, with the loader's message). Thread-safe.
+void* PluginEntry(const std::string& module, const std::string& entry, std::string* failure);
+
+}  // namespace mvtm
