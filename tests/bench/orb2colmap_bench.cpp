@@ -116,6 +116,11 @@ int main(int argc, char** argv) {
     row("  baseline: colmap BIN read+write", t_cbin);
     std::printf("ratios (baseline / ours): text read+write %.2fx, binary read+write %.2fx\n",
                 t_ctxt / (t_wtxt + t_rtxt), t_cbin / (t_wbin + t_rbin));
+    const std::string n = std::to_string(frames) + " frames";
+    mvtm::bench::Report("orb2colmap", "images.txt read+write, " + n, (t_wtxt + t_rtxt) * 1e3, "ms",
+                        "colmap model_converter TXT", t_ctxt * 1e3);
+    mvtm::bench::Report("orb2colmap", "images.bin read+write, " + n, (t_wbin + t_rbin) * 1e3, "ms",
+                        "colmap model_converter BIN", t_cbin * 1e3);
   }
   return 0;
 }

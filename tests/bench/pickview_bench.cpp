@@ -134,7 +134,8 @@ int main(int argc, char** argv) {
   }
   std::printf("%-18s %9s %10s %9s %10s %13s %10s\n", "method", "build_ms", "us/query", "speedup",
               "miss_rate", "mean_extra_m", "identical");
-  double brute_s = 0, grid_cell = 0;
+  double brute_s = 0, flann_s = 0, grid_cell = 0;
+  std::vector<std::pair<std::string, double>> us_per_query;
   int status = 0;
   for (const auto& row : rows) {
     std::vector<std::vector<Candidate>> got(queries.size());
@@ -152,6 +153,7 @@ int main(int argc, char** argv) {
       if (row.opt.method == SearchMethod::kGrid9) grid_cell = idx->grid_cell();
     }
     if (row.name == "brute") brute_s = s;
+    if (row.name == "flann checks=32") flann_s = s;
     SelectionDiff d;
     bool same = true;
     for (size_t i = 0; i < queries.size(); ++i) {
@@ -160,10 +162,23 @@ int main(int argc, char** argv) {
     }
     if ((row.select_views || IsExact(row.opt.method)) && !same) status = 1;
     double us = s / static_cast<double>(queries.size()) * 1e6;
+    us_per_query.emplace_back(row.name, us);
+    if (!row.select_views && !IsExact(row.opt.method))
+      mvtm::bench::Report("pickview", row.name + " miss rate", d.MissRate(), "share", "", 0);
     std::printf("%-18s %9.2f %10.3f %9s %10.5f %13.6f %10s\n", row.name.c_str(), build_s * 1e3, us,
                 brute_s > 0 ? (std::to_string(brute_s / s).substr(0, 6) + "x").c_str() : "-",
                 d.MissRate(), d.MeanExtraCost(), same ? "yes" : "no");
   }
+  const double to_us = 1e6 / static_cast<double>(queries.size());
+  for (const auto& [name, us] : us_per_query) {
+    if (name == "brute" || name == "SelectViews") continue;
+    mvtm::bench::Report("pickview", name + ", K=" + std::to_string(k), us, "us/query",
+                        "brute force", brute_s * to_us);
+  }
+  for (const auto& [name, us] : us_per_query)
+    if (name == "kdtree")
+      mvtm::bench::Report("pickview", "kdtree (exact), K=" + std::to_string(k), us, "us/query",
+                          "flann checks=32 (approximate)", flann_s * to_us);
   std::printf(
       "\n(speedup: brute-force time / method time, measured in this run; the thesis's Python grid "
       "search took 189 us per query;\n grid9 cell side (automatic): %.3f m)\n\n",
