@@ -1,13 +1,16 @@
 #include "ssim_tool.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <thread>
 #include <vector>
 
 #include "base/atomic_file.h"
@@ -156,6 +159,43 @@ Row ComparePair(const PairJob& job, const SsimToolOptions& o) {
   return row;
 }
 
+// Every pair. One pair: SSIM's row threads. Several (a folder): one pair per thread, each pair
+// on one thread, which keeps every core busy through decoding too and does not stall when
+// another process takes a core. Rows come back in job order; the first failing pair in that
+// order is the error reported (no new pair is started once one has failed).
+std::vector<Row> CompareAll(const std::vector<PairJob>& jobs, const SsimToolOptions& options) {
+  std::vector<Row> rows(jobs.size());
+  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+  const size_t workers = std::min<size_t>(
+      jobs.size(), options.ssim.threads > 0 ? size_t(options.ssim.threads) : cores);
+  if (workers <= 1) {
+    for (size_t i = 0; i < jobs.size(); ++i) rows[i] = ComparePair(jobs[i], options);
+    return rows;
+  }
+  SsimToolOptions per_pair = options;
+  per_pair.ssim.threads = 1;
+  std::vector<std::exception_ptr> errors(jobs.size());
+  std::atomic<size_t> next{0};
+  std::atomic<bool> failed{false};
+  auto work = [&] {
+    for (size_t i; !failed && (i = next.fetch_add(1)) < jobs.size();) {
+      try {
+        rows[i] = ComparePair(jobs[i], per_pair);
+      } catch (...) {
+        errors[i] = std::current_exception();
+        failed = true;
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (size_t k = 1; k < workers; ++k) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  for (const auto& e : errors)
+    if (e) std::rethrow_exception(e);
+  return rows;
+}
+
 // Statistics over the non-NaN values (NaN when there are none); std is the population one.
 struct Stats {
   double mean, std, min;
@@ -198,8 +238,7 @@ int RunSsim(const SsimToolOptions& options, std::ostream& out) {
   const bool folders = fs::is_directory(options.a);
   if (folders && !options.map.empty()) CreateFolder(options.map);
 
-  std::vector<Row> rows;
-  for (const PairJob& job : jobs) rows.push_back(ComparePair(job, options));
+  const std::vector<Row> rows = CompareAll(jobs, options);
 
   std::vector<double> ssim, ncc, psnr;
   for (const Row& r : rows) {
