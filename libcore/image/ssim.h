@@ -64,7 +64,7 @@ struct SsimOptions {
   double k2 = 0.03;       // contrast constant, C2 = (k2·R)², >= 0
   double data_range = 0;  // R; 0 = from the bit depth of the first image (255, 65535, 1.0)
   double truncate = 3.5;  // window radius in sigmas (skimage uses 3.5 for Gaussian SSIM)
-  int threads = 0;        // worker threads; 0 = std::thread::hardware_concurrency()
+  int threads = 0;        // worker threads; 0 = automatic: one per 2^20 samples, up to the cores
   // Highest instruction set the kernels may use (capped at what the CPU has). kBest for real
   // work; the others exist for tests and benchmarks. Levels agree to ~1e-15.
   SimdLevel simd = SimdLevel::kBest;
