@@ -32,6 +32,10 @@ std::string SizeText(int w, int h) { return std::to_string(w) + "x" + std::to_st
 // core busy, few enough that a bad file is reported soon and the progress bar moves.
 constexpr size_t kBatch = 32;
 
+// Work for cv::parallel_for_ in a few stripes per thread, so that each stripe's buffers serve
+// several frames and a thread slowed by other load does not hold up the rest for long.
+double Stripes() { return 4.0 * cv::getNumThreads(); }
+
 // Reads the label images of `files` and decodes their vehicle masks on all cores (OpenCV's
 // thread pool), a batch at a time; per_frame(vehicle, width, height, finder) runs on the worker
 // threads, and its result goes to use(index, result) on this thread in file order, after the
@@ -49,22 +53,25 @@ void ForEachLabel(const std::vector<fs::path>& files, const LabelDecoder& decode
   int w0 = 0, h0 = 0;
   for (size_t b0 = 0; b0 < files.size(); b0 += kBatch) {
     batch.assign(std::min(kBatch, files.size() - b0), Frame());
-    cv::parallel_for_(cv::Range(0, static_cast<int>(batch.size())), [&](const cv::Range& range) {
-      BlobFinder finder;
-      std::vector<uint8_t> vehicle;
-      for (int k = range.start; k < range.end; ++k) {
-        Frame& f = batch[static_cast<size_t>(k)];
-        try {
-          const std::string name = files[b0 + static_cast<size_t>(k)].string();
-          const Image label = ReadImage(name);
-          f.width = label.width, f.height = label.height;
-          decoder.Decode(label, name, vehicle);
-          f.value = per_frame(vehicle, f.width, f.height, finder);
-        } catch (...) {
-          f.error = std::current_exception();
-        }
-      }
-    });
+    cv::parallel_for_(
+        cv::Range(0, static_cast<int>(batch.size())),
+        [&](const cv::Range& range) {
+          BlobFinder finder;
+          std::vector<uint8_t> vehicle;
+          for (int k = range.start; k < range.end; ++k) {
+            Frame& f = batch[static_cast<size_t>(k)];
+            try {
+              const std::string name = files[b0 + static_cast<size_t>(k)].string();
+              const Image label = ReadImage(name);
+              f.width = label.width, f.height = label.height;
+              decoder.Decode(label, name, vehicle);
+              f.value = per_frame(vehicle, f.width, f.height, finder);
+            } catch (...) {
+              f.error = std::current_exception();
+            }
+          }
+        },
+        Stripes());
     for (size_t k = 0; k < batch.size(); ++k) {
       const size_t i = b0 + k;
       Frame& f = batch[k];
@@ -87,20 +94,24 @@ void WriteMasks(const TrackResult& res, const std::vector<fs::path>& files, cons
                 int dilate) {
   std::vector<std::exception_ptr> errors(files.size());
   std::atomic<bool> failed{false};
-  cv::parallel_for_(cv::Range(0, static_cast<int>(files.size())), [&](const cv::Range& range) {
-    std::vector<uint8_t> mask;
-    Image out(res.width, res.height, 1, 8);
-    for (int i = range.start; i < range.end && !failed; ++i) {
-      try {
-        res.RenderMask(i, dilate, mask);
-        std::copy(mask.begin(), mask.end(), out.data.begin());
-        WriteImage(ws.MaskPath(files[static_cast<size_t>(i)].filename().string()).string(), out);
-      } catch (...) {
-        errors[static_cast<size_t>(i)] = std::current_exception();
-        failed = true;
-      }
-    }
-  });
+  cv::parallel_for_(
+      cv::Range(0, static_cast<int>(files.size())),
+      [&](const cv::Range& range) {
+        std::vector<uint8_t> mask;
+        Image out(res.width, res.height, 1, 8);
+        for (int i = range.start; i < range.end && !failed; ++i) {
+          try {
+            res.RenderMask(i, dilate, mask);
+            std::copy(mask.begin(), mask.end(), out.data.begin());
+            WriteImage(ws.MaskPath(files[static_cast<size_t>(i)].filename().string()).string(),
+                       out);
+          } catch (...) {
+            errors[static_cast<size_t>(i)] = std::current_exception();
+            failed = true;
+          }
+        }
+      },
+      Stripes());
   for (const std::exception_ptr& e : errors)
     if (e) std::rethrow_exception(e);
 }
