@@ -155,7 +155,7 @@ int main(int argc, char** argv) {
   // The whole job, on label PNGs in a temporary folder.
   const fs::path tmp =
       fs::temp_directory_path() / ("mvtm-bench-segtrack-" + std::to_string(getpid()));
-  const fs::path labels = tmp / "labels", cv_masks = tmp / "cv_masks";
+  const fs::path labels = tmp / "labels";
   fs::create_directories(labels);
   std::vector<std::string> names;
   for (size_t i = 0; i < n; ++i) {
@@ -165,27 +165,31 @@ int main(int argc, char** argv) {
     cv::imwrite((labels / name).string(), label_mats[i]);
   }
   cv::setNumThreads(-1);  // the jobs as run: OpenCV's default thread count
-  SegtrackOptions o;
-  o.paths = {labels.string(), (tmp / "ws").string()};
-  o.quiet = true;
+  // Each run writes into a new folder (a fresh workspace for segtrack), made before the clock
+  // starts; the CPU time (all threads) of the least of the runs is kept as well.
+  int run = 0;
+  auto fresh = [&](const char* what) {
+    const fs::path dir = tmp / (what + std::to_string(run++));
+    fs::create_directories(dir);
+    return dir;
+  };
   double cpu_job = 1e300, cpu_cv_job = 1e300;
   const double t_job = BestOf(repeat, [&] {
-    fs::remove_all(tmp / "ws");
-    const double c0 = CpuSeconds();
+    SegtrackOptions o;
+    o.paths = {labels.string(), fresh("ws").string()};
+    o.quiet = true;
+    CpuAtEnd at_end{CpuSeconds(), cpu_job};
     RunSegtrack(o);
-    cpu_job = std::min(cpu_job, CpuSeconds() - c0);
   });
   const double t_cv_job = BestOf(repeat, [&] {
-    fs::remove_all(cv_masks);
-    fs::create_directories(cv_masks);
-    const double c0 = CpuSeconds();
-    CpuAtEnd at_end{c0, cpu_cv_job};
+    const fs::path masks = fresh("cv_masks");
+    CpuAtEnd at_end{CpuSeconds(), cpu_cv_job};
     cv::Mat cc, stats, centroids;
     for (const std::string& name : names) {
       const cv::Mat label = cv::imread((labels / name).string(), cv::IMREAD_UNCHANGED);
       const cv::Mat mask = label == kCar;
       cv::connectedComponentsWithStats(mask, cc, stats, centroids, 8, CV_32S);
-      cv::imwrite((cv_masks / name).string(), mask);
+      cv::imwrite((masks / name).string(), mask);
     }
   });
   fs::remove_all(tmp);
