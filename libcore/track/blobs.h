@@ -23,8 +23,12 @@ struct Blob {
   std::vector<uint8_t> mask;       // w*h bytes, row-major; 1 = pixel of this blob, 0 = not
 };
 
-// Finds the 8-connected components of a vehicle mask (cv::connectedComponentsWithStats),
-// in the order of their first pixel in raster order (top row first, left to right).
+// Finds the 8-connected components of a vehicle mask, in the order of their first pixel in
+// raster order (top row first, left to right): the components, boxes, areas and centroids of
+// cv::connectedComponentsWithStats (8-connectivity), bit for bit. One pass over the mask collects
+// its runs of set pixels; the components are unions of runs (a run touches the runs of the row
+// above that it overlaps or meets diagonally), so a mostly empty mask costs little more than
+// reading it.
 class BlobFinder {
  public:
   BlobFinder();

@@ -16,6 +16,7 @@ LabelDecoder LabelDecoder::ClassIds(const std::vector<int>& classes) {
   for (int c : classes) {
     if (c < 0 || c > 65535)
       throw UsageError("classes: id " + std::to_string(c) + " is outside 0..65535");
+    if (!d.lut_[static_cast<size_t>(c)]) d.ids_.push_back(static_cast<float>(c));
     d.lut_[static_cast<size_t>(c)] = 1;
   }
   return d;
@@ -82,9 +83,21 @@ void LabelDecoder::Decode(const Image& label, const std::string& name,
                     std::to_string(ch) + " (colour labels: use --palette; masks: --binary)");
       if (label.bits == 32)
         throw Error(name + ": class-id labels must be 8- or 16-bit integers, not float");
-      // 8/16-bit samples read as exact integers 0..65535; the table lookup needs no range check.
-      const uint8_t* lut = lut_.data();
-      for (size_t i = 0; i < n; ++i) out[i] = lut[static_cast<uint32_t>(in[i])];
+      // 8/16-bit samples read as exact integers 0..65535: an id compares equal to its class,
+      // and the table lookup needs no range check. A few classes: one comparison per class and
+      // sample, which the compiler vectorises, costs less than the table's scattered loads.
+      uint8_t* o = out.data();
+      if (ids_.size() <= kCompareClasses) {
+        const float first = ids_[0];
+        for (size_t i = 0; i < n; ++i) o[i] = static_cast<uint8_t>(in[i] == first);
+        for (size_t k = 1; k < ids_.size(); ++k) {
+          const float id = ids_[k];
+          for (size_t i = 0; i < n; ++i) o[i] |= static_cast<uint8_t>(in[i] == id);
+        }
+      } else {
+        const uint8_t* lut = lut_.data();
+        for (size_t i = 0; i < n; ++i) o[i] = lut[static_cast<uint32_t>(in[i])];
+      }
       break;
     }
     case Kind::kPalette: {

@@ -42,8 +42,10 @@ class LabelDecoder {
 
  private:
   Kind kind_ = Kind::kClassIds;
-  std::vector<uint8_t> lut_;                 // class ids: 65536 entries, 1 = vehicle class
-  std::vector<std::array<uint8_t, 3>> rgb_;  // palette: the vehicle colours
+  static constexpr size_t kCompareClasses = 3;  // up to this many: compare, else look up
+  std::vector<uint8_t> lut_;                    // class ids: 65536 entries, 1 = vehicle class
+  std::vector<float> ids_;                      // class ids: the vehicle classes, each once
+  std::vector<std::array<uint8_t, 3>> rgb_;     // palette: the vehicle colours
 };
 
 }  // namespace mvtm

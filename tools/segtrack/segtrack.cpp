@@ -1,6 +1,10 @@
 #include "segtrack.h"
 
 #include <algorithm>
+#include <atomic>
+#include <exception>
+#include <opencv2/core.hpp>
+#include <utility>
 
 #include "base/atomic_file.h"
 #include "base/error.h"
@@ -24,25 +28,92 @@ LabelDecoder MakeDecoder(const SegtrackOptions& o) {
 
 std::string SizeText(int w, int h) { return std::to_string(w) + "x" + std::to_string(h); }
 
-// Reads the label images of `files` in order, all of one size, and hands each decoded vehicle
-// mask to `use(index, mask, width, height)`.
-template <class Use>
+// Frames read and decoded in parallel between two in-order hand-overs: enough to keep every
+// core busy, few enough that a bad file is reported soon and the progress bar moves.
+constexpr size_t kBatch = 32;
+
+// Work for cv::parallel_for_ in a few stripes per thread, so that each stripe's buffers serve
+// several frames and a thread slowed by other load does not hold up the rest for long.
+double Stripes() { return 4.0 * cv::getNumThreads(); }
+
+// Reads the label images of `files` and decodes their vehicle masks on all cores (OpenCV's
+// thread pool), a batch at a time; per_frame(vehicle, width, height, finder) runs on the worker
+// threads, and its result goes to use(index, result) on this thread in file order, after the
+// size check. Errors are thrown in file order too, as a one-by-one loop would throw them.
+template <class PerFrame, class Use>
 void ForEachLabel(const std::vector<fs::path>& files, const LabelDecoder& decoder,
-                  Progress* progress, Use&& use) {
+                  Progress* progress, PerFrame&& per_frame, Use&& use) {
+  using Value = decltype(per_frame(std::vector<uint8_t>(), 0, 0, std::declval<BlobFinder&>()));
+  struct Frame {
+    int width = 0, height = 0;
+    Value value{};
+    std::exception_ptr error;
+  };
+  std::vector<Frame> batch;
   int w0 = 0, h0 = 0;
-  std::vector<uint8_t> vehicle;
-  for (size_t i = 0; i < files.size(); ++i) {
-    const Image label = ReadImage(files[i].string());
-    if (i == 0) {
-      w0 = label.width, h0 = label.height;
-    } else if (label.width != w0 || label.height != h0) {
-      throw Error(files[i].string() + ": size " + SizeText(label.width, label.height) +
-                  " differs from " + files[0].string() + " (" + SizeText(w0, h0) + ")");
+  for (size_t b0 = 0; b0 < files.size(); b0 += kBatch) {
+    batch.assign(std::min(kBatch, files.size() - b0), Frame());
+    cv::parallel_for_(
+        cv::Range(0, static_cast<int>(batch.size())),
+        [&](const cv::Range& range) {
+          BlobFinder finder;
+          std::vector<uint8_t> vehicle;
+          for (int k = range.start; k < range.end; ++k) {
+            Frame& f = batch[static_cast<size_t>(k)];
+            try {
+              const std::string name = files[b0 + static_cast<size_t>(k)].string();
+              const Image label = ReadImage(name);
+              f.width = label.width, f.height = label.height;
+              decoder.Decode(label, name, vehicle);
+              f.value = per_frame(vehicle, f.width, f.height, finder);
+            } catch (...) {
+              f.error = std::current_exception();
+            }
+          }
+        },
+        Stripes());
+    for (size_t k = 0; k < batch.size(); ++k) {
+      const size_t i = b0 + k;
+      Frame& f = batch[k];
+      if (f.error) std::rethrow_exception(f.error);
+      if (i == 0) {
+        w0 = f.width, h0 = f.height;
+      } else if (f.width != w0 || f.height != h0) {
+        throw Error(files[i].string() + ": size " + SizeText(f.width, f.height) + " differs from " +
+                    files[0].string() + " (" + SizeText(w0, h0) + ")");
+      }
+      use(i, std::move(f.value), w0, h0);
+      if (progress) progress->Step();
     }
-    decoder.Decode(label, files[i].string(), vehicle);
-    use(i, vehicle, w0, h0);
-    if (progress) progress->Step();
   }
+}
+
+// Renders and writes every frame's mask on all cores. Each write is atomic; the error of the
+// first frame (in file order) that failed is thrown, and no new write starts after a failure.
+void WriteMasks(const TrackResult& res, const std::vector<fs::path>& files, const Workspace& ws,
+                int dilate) {
+  std::vector<std::exception_ptr> errors(files.size());
+  std::atomic<bool> failed{false};
+  cv::parallel_for_(
+      cv::Range(0, static_cast<int>(files.size())),
+      [&](const cv::Range& range) {
+        std::vector<uint8_t> mask;
+        Image out(res.width, res.height, 1, 8);
+        for (int i = range.start; i < range.end && !failed; ++i) {
+          try {
+            res.RenderMask(i, dilate, mask);
+            std::copy(mask.begin(), mask.end(), out.data.begin());
+            WriteImage(ws.MaskPath(files[static_cast<size_t>(i)].filename().string()).string(),
+                       out);
+          } catch (...) {
+            errors[static_cast<size_t>(i)] = std::current_exception();
+            failed = true;
+          }
+        }
+      },
+      Stripes());
+  for (const std::exception_ptr& e : errors)
+    if (e) std::rethrow_exception(e);
 }
 
 }  // namespace
@@ -79,22 +150,19 @@ SegtrackReport RunSegtrack(const SegtrackOptions& o) {
   std::unique_ptr<Tracker> tracker;
   {
     Progress progress("segtrack", files.size(), o.quiet);
-    ForEachLabel(files, decoder, &progress,
-                 [&](size_t, const std::vector<uint8_t>& vehicle, int w, int h) {
-                   if (!tracker) tracker = std::make_unique<Tracker>(w, h, o.track);
-                   tracker->AddFrame(vehicle.data());
-                 });
+    ForEachLabel(
+        files, decoder, &progress,
+        [](const std::vector<uint8_t>& vehicle, int w, int h, BlobFinder& finder) {
+          return finder.Find(vehicle.data(), w, h);
+        },
+        [&](size_t, std::vector<Blob>&& blobs, int w, int h) {
+          if (!tracker) tracker = std::make_unique<Tracker>(w, h, o.track);
+          tracker->AddBlobs(std::move(blobs));
+        });
   }
   const TrackResult res = tracker->Finish();
   RemoveStaleTemporaries(ws.MasksDir());  // a killed run's leftovers
-
-  std::vector<uint8_t> mask;
-  Image out(res.width, res.height, 1, 8);
-  for (size_t i = 0; i < files.size(); ++i) {
-    res.RenderMask(static_cast<int>(i), o.track.dilate, mask);
-    std::copy(mask.begin(), mask.end(), out.data.begin());
-    WriteImage(ws.MaskPath(files[i].filename().string()).string(), out);
-  }
+  WriteMasks(res, files, ws, o.track.dilate);
 
   std::vector<TracksTsvRow> table;
   table.reserve(res.rows.size());
@@ -128,14 +196,18 @@ std::vector<RankRow> RankSequences(const SegtrackOptions& o) {
     RankRow row;
     row.labeldir = dir;
     double pixels = 0;
-    ForEachLabel(files, decoder, nullptr,
-                 [&](size_t, const std::vector<uint8_t>& vehicle, int w, int h) {
-                   size_t n = 0;
-                   for (uint8_t v : vehicle) n += v;
-                   row.area += static_cast<double>(n);
-                   pixels += static_cast<double>(w) * h;
-                   ++row.frames;
-                 });
+    ForEachLabel(
+        files, decoder, nullptr,
+        [](const std::vector<uint8_t>& vehicle, int, int, BlobFinder&) {
+          size_t n = 0;
+          for (uint8_t v : vehicle) n += v;
+          return n;
+        },
+        [&](size_t, size_t n, int w, int h) {
+          row.area += static_cast<double>(n);
+          pixels += static_cast<double>(w) * h;
+          ++row.frames;
+        });
     row.fraction = pixels > 0 ? row.area / pixels : 0;
     rows.push_back(row);
   }

@@ -16,6 +16,17 @@ TEST(LabelDecoder, ClassIds) {
   EXPECT_THROW(LabelDecoder::ClassIds({8}).Decode(rgb, "b.png", out), Error);
 }
 
+// Up to three classes are compared, more are looked up in a table: both give the same masks.
+TEST(LabelDecoder, ClassIdsFewAndMany) {
+  Image im(8, 1, 1, 16);
+  im.data = {0, 8, 9, 10, 65535, 300, 8, 2};
+  std::vector<uint8_t> out;
+  LabelDecoder::ClassIds({8, 8, 65535}).Decode(im, "a.png", out);
+  EXPECT_EQ(out, (std::vector<uint8_t>{0, 1, 0, 0, 1, 0, 1, 0}));
+  LabelDecoder::ClassIds({2, 8, 300, 65535, 4}).Decode(im, "a.png", out);
+  EXPECT_EQ(out, (std::vector<uint8_t>{0, 1, 0, 0, 1, 1, 1, 1}));
+}
+
 TEST(LabelDecoder, Palette) {
   Image pal(3, 1, 3);
   pal.data = {0, 0, 0, 10, 20, 30, 64, 0, 128};
