@@ -83,13 +83,13 @@ void RequireImageSize(const Image& img, const std::string& path, uint64_t w, uin
                     " but its camera is " + std::to_string(w) + "x" + std::to_string(h));
 }
 
-void WriteImage(const std::string& path, const Image& img) {
+void WriteImage(const std::string& path, const Image& img, PngCompression png) {
   if (img.empty()) throw Error(path, 0, "refusing to write an empty image");
   const std::string ext = Extension(path);
   // The pipeline's formats: encoded in memory by their own library, then written with every
   // write() and the close() checked, so a full disk never leaves a truncated file in place.
   if (ext == ".png" && (img.bits == 8 || img.bits == 16) && img.channels <= 4) {
-    const auto bytes = EncodePng(path, img);
+    const auto bytes = EncodePng(path, img, png);
     WriteBytesAtomic(path, bytes.data(), bytes.size());
     return;
   }

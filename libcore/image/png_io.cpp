@@ -159,9 +159,10 @@ void Flush(png_structp) {}
 
 // Plain C calls only (libpng may longjmp out of it).
 void WritePngRows(png_structp png, png_infop info, png_uint_32 w, png_uint_32 h, int bits,
-                  int colour, png_bytepp rows) {
-  png_set_compression_level(png, 6);
-  png_set_compression_strategy(png, Z_DEFAULT_STRATEGY);
+                  int colour, bool fast, png_bytepp rows) {
+  png_set_compression_level(png, fast ? 1 : 6);
+  png_set_compression_strategy(png, fast ? Z_RLE : Z_DEFAULT_STRATEGY);
+  if (fast) png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_NONE);
   png_set_IHDR(png, info, w, h, bits, colour, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
                PNG_FILTER_TYPE_DEFAULT);
   png_set_oFFs(png, info, 0, 0, PNG_OFFSET_PIXEL);
@@ -174,7 +175,8 @@ void WritePngRows(png_structp png, png_infop info, png_uint_32 w, png_uint_32 h,
 }
 }  // namespace
 
-std::vector<unsigned char> EncodePng(const std::string& path, const Image& img) {
+std::vector<unsigned char> EncodePng(const std::string& path, const Image& img,
+                                     PngCompression compression) {
   if (img.bits != 8 && img.bits != 16)
     throw Error(path, 0, "PNG holds 8 or 16 bits per sample, not " + std::to_string(img.bits));
   if (img.channels < 1 || img.channels > 4)
@@ -208,7 +210,7 @@ std::vector<unsigned char> EncodePng(const std::string& path, const Image& img) 
   if (setjmp(png_jmpbuf(ws.png)) == 0) {
     png_set_write_fn(ws.png, &out, AppendBytes, Flush);
     WritePngRows(ws.png, ws.info, png_uint_32(img.width), png_uint_32(img.height), img.bits,
-                 kColour[img.channels - 1], rows.data());
+                 kColour[img.channels - 1], compression == PngCompression::kFast, rows.data());
     ok = true;
   }
   if (!ok)

@@ -27,7 +27,9 @@ Image ReadPng(const std::string& path, bool header_only = false);
 // (checked by png_io_test): zlib level 6 with the default strategy, libpng's adaptive filters,
 // an oFFs chunk (0, 0) and a tIME chunk fixed at 1970-01-01 00:00:00 (no clock in the output).
 // Samples are rounded to nearest and clamped; colour is written as stored (unassociated alpha,
-// so a PNG read and written again keeps its pixels). Throws Error(path, 0, ...).
-std::vector<unsigned char> EncodePng(const std::string& path, const Image& img);
+// so a PNG read and written again keeps its pixels). PngCompression::kFast trades those bytes
+// for speed (image.h). Throws Error(path, 0, ...).
+std::vector<unsigned char> EncodePng(const std::string& path, const Image& img,
+                                     PngCompression compression = PngCompression::kDefault);
 
 }  // namespace mvtm

@@ -103,8 +103,10 @@ void WriteMasks(const TrackResult& res, const std::vector<fs::path>& files, cons
           try {
             res.RenderMask(i, dilate, mask);
             std::copy(mask.begin(), mask.end(), out.data.begin());
-            WriteImage(ws.MaskPath(files[static_cast<size_t>(i)].filename().string()).string(),
-                       out);
+            // Masks are long runs of 0 and 255: the fast PNG settings encode them 4-5x faster
+            // at about the same size (same pixels).
+            WriteImage(ws.MaskPath(files[static_cast<size_t>(i)].filename().string()).string(), out,
+                       PngCompression::kFast);
           } catch (...) {
             errors[static_cast<size_t>(i)] = std::current_exception();
             failed = true;

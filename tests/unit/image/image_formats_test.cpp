@@ -143,6 +143,25 @@ TEST(ImageFormats, PngBytesAreOpenImageIOs) {
       }
 }
 
+// The fast settings (masks): other bytes, the same pixels for both readers, and for a mask about
+// the size of the default settings.
+TEST(ImageFormats, FastPngKeepsThePixels) {
+  for (int bits : {8, 16})
+    for (int c = 1; c <= 4; ++c) {
+      const Image img = Pattern(203, 61, c, bits, unsigned(c * bits));
+      const std::string what = std::to_string(c) + "x" + std::to_string(bits) + " fast PNG";
+      WriteImage((Dir() / "fast.png").string(), img, PngCompression::kFast);
+      ExpectSamePixels(ReadImage((Dir() / "fast.png").string()), img, what);
+      ExpectSamePixels(OiioRead(Dir() / "fast.png"), img, what);
+    }
+  Image mask(1241, 376, 1, 8);
+  for (int y = 100; y < 220; ++y)
+    for (int x = 300; x < 520; ++x) mask.at(x, y) = 255;
+  const auto fast = EncodePng("m.png", mask, PngCompression::kFast);
+  const auto dflt = EncodePng("m.png", mask);
+  EXPECT_LT(fast.size(), 3 * dflt.size());
+}
+
 TEST(ImageFormats, ExrBytesAreOpenImageIOs) {
   for (int c = 1; c <= 4; ++c)
     for (auto [w, h] : {std::pair{5, 2}, std::pair{80, 24}, std::pair{1241, 376}}) {
