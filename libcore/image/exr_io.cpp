@@ -6,6 +6,7 @@
 #include <ImfIO.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
+#include <ImfStdIO.h>
 #include <ImfStringAttribute.h>
 #include <ImfVersion.h>
 
@@ -13,7 +14,9 @@
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <filesystem>
 #include <fstream>
+#include <mutex>
 
 #include "base/error.h"
 #include "image/codec.h"
@@ -29,6 +32,47 @@ bool ReadMagic(const std::string& path, unsigned char head[8]) {
   const bool ok = std::fread(head, 1, 8, f) == 8;
   std::fclose(f);
   return ok && Imf::isImfMagic(reinterpret_cast<const char*>(head));
+}
+
+// OpenEXR allocates what a header attribute claims before reading it (fuzzing found a 400-byte
+// file claiming 430 MB), so the attribute sizes of every header are checked against the file
+// first. Throws Error for a size beyond the end of the file.
+void CheckAttributeSizes(const std::string& path, bool multipart) {
+  std::ifstream in(path, std::ios::binary);
+  std::error_code ec;
+  const uint64_t size = std::filesystem::file_size(path, ec);
+  if (!in || ec) throw Error(path, 0, "cannot open");
+  in.seekg(8);
+  auto read_name = [&](std::string* out) {  // up to 255 characters and a NUL
+    out->clear();
+    for (char c; in.get(c);) {
+      if (c == 0) return true;
+      if (out->size() >= 255) return false;
+      out->push_back(c);
+    }
+    return false;
+  };
+  const auto fail = [&](const std::string& what) {
+    throw Error(path, 0, "cannot read image: corrupt or truncated file: " + what);
+  };
+  for (int header = 0;; ++header) {
+    std::string name, type;
+    int attributes = 0;
+    for (;; ++attributes) {
+      if (!read_name(&name)) fail("header cut short");
+      if (name.empty()) break;
+      unsigned char b[4];
+      if (!read_name(&type) || !in.read(reinterpret_cast<char*>(b), 4)) fail("header cut short");
+      const int64_t n = int32_t(uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 |
+                                uint32_t(b[3]) << 24);
+      const uint64_t at = uint64_t(in.tellg());
+      if (n < 0 || at + uint64_t(n) > size)
+        fail("attribute '" + name + "' claims " + std::to_string(n) + " bytes at offset " +
+             std::to_string(at) + " of a " + std::to_string(size) + "-byte file");
+      in.seekg(std::streamoff(n), std::ios::cur);
+    }
+    if (!multipart || attributes == 0) return;  // a multi-part file ends with an empty header
+  }
 }
 
 // The channel names in the order mvtm returns them, or empty when OpenImageIO should read it.
@@ -81,19 +125,45 @@ bool ReadExr(const std::string& path, bool header_only, Image* img) {
   unsigned char head[8];
   if (!ReadMagic(path, head)) return false;
   const int version = head[4] | (head[5] << 8) | (head[6] << 16) | (head[7] << 24);
+  CheckAttributeSizes(path, Imf::isMultiPart(version));
   if (Imf::isMultiPart(version) || Imf::isNonImage(version)) return false;
+  static std::once_flag limits;
+  std::call_once(limits, [] {  // sanityCheck() refuses larger windows and tiles
+    Imf::Header::setMaxImageSize(kMaxReadImageSide, kMaxReadImageSide);
+    Imf::Header::setMaxTileSize(kMaxReadImageSide, kMaxReadImageSide);
+  });
   try {
-    Imf::InputFile file(path.c_str());
-    const Imf::Header& h = file.header();
+    // The header alone first: sizes and channels are checked before OpenEXR sizes its buffers.
+    Imf::Header h;
+    {
+      Imf::StdIFStream is(path.c_str());
+      is.seekg(8);
+      int v = version;
+      h.readFrom(is, v);
+      h.sanityCheck(Imf::isTiled(version));
+    }
+    const Imath::Box2i dw = h.dataWindow();
+    const int64_t w = int64_t(dw.max.x) - dw.min.x + 1, hgt = int64_t(dw.max.y) - dw.min.y + 1;
+    int64_t listed = 0;
+    for (auto it = h.channels().begin(); it != h.channels().end(); ++it) ++listed;
+    CheckImageDims(path, w, hgt, listed);
+    // Deflate expands at most 1032:1 and run-length coding before it at most 128:1 more; a
+    // file smaller than that share of its pixels was cut short (or lies): refused before the
+    // allocation.
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(path, ec);
+    if (!ec && double(w) * double(hgt) * double(listed) * 4 > 4096.0 * double(size) + (1 << 20))
+      throw Error(path, 0,
+                  "cannot read image: the file (" + std::to_string(size) +
+                      " bytes) is too small for its " + std::to_string(w) + "x" +
+                      std::to_string(hgt) + " header (truncated?)");
     Imf::PixelType type = Imf::FLOAT;
     const std::vector<std::string> names = ChannelOrder(h.channels(), &type);
     if (names.empty()) return false;
-    const Imath::Box2i dw = h.dataWindow();
-    const int64_t w = int64_t(dw.max.x) - dw.min.x + 1, hgt = int64_t(dw.max.y) - dw.min.y + 1;
-    CheckImageDims(path, w, hgt, int64_t(names.size()));
     Image out;
     out.width = int(w), out.height = int(hgt), out.channels = int(names.size()), out.bits = 32;
     if (!header_only) {
+      Imf::InputFile file(path.c_str());
       out.data.assign(out.pixels() * size_t(out.channels), 0.f);
       const size_t xs = sizeof(float) * size_t(out.channels), ys = xs * size_t(w);
       Imf::FrameBuffer fb;
