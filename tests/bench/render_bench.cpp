@@ -1,11 +1,18 @@
-// ptmrender's renderer at 1241×376 on this machine's GL (llvmpipe here): frames/s per
-// configuration and where the time goes (cull, draw, readback, PNG encode), for the mkroad road
-// mesh at the --full density (~255k triangles) and at ~1M triangles.
+// ptmrender's renderer at 1241×376 on this machine's GL (llvmpipe here).
+//
+// First ptmrender itself, end to end, on the mkroad --full road (255k triangles, 48 images, depth
+// baked by bakedepth): its frame rate with 4 projectors against bakedepth's depth pass in the same
+// run, and where its time goes per frame (load, depth, render, readback, write). The workspace is
+// generated once into the temporary folder (or --workspace DIR) and kept for later runs.
+//
+// Then the renderer alone: frames/s per configuration and where the time goes (cull, draw,
+// readback, PNG encode), for the road mesh at the --full density (~255k triangles) and at ~1M.
 //
 // Every figure is also given as a ratio to a baseline measured in the same run: a plain depth
 // render of the same frames (one rasterisation of the mesh, no texturing), so the table holds on
-// a noisy shared machine. Projector images are synthetic (speed does not depend on content).
-// usage: bench_render [--frames N] [--short]
+// a noisy shared machine. Projector images of the second part are synthetic (speed does not
+// depend on content). Run with MESA_SHADER_CACHE_DISABLE=true for repeatable timings.
+// usage: bench_render [--frames N] [--short] [--workspace DIR]
 #include <unistd.h>
 
 #include <chrono>
@@ -13,11 +20,14 @@
 #include <cstdio>
 #include <filesystem>
 #include <functional>
+#include <sstream>
 #include <string>
 
+#include "bakedepth.h"
 #include "image/image.h"
 #include "mkroad/mkroad.h"
 #include "mkroad/road_scene.h"
+#include "ptmrender.h"
 #include "render/context.h"
 #include "render/renderer.h"
 
@@ -29,14 +39,63 @@ static double Ms(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
 
+// ptmrender --at-images --exclude-self (4 projectors, baked depth) on an mkroad --full workspace
+// against bakedepth's depth pass over the same workspace, in the same run.
+static void PipelineBench(bool quick, fs::path ws) {
+  if (ws.empty())
+    ws = fs::temp_directory_path() / (quick ? "mvtm-bench-road-short" : "mvtm-bench-road-full");
+  if (!fs::exists(ws / "mesh.ply")) {
+    fixture::MkroadOptions mo;
+    mo.out_dir = ws.string();
+    mo.full = !quick;
+    mo.frames = quick ? 4 : 24;  // per pass: 48 images
+    mo.ApplyFull(true, false, false, false);
+    mo.supersample = 1;  // content does not change the speed
+    mo.offpath_every = mo.fullsize_frames = 0;
+    mo.quiet = true;
+    std::fprintf(stderr, "bench_render: generating the workspace %s\n", ws.c_str());
+    fixture::RunMkroad(mo);
+  }
+  BakeDepthOptions bo;
+  bo.workspace = ws.string();
+  bo.force = bo.quiet = true;
+  const BakeDepthReport br = RunBakeDepth(bo);
+  const double depth_ms = br.render_ms / double(br.written);
+
+  PtmRenderOptions po;
+  po.workspace = ws.string();
+  po.outdir = (ws / "bench-frames").string();
+  po.at_images = po.exclude_self = po.force = po.quiet = true;
+  std::ostringstream sink;
+  const PtmRenderReport r = RunPtmRender(po, sink);
+  fs::remove_all(po.outdir);
+  const double n = double(r.rendered), frame_ms = r.frames_ms / n;
+  std::printf(
+      "ptmrender --at-images --exclude-self, %d projectors, baked depth: %zu frames on %s\n",
+      po.projectors, r.rendered, ws.c_str());
+  std::printf("  depth only (bakedepth's pass)   %8.2f ms  %6.1f fps  (baseline)\n", depth_ms,
+              1000 / depth_ms);
+  std::printf("  ptmrender, whole frame          %8.2f ms  %6.1f fps  %5.2fx the depth-only rate\n",
+              frame_ms, 1000 / frame_ms, depth_ms / frame_ms);
+  const double other = r.frames_ms - r.load_ms - r.survey_ms - r.render_ms - r.write_ms;
+  std::printf(
+      "  ptmrender per frame: load %.2f (depth maps %.2f), depth pass %.2f, render %.2f, "
+      "readback %.2f, write wait %.2f, other %.2f ms\n",
+      r.load_ms / n, (r.depth_ms - r.survey_ms) / n, r.survey_ms / n,
+      (r.render_ms - r.readback_ms) / n, r.readback_ms / n, r.write_ms / n, other / n);
+}
+
 int main(int argc, char** argv) {
   int frames = 20;
   bool quick = false;
+  fs::path ws;
   for (int i = 1; i < argc; ++i) {
     std::string a = argv[i];
     if (a == "--frames" && i + 1 < argc) frames = std::stoi(argv[++i]);
     if (a == "--short") quick = true, frames = 2;
+    if (a == "--workspace" && i + 1 < argc) ws = argv[++i];
   }
+  PipelineBench(quick, ws);
   const int W = quick ? 320 : fixture::kKittiWidth, H = quick ? 96 : fixture::kKittiHeight;
   Camera cam = ParseCameraSpec("PINHOLE 1241 376 718.856 718.856 607.1928 185.2157").Scaled(W, H);
   auto ctx = GlContext::Create();

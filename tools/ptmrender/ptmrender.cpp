@@ -286,20 +286,27 @@ void RenderFrames(const FrameJob& job, Renderer& renderer, const std::vector<siz
     sources.Trim();  // between frames only: a frame's projectors hold references into it
     std::vector<Projector> ps = FrameProjectors(job, i, sources, rep);
     auto t1 = Clock::now();
-    Renderer::Frame f = renderer.Render(View{job.cam, job.poses[i].w2c}, ps, job.plan);
+    RenderStats stats;
+    Renderer::Frame f = renderer.Render(View{job.cam, job.poses[i].w2c}, ps, job.plan, &stats);
+    auto t2 = Clock::now();
     rep.load_ms += Ms(t0, t1);
-    rep.render_ms += Ms(t1, Clock::now());
-    writer.Push((outdir / job.poses[i].name).string(),
-                OutputImage(std::move(f.colour), grey, job.o.exr));
+    rep.render_ms += Ms(t1, t2);
+    rep.readback_ms += stats.readback_ms;
+    Image colour = OutputImage(std::move(f.colour), grey, job.o.exr);
+    auto t3 = Clock::now();
+    writer.Push((outdir / job.poses[i].name).string(), std::move(colour));
     if (job.o.provenance) {
       fs::path pp = outdir / "provenance" / job.poses[i].name;
       pp.replace_extension(".png");
       writer.Push(pp.string(), std::move(f.source));
     }
+    rep.write_ms += Ms(t3, Clock::now());
     ++rep.rendered;
     bar.Step();
   }
+  auto t_finish = Clock::now();
   writer.Finish();
+  rep.write_ms += Ms(t_finish, Clock::now());
 }
 
 nlohmann::json PlanJson(const Camera& cam, size_t frames, const std::string& gl,
@@ -369,7 +376,8 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
   Renderer renderer(mesh);
   auto t_plan = Clock::now();
   SurveyFrames(survey, renderer, cam, scene, poses, picks, o.explain ? chosen : todo);
-  rep.depth_ms += Ms(t_plan, Clock::now());
+  rep.survey_ms = Ms(t_plan, Clock::now());
+  rep.depth_ms += rep.survey_ms;
   const EffectsPlan plan = PlanEffects(survey);
   const nlohmann::json plan_json = PlanJson(cam, chosen.size(), rep.gl, survey, plan);
   if (o.explain) {
@@ -377,6 +385,7 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
     return rep;
   }
   RenderFrames(FrameJob{o, ws, scene, cam, poses, picks, plan}, renderer, todo, rep);
+  rep.frames_ms = Ms(t_plan, Clock::now());
   WriteRunProvenance(o, ws, plan_json, rep.gl, inputs);
   return rep;
 }
