@@ -1,9 +1,9 @@
-// Shared by ptm.frag and sky.frag: projectors and their images as texture arrays.
+// Included by ptm.frag: projectors and their images as texture arrays.
 // Compile-time switches (the effects plan, see ptmrender --explain):
 //   MVTM_MAX_PROJECTORS  N    projectors tried in rank order (1 = a single projector)
 //   MVTM_OCCLUSION            compare with the projector's depth map (Alg. 2)
 //   MVTM_MASKS                skip masked projector texels (the next projector is tried)
-//   MVTM_SKYBOX               (sky.frag) sky only where the projector's depth map is +inf
+//   MVTM_SKYBOX               background from projectors, where their depth map is +inf
 //   MVTM_EXPOSURE             bring each projector's samples to the workspace's common exposure
 uniform int u_num_projectors;
 uniform mat3 u_proj_R[MVTM_MAX_PROJECTORS];   // world → projector camera rotation
@@ -72,4 +72,20 @@ vec3 Sample(int k, vec2 uv) {
   c = (c - u_proj_exposure[k].y) / u_proj_exposure[k].x;  // the radiance L, common frame
 #endif
   return c;
+}
+
+// The first projector, in rank order, that sees camera-relative point `rel` (or direction,
+// w = 0, at_infinity), is not masked there and is not occluded (at infinity: sees sky there):
+// true with its rank k and colour c; false when none does.
+bool FirstProjector(vec3 rel, float w, bool at_infinity, out int k, out vec3 c) {
+  for (k = 0; k < MVTM_MAX_PROJECTORS; ++k) {
+    if (k >= u_num_projectors) break;
+    vec2 uv;
+    float z;
+    if (!ProjectInto(k, rel, w, uv, z)) continue;
+    if (!Usable(k, uv, z, at_infinity)) continue;
+    c = Sample(k, uv);
+    return true;
+  }
+  return false;
 }

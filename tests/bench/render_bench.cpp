@@ -124,8 +124,8 @@ int main(int argc, char** argv) {
     std::printf(
         "\nmesh: %zu triangles in %zu chunks (cell %.2f m); baking one depth map: %.1f ms\n",
         r.triangles(), r.chunks(), cell, bake_ms);
-    std::printf("%-30s %8s %8s %8s %8s %8s %8s %9s\n", "configuration", "cull", "draw", "readback",
-                "depth", "total", "fps", "x depth");
+    std::printf("%-30s %8s %8s %8s %8s %8s %8s %8s %9s\n", "configuration", "cull", "draw", "shade",
+                "readback", "depth", "total", "fps", "x depth");
     double base_ms = 0;
     struct Cfg {
       const char* name;
@@ -184,9 +184,9 @@ int main(int argc, char** argv) {
       }
       double total = Ms(t0, Clock::now()) / frames;
       if (c == 0) base_ms = total;
-      std::printf("%-30s %8.2f %8.2f %8.2f %8.2f %8.2f %8.1f %8.2fx\n", cfg.name,
-                  st.cull_ms / frames, st.draw_ms / frames, st.readback_ms / frames,
-                  depth_ms / frames, total, 1000 / total, total / base_ms);
+      std::printf("%-30s %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %8.1f %8.2fx\n", cfg.name,
+                  st.cull_ms / frames, st.draw_ms / frames, st.shade_ms / frames,
+                  st.readback_ms / frames, depth_ms / frames, total, 1000 / total, total / base_ms);
     }
     std::printf(
         "PNG encoding of one %dx%d frame: %.1f ms (overlapped with rendering by ptmrender's writer "
