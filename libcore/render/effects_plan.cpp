@@ -20,12 +20,23 @@ std::vector<std::string> EffectsPlan::Defines() const {
 }
 
 ViewCoverage SurveyView(Renderer& renderer, const View& v, const View* first) {
-  const Image d = renderer.RenderDepth(v);
+  return CoverageOf(renderer.RenderDepth(v), v, first);
+}
+
+ViewCoverage CoverageOf(const Image& d, const View& v, const View* first) {
   const Camera& cam = v.camera;
-  const Eigen::Matrix3d Rt = v.world_to_camera.R().transpose();
-  const Eigen::Vector3d C = v.world_to_camera.Centre();
+  // The point at pixel (x, y) and depth z, in the first projector's camera: z·(M·ray) + b, with
+  // ray = ((x + ½ − cx)/fx, (y + ½ − cy)/fy, 1) the pinhole ray of the render camera.
+  Eigen::Matrix3d M = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  if (first) {
+    M = first->world_to_camera.R() * v.world_to_camera.R().transpose();
+    b = first->world_to_camera * v.world_to_camera.Centre();
+  }
   ViewCoverage c;
-  for (int y = 0; y < d.height; ++y)
+  for (int y = 0; y < d.height; ++y) {
+    const Eigen::Vector3d row = M * Eigen::Vector3d(0, (y + 0.5 - cam.cy()) / cam.fy(), 1);
+    const Eigen::Vector3d dx = M.col(0) / cam.fx();
     for (int x = 0; x < d.width; ++x) {
       const float z = d.at(x, y);
       if (!std::isfinite(z)) {
@@ -34,14 +45,13 @@ ViewCoverage SurveyView(Renderer& renderer, const View& v, const View* first) {
       }
       ++c.surface;
       if (!first) continue;
-      const Eigen::Vector3d X = Rt * cam.Unproject({x + 0.5, y + 0.5}, z) + C;
-      const Eigen::Vector3d xp = first->world_to_camera * X;
+      const Eigen::Vector3d xp = double(z) * (row + (x + 0.5 - cam.cx()) * dx) + b;
       if (xp.z() <= 0) continue;
-      const Eigen::Vector2d uv = first->camera.Project(xp);
       const Camera& pc = first->camera;
-      c.covered +=
-          uv.x() >= 0 && uv.y() >= 0 && uv.x() < double(pc.width) && uv.y() < double(pc.height);
+      const double u = pc.fx() * xp.x() / xp.z() + pc.cx(), w = pc.fy() * xp.y() / xp.z() + pc.cy();
+      c.covered += u >= 0 && w >= 0 && u < double(pc.width) && w < double(pc.height);
     }
+  }
   return c;
 }
 
