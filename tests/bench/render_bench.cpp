@@ -79,10 +79,12 @@ static void PipelineBench(bool quick, fs::path ws) {
               frame_ms, 1000 / frame_ms, depth_ms / frame_ms);
   const double other = r.frames_ms - r.load_ms - r.survey_ms - r.render_ms - r.write_ms;
   std::printf(
-      "  ptmrender per frame: load %.2f (depth maps %.2f), depth pass %.2f, render %.2f, "
-      "readback %.2f, write wait %.2f, other %.2f ms\n",
-      r.load_ms / n, (r.depth_ms - r.survey_ms) / n, r.survey_ms / n,
-      (r.render_ms - r.readback_ms) / n, r.readback_ms / n, r.write_ms / n, other / n);
+      "  ptmrender per frame: load %.2f (depth maps %.2f), survey %.2f, render %.2f = "
+      "mesh pass %.2f + texturing %.2f + readback %.2f + uploads etc. %.2f, write wait "
+      "%.2f, other %.2f ms\n",
+      r.load_ms / n, (r.depth_ms - r.survey_ms) / n, r.survey_ms / n, r.render_ms / n,
+      r.draw_ms / n, r.shade_ms / n, r.readback_ms / n,
+      (r.render_ms - r.draw_ms - r.shade_ms - r.readback_ms) / n, r.write_ms / n, other / n);
 }
 
 int main(int argc, char** argv) {

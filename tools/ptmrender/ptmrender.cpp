@@ -284,7 +284,8 @@ void RenderFrames(const FrameJob& job, Renderer& renderer, const std::vector<siz
   const bool grey = GreySources(job.ws, job.scene, job.picks.used);
   AsyncImageWriter writer;
   Progress bar("ptmrender", todo.size(), job.o.quiet);
-  for (size_t i : todo) {
+  for (size_t n = 0; n < todo.size(); ++n) {
+    const size_t i = todo[n];
     const View view{job.cam, job.poses[i].w2c};
     Renderer::Frame f;
     bool surveyed = false;
@@ -292,12 +293,19 @@ void RenderFrames(const FrameJob& job, Renderer& renderer, const std::vector<siz
       auto t0 = Clock::now();
       sources.Trim();  // between frames only: a frame's projectors hold references into it
       std::vector<Projector> ps = FrameProjectors(job, plan, i, sources, rep);
+      if (n + 1 < todo.size()) {  // the next frame's files are read while this one renders
+        std::vector<size_t> next;
+        for (const auto& c : job.picks.per_pose[todo[n + 1]]) next.push_back(c.index);
+        sources.Prefetch(next, plan.occlusion || plan.skybox, plan.masks);
+      }
       auto t1 = Clock::now();
       RenderStats stats;
       f = renderer.Render(view, ps, plan, &stats, /*with_depth=*/survey.ptm);
       auto t2 = Clock::now();
       rep.load_ms += Ms(t0, t1);
       rep.render_ms += Ms(t1, t2);
+      rep.draw_ms += stats.draw_ms;
+      rep.shade_ms += stats.shade_ms;
       rep.readback_ms += stats.readback_ms;
       again = false;
       if (survey.ptm && !surveyed) {

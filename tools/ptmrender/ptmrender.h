@@ -41,6 +41,8 @@ struct PtmRenderOptions : WorkOptions {
 struct PtmRenderReport {
   size_t frames = 0, rendered = 0, skipped = 0;
   double render_ms = 0;    // Renderer::Render: uploads, draw, readback
+  double draw_ms = 0;      // ... of which the mesh pass (RenderStats::draw_ms)
+  double shade_ms = 0;     // ... of which the texturing pass (RenderStats::shade_ms)
   double readback_ms = 0;  // ... of which reading the frame back from GL
   double depth_ms = 0;     // survey_ms + gathering depth maps (also in load_ms)
   double survey_ms = 0;    // the plan's depth passes (holes, coverage)
