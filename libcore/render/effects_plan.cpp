@@ -25,31 +25,35 @@ ViewCoverage SurveyView(Renderer& renderer, const View& v, const View* first) {
 
 ViewCoverage CoverageOf(const Image& d, const View& v, const View* first) {
   const Camera& cam = v.camera;
-  // The point at pixel (x, y) and depth z, in the first projector's camera: z·(M·ray) + b, with
-  // ray = ((x + ½ − cx)/fx, (y + ½ − cy)/fy, 1) the pinhole ray of the render camera.
-  Eigen::Matrix3d M = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d b = Eigen::Vector3d::Zero();
-  if (first) {
-    M = first->world_to_camera.R() * v.world_to_camera.R().transpose();
-    b = first->world_to_camera * v.world_to_camera.Centre();
-  }
   ViewCoverage c;
+  const float* z = d.data.data();
+  if (!first) {
+    for (size_t p = 0; p < d.pixels(); ++p) c.holes += !std::isfinite(z[p]);
+    c.surface = d.pixels() - c.holes;
+    return c;
+  }
+  // The point at pixel (x, y) and depth z in the first projector's camera, x_p = z·(M·ray) + b
+  // with ray = ((x + ½ − cx)/fx, (y + ½ − cy)/fy, 1) the render camera's pinhole ray, is inside
+  // its image when 0 ≤ fx·x_p/z_p + cx < W (likewise y), tested without dividing by z_p > 0.
+  const Camera& pc = first->camera;
+  const Eigen::Matrix3d M = first->world_to_camera.R() * v.world_to_camera.R().transpose();
+  const Eigen::Vector3d b = first->world_to_camera * v.world_to_camera.Centre();
+  const Eigen::Vector3d dx = M.col(0) / cam.fx();
+  const double W = double(pc.width), H = double(pc.height);
+  const double fx = pc.fx(), fy = pc.fy(), cx = pc.cx(), cy = pc.cy();
   for (int y = 0; y < d.height; ++y) {
-    const Eigen::Vector3d row = M * Eigen::Vector3d(0, (y + 0.5 - cam.cy()) / cam.fy(), 1);
-    const Eigen::Vector3d dx = M.col(0) / cam.fx();
-    for (int x = 0; x < d.width; ++x) {
-      const float z = d.at(x, y);
-      if (!std::isfinite(z)) {
+    const Eigen::Vector3d row =
+        M * Eigen::Vector3d((0.5 - cam.cx()) / cam.fx(), (y + 0.5 - cam.cy()) / cam.fy(), 1);
+    for (int x = 0; x < d.width; ++x, ++z) {
+      if (!std::isfinite(*z)) {
         ++c.holes;
         continue;
       }
       ++c.surface;
-      if (!first) continue;
-      const Eigen::Vector3d xp = double(z) * (row + (x + 0.5 - cam.cx()) * dx) + b;
-      if (xp.z() <= 0) continue;
-      const Camera& pc = first->camera;
-      const double u = pc.fx() * xp.x() / xp.z() + pc.cx(), w = pc.fy() * xp.y() / xp.z() + pc.cy();
-      c.covered += u >= 0 && w >= 0 && u < double(pc.width) && w < double(pc.height);
+      const Eigen::Vector3d xp = double(*z) * (row + double(x) * dx) + b;
+      if (!(xp.z() > 0)) continue;
+      const double u = fx * xp.x() + cx * xp.z(), w = fy * xp.y() + cy * xp.z();
+      c.covered += u >= 0 && w >= 0 && u < W * xp.z() && w < H * xp.z();
     }
   }
   return c;
