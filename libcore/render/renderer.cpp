@@ -258,25 +258,26 @@ struct Renderer::Impl {
       glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
       glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
     };
-    alloc(images, GL_TEXTURE0, GL_RGB8, GL_RGB, GL_UNSIGNED_BYTE, GL_LINEAR);
+    alloc(images, GL_TEXTURE0, GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, GL_LINEAR);
     alloc(depths, GL_TEXTURE1, GL_R32F, GL_RED, GL_FLOAT, GL_NEAREST);
     alloc(masks, GL_TEXTURE2, GL_R8, GL_RED, GL_UNSIGNED_BYTE, GL_NEAREST);
     layer_w = w, layer_h = h, layer_count = count;
     layers.assign(static_cast<size_t>(count), Layer());
   }
 
+  // RGBA8 (alpha unused), the layout a software GL stores texels in: the upload is a copy.
   void UploadColour(int layer, const Image& im) {
-    std::vector<uint8_t> buf(static_cast<size_t>(layer_w) * layer_h * 3);
+    std::vector<uint8_t> buf(static_cast<size_t>(layer_w) * layer_h * 4, 255);
+    const bool wide = im.bits == 16;
+    auto to8 = [wide](float v) {  // rounded half away from zero (lround) for v ≥ 0
+      return static_cast<uint8_t>(std::clamp(wide ? v / 257.f : v, 0.f, 255.f) + 0.5f);
+    };
     for (size_t p = 0; p < im.pixels(); ++p)
-      for (int c = 0; c < 3; ++c) {
-        int sc = im.channels >= 3 ? c : 0;
-        float val = im.data[p * im.channels + sc];
-        if (im.bits == 16) val /= 257.f;
-        buf[p * 3 + c] = static_cast<uint8_t>(std::clamp(std::lround(val), 0L, 255L));
-      }
+      for (int c = 0; c < 3; ++c)
+        buf[p * 4 + c] = to8(im.data[p * im.channels + (im.channels >= 3 ? c : 0)]);
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D_ARRAY, images);
-    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, layer_w, layer_h, 1, GL_RGB,
+    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, layer_w, layer_h, 1, GL_RGBA,
                     GL_UNSIGNED_BYTE, buf.data());
   }
 
