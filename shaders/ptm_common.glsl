@@ -1,3 +1,4 @@
+#extension GL_ARB_texture_gather : enable
 // Included by ptm.frag: projectors and their images as texture arrays.
 // Compile-time switches (the effects plan, see ptmrender --explain):
 //   MVTM_MAX_PROJECTORS  N    projectors tried in rank order (1 = a single projector)
@@ -54,6 +55,10 @@ bool Usable(int k, vec2 uv, float z, bool at_infinity) {
   // Occluded only when all four depth texels around uv (the bilinear footprint) are nearer:
   // a surface seen at a grazing angle changes depth by metres per texel, and a single nearest
   // texel would reject visible points on it.
+#ifdef GL_ARB_texture_gather
+  vec4 q = textureGather(u_depths, vec3(uv / u_proj_size, float(u_proj_layer[k])));
+  float d = max(max(q.x, q.y), max(q.z, q.w));
+#else
   ivec2 base = ivec2(floor(uv - 0.5));
   float d = 0.0;
   for (int j = 0; j < 2; ++j)
@@ -61,6 +66,7 @@ bool Usable(int k, vec2 uv, float z, bool at_infinity) {
       ivec2 t = clamp(base + ivec2(i, j), ivec2(0), ivec2(u_proj_size) - 1);
       d = max(d, texelFetch(u_depths, ivec3(t, u_proj_layer[k]), 0).r);
     }
+#endif
   if (!isinf(d) && z > d * (1.0 + u_bias)) return false;  // something nearer hides this point
 #endif
   return true;
