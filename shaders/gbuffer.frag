@@ -3,10 +3,10 @@
 in vec3 v_rel;
 in vec3 v_colour;
 in float v_depth;
-layout(location = 0) out vec4 o_surface;  // linear depth, then position − render camera centre
-layout(location = 1) out vec4 o_colour;   // vertex colour
+layout(location = 0) out float o_depth;  // linear depth (ptm.frag finds the point from it)
+layout(location = 1) out vec4 o_colour;  // vertex colour
 
 void main() {
-  o_surface = vec4(v_depth, v_rel);
+  o_depth = v_depth;
   o_colour = vec4(v_colour, 1.0);
 }

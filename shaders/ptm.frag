@@ -11,7 +11,7 @@ in vec2 v_ndc;
 layout(location = 0) out vec4 o_colour;
 layout(location = 1) out uint o_source;  // projector rank, 254 = vertex colour, 255 = background
 
-uniform sampler2D u_surface;        // linear depth (+inf = no surface), position − camera centre
+uniform sampler2D u_depth;          // linear depth of the surface, +inf = none
 uniform sampler2D u_vertex_colour;  // RGBA8
 uniform vec3 u_background;          // 0..1
 uniform mat3 u_Rt;                  // render camera → world rotation
@@ -20,14 +20,16 @@ uniform vec2 u_size;                // render size
 
 void main() {
   ivec2 p = ivec2(gl_FragCoord.xy);
-  vec4 s = texelFetch(u_surface, p, 0);
+  float z = texelFetch(u_depth, p, 0).r;
   int k;
   vec3 c;
-  if (!isinf(s.x)) {
+  if (!isinf(z)) {
     o_colour = vec4(texelFetch(u_vertex_colour, p, 0).rgb, 1.0);
     o_source = 254u;
 #ifdef MVTM_PTM
-    if (FirstProjector(s.yzw, 1.0, false, k, c)) {
+    vec2 pix = vec2(gl_FragCoord.x, u_size.y - gl_FragCoord.y);  // pixel centre, row 0 on top
+    vec3 rel = u_Rt * vec3((pix - u_K.zw) / u_K.xy * z, z);       // point − camera centre
+    if (FirstProjector(rel, 1.0, false, k, c)) {
       o_colour = vec4(c, 1.0);
       o_source = uint(k);
     }

@@ -73,7 +73,6 @@ struct Target {
 };
 
 const Target::Format kLinearDepth{GL_R32F, GL_RED, GL_FLOAT};
-const Target::Format kSurface{GL_RGBA32F, GL_RGBA, GL_FLOAT};  // depth, position (gbuffer.frag)
 const Target::Format kRgba8{GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE};
 const Target::Format kSource{GL_R8UI, GL_RED_INTEGER, GL_UNSIGNED_BYTE};
 
@@ -550,7 +549,7 @@ void Renderer::Impl::Shade(const View& view, const std::vector<Projector>& proje
   glBindTexture(GL_TEXTURE_2D, surface_target.tex[0]);
   glActiveTexture(GL_TEXTURE4);
   glBindTexture(GL_TEXTURE_2D, surface_target.tex[1]);
-  glUniform1i(glGetUniformLocation(prog, "u_surface"), 3);
+  glUniform1i(glGetUniformLocation(prog, "u_depth"), 3);
   glUniform1i(glGetUniformLocation(prog, "u_vertex_colour"), 4);
   glUniform3f(glGetUniformLocation(prog, "u_background"), plan.background[0] / 255.f,
               plan.background[1] / 255.f, plan.background[2] / 255.f);
@@ -589,7 +588,7 @@ Renderer::Frame Renderer::Render(const View& view, const std::vector<Projector>&
   }
   // Two passes: the surface each pixel sees, then texturing once per pixel (a fragment hidden by
   // a nearer one costs no texturing, and a software rasteriser shades tiny triangles wastefully).
-  m.DrawSurface(m.surface_target, {kSurface, kRgba8}, "gbuffer.frag", view, stats);
+  m.DrawSurface(m.surface_target, {kLinearDepth, kRgba8}, "gbuffer.frag", view, stats);
   auto t_shade = Clock::now();
   m.EnsureTarget(m.colour_target, w, h, {kRgba8, kSource}, false);
   glBindFramebuffer(GL_FRAMEBUFFER, m.colour_target.fbo);

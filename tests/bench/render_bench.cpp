@@ -8,13 +8,15 @@
 // Then the renderer alone: frames/s per configuration and where the time goes (cull, draw = the
 // mesh pass, shade = the texturing pass, readback, PNG encode), for the road mesh at the --full
 // density (~255k triangles) and at ~1M; then the fastest frame's texturing pass and whole time
-// and that against the fastest depth render (the least disturbed by other load).
+// and that against the fastest depth render, and the process's CPU time per frame (all threads)
+// against the depth render's: the two least disturbed by other load.
 //
 // Every figure is also given as a ratio to a baseline measured in the same run: a plain depth
 // render of the same frames (one rasterisation of the mesh, no texturing), so the table holds on
 // a noisy shared machine. Projector images of the second part are synthetic (speed does not
 // depend on content). Run with MESA_SHADER_CACHE_DISABLE=true for repeatable timings.
-// usage: bench_render [--frames N] [--short] [--workspace DIR]
+// usage: bench_render [--frames N] [--short] [--workspace DIR] [--renderer-only]
+#include <time.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -39,6 +41,14 @@ namespace fs = std::filesystem;
 
 static double Ms(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+// CPU time of all the process's threads (llvmpipe's included), ms: less disturbed by other
+// processes on the machine than wall time.
+static double CpuMs() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return double(t.tv_sec) * 1e3 + double(t.tv_nsec) * 1e-6;
 }
 
 // ptmrender --at-images --exclude-self (4 projectors, baked depth) on an mkroad --full workspace
@@ -93,13 +103,15 @@ int main(int argc, char** argv) {
   int frames = 20;
   bool quick = false;
   fs::path ws;
+  bool pipeline = true;
   for (int i = 1; i < argc; ++i) {
     std::string a = argv[i];
     if (a == "--frames" && i + 1 < argc) frames = std::stoi(argv[++i]);
     if (a == "--short") quick = true, frames = 2;
     if (a == "--workspace" && i + 1 < argc) ws = argv[++i];
+    if (a == "--renderer-only") pipeline = false;
   }
-  PipelineBench(quick, ws);
+  if (pipeline) PipelineBench(quick, ws);
   const int W = quick ? 320 : fixture::kKittiWidth, H = quick ? 96 : fixture::kKittiHeight;
   Camera cam = ParseCameraSpec("PINHOLE 1241 376 718.856 718.856 607.1928 185.2157").Scaled(W, H);
   auto ctx = GlContext::Create();
@@ -128,10 +140,10 @@ int main(int argc, char** argv) {
     std::printf(
         "\nmesh: %zu triangles in %zu chunks (cell %.2f m); baking one depth map: %.1f ms\n",
         r.triangles(), r.chunks(), cell, bake_ms);
-    std::printf("%-30s %8s %8s %8s %8s %8s %8s %8s %9s %8s %8s %9s\n", "configuration", "cull",
-                "draw", "shade", "readback", "depth", "total", "fps", "x depth", "min shd",
-                "min tot", "x depth");
-    double base_ms = 0, base_best = 0;
+    std::printf("%-30s %8s %8s %8s %8s %8s %8s %8s %9s %8s %8s %9s %8s %9s\n", "configuration",
+                "cull", "draw", "shade", "readback", "depth", "total", "fps", "x depth", "min shd",
+                "min tot", "x depth", "cpu", "x depth");
+    double base_ms = 0, base_best = 0, base_cpu = 0;
     struct Cfg {
       const char* name;
       bool ptm;
@@ -149,6 +161,7 @@ int main(int argc, char** argv) {
       const Cfg& cfg = cfgs[c];
       RenderStats st;
       double depth_ms = 0, best = 1e300, best_shade = 1e300;
+      const double cpu0 = CpuMs();
       auto t0 = Clock::now();
       for (int f = 0; f < frames; ++f) {
         View v{cam, pa[f].pose.WorldToCamera()};
@@ -192,12 +205,14 @@ int main(int argc, char** argv) {
           fs::remove(p);
         }
       }
-      double total = Ms(t0, Clock::now()) / frames;
-      if (c == 0) base_ms = total, base_best = best;
-      std::printf("%-30s %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %8.1f %8.2fx %8.2f %8.2f %8.2fx\n",
-                  cfg.name, st.cull_ms / frames, st.draw_ms / frames, st.shade_ms / frames,
-                  st.readback_ms / frames, depth_ms / frames, total, 1000 / total, total / base_ms,
-                  c == 0 ? 0.0 : best_shade, best, best / base_best);
+      double total = Ms(t0, Clock::now()) / frames, cpu = (CpuMs() - cpu0) / frames;
+      if (c == 0) base_ms = total, base_best = best, base_cpu = cpu;
+      std::printf(
+          "%-30s %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %8.1f %8.2fx %8.2f %8.2f %8.2fx %8.2f "
+          "%8.2fx\n",
+          cfg.name, st.cull_ms / frames, st.draw_ms / frames, st.shade_ms / frames,
+          st.readback_ms / frames, depth_ms / frames, total, 1000 / total, total / base_ms,
+          c == 0 ? 0.0 : best_shade, best, best / base_best, cpu, cpu / base_cpu);
     }
     std::printf(
         "PNG encoding of one %dx%d frame: %.1f ms (overlapped with rendering by ptmrender's writer "
