@@ -1,25 +1,49 @@
-// Projective texture mapping of one mesh fragment (thesis Alg. 1–5): the first projector, in
-// rank order, that sees the point, is not masked there and is not occluded colours it; else the
-// vertex colour. Without MVTM_PTM this is plain vertex-colour rendering.
-in vec3 v_rel;
-in vec3 v_colour;
-in float v_depth;
+// The second pass of a render, once per pixel over the surface gbuffer.frag stored (thesis
+// Alg. 1–5). A surface pixel takes the first projector, in rank order, that sees the point, is
+// not masked there and is not occluded; else its vertex colour. Without MVTM_PTM it is plain
+// vertex-colour rendering.
+//
+// A pixel with no surface is background (§5.3.3). With MVTM_SKYBOX the view direction is
+// projected into the projectors as a point at infinity (rotation only), so distant sky and
+// far-away scenery come from the photographs; otherwise, and where no projector sees sky in
+// that direction, a constant colour.
+in vec2 v_ndc;
 layout(location = 0) out vec4 o_colour;
-layout(location = 1) out uint o_source;  // projector rank, 254 = vertex colour
+layout(location = 1) out uint o_source;  // projector rank, 254 = vertex colour, 255 = background
+
+uniform sampler2D u_depth;          // linear depth of the surface, +inf = none
+uniform sampler2D u_vertex_colour;  // RGBA8
+uniform vec3 u_background;          // 0..1
+uniform mat3 u_Rt;                  // render camera → world rotation
+uniform vec4 u_K;                   // render fx fy cx cy
+uniform vec2 u_size;                // render size
 
 void main() {
-  o_colour = vec4(v_colour, 1.0);
-  o_source = 254u;
+  ivec2 p = ivec2(gl_FragCoord.xy);
+  float z = texelFetch(u_depth, p, 0).r;
+  int k;
+  vec3 c;
+  if (!isinf(z)) {
+    o_colour = vec4(texelFetch(u_vertex_colour, p, 0).rgb, 1.0);
+    o_source = 254u;
 #ifdef MVTM_PTM
-  for (int k = 0; k < MVTM_MAX_PROJECTORS; ++k) {
-    if (k >= u_num_projectors) break;
-    vec2 uv;
-    float z;
-    if (!ProjectInto(k, v_rel, 1.0, uv, z)) continue;
-    if (!Usable(k, uv, z, false)) continue;
-    o_colour = vec4(Sample(k, uv), 1.0);
+    vec2 pix = vec2(gl_FragCoord.x, u_size.y - gl_FragCoord.y);  // pixel centre, row 0 on top
+    vec3 rel = u_Rt * vec3((pix - u_K.zw) / u_K.xy * z, z);       // point − camera centre
+    if (FirstProjector(rel, 1.0, false, k, c)) {
+      o_colour = vec4(c, 1.0);
+      o_source = uint(k);
+    }
+#endif
+    return;
+  }
+  o_colour = vec4(u_background, 1.0);
+  o_source = 255u;
+#ifdef MVTM_SKYBOX
+  vec2 pix = vec2((v_ndc.x + 1.0) * 0.5 * u_size.x, (1.0 - v_ndc.y) * 0.5 * u_size.y);
+  vec3 dir = u_Rt * vec3((pix - u_K.zw) / u_K.xy, 1.0);
+  if (FirstProjector(dir, 0.0, true, k, c)) {
+    o_colour = vec4(c, 1.0);
     o_source = uint(k);
-    break;
   }
 #endif
 }

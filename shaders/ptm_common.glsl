@@ -1,9 +1,10 @@
-// Shared by ptm.frag and sky.frag: projectors and their images as texture arrays.
+#extension GL_ARB_texture_gather : enable
+// Included by ptm.frag: projectors and their images as texture arrays.
 // Compile-time switches (the effects plan, see ptmrender --explain):
 //   MVTM_MAX_PROJECTORS  N    projectors tried in rank order (1 = a single projector)
 //   MVTM_OCCLUSION            compare with the projector's depth map (Alg. 2)
 //   MVTM_MASKS                skip masked projector texels (the next projector is tried)
-//   MVTM_SKYBOX               (sky.frag) sky only where the projector's depth map is +inf
+//   MVTM_SKYBOX               background from projectors, where their depth map is +inf
 //   MVTM_EXPOSURE             bring each projector's samples to the workspace's common exposure
 uniform int u_num_projectors;
 uniform mat3 u_proj_R[MVTM_MAX_PROJECTORS];   // world → projector camera rotation
@@ -54,6 +55,10 @@ bool Usable(int k, vec2 uv, float z, bool at_infinity) {
   // Occluded only when all four depth texels around uv (the bilinear footprint) are nearer:
   // a surface seen at a grazing angle changes depth by metres per texel, and a single nearest
   // texel would reject visible points on it.
+#ifdef GL_ARB_texture_gather
+  vec4 q = textureGather(u_depths, vec3(uv / u_proj_size, float(u_proj_layer[k])));
+  float d = max(max(q.x, q.y), max(q.z, q.w));
+#else
   ivec2 base = ivec2(floor(uv - 0.5));
   float d = 0.0;
   for (int j = 0; j < 2; ++j)
@@ -61,6 +66,7 @@ bool Usable(int k, vec2 uv, float z, bool at_infinity) {
       ivec2 t = clamp(base + ivec2(i, j), ivec2(0), ivec2(u_proj_size) - 1);
       d = max(d, texelFetch(u_depths, ivec3(t, u_proj_layer[k]), 0).r);
     }
+#endif
   if (!isinf(d) && z > d * (1.0 + u_bias)) return false;  // something nearer hides this point
 #endif
   return true;
@@ -72,4 +78,20 @@ vec3 Sample(int k, vec2 uv) {
   c = (c - u_proj_exposure[k].y) / u_proj_exposure[k].x;  // the radiance L, common frame
 #endif
   return c;
+}
+
+// The first projector, in rank order, that sees camera-relative point `rel` (or direction,
+// w = 0, at_infinity), is not masked there and is not occluded (at infinity: sees sky there):
+// true with its rank k and colour c; false when none does.
+bool FirstProjector(vec3 rel, float w, bool at_infinity, out int k, out vec3 c) {
+  for (k = 0; k < MVTM_MAX_PROJECTORS; ++k) {
+    if (k >= u_num_projectors) break;
+    vec2 uv;
+    float z;
+    if (!ProjectInto(k, rel, w, uv, z)) continue;
+    if (!Usable(k, uv, z, at_infinity)) continue;
+    c = Sample(k, uv);
+    return true;
+  }
+  return false;
 }

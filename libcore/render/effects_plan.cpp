@@ -20,28 +20,42 @@ std::vector<std::string> EffectsPlan::Defines() const {
 }
 
 ViewCoverage SurveyView(Renderer& renderer, const View& v, const View* first) {
-  const Image d = renderer.RenderDepth(v);
+  return CoverageOf(renderer.RenderDepth(v), v, first);
+}
+
+ViewCoverage CoverageOf(const Image& d, const View& v, const View* first) {
   const Camera& cam = v.camera;
-  const Eigen::Matrix3d Rt = v.world_to_camera.R().transpose();
-  const Eigen::Vector3d C = v.world_to_camera.Centre();
   ViewCoverage c;
-  for (int y = 0; y < d.height; ++y)
-    for (int x = 0; x < d.width; ++x) {
-      const float z = d.at(x, y);
-      if (!std::isfinite(z)) {
+  const float* z = d.data.data();
+  if (!first) {
+    for (size_t p = 0; p < d.pixels(); ++p) c.holes += !std::isfinite(z[p]);
+    c.surface = d.pixels() - c.holes;
+    return c;
+  }
+  // The point at pixel (x, y) and depth z in the first projector's camera, x_p = z·(M·ray) + b
+  // with ray = ((x + ½ − cx)/fx, (y + ½ − cy)/fy, 1) the render camera's pinhole ray, is inside
+  // its image when 0 ≤ fx·x_p/z_p + cx < W (likewise y), tested without dividing by z_p > 0.
+  const Camera& pc = first->camera;
+  const Eigen::Matrix3d M = first->world_to_camera.R() * v.world_to_camera.R().transpose();
+  const Eigen::Vector3d b = first->world_to_camera * v.world_to_camera.Centre();
+  const Eigen::Vector3d dx = M.col(0) / cam.fx();
+  const double W = double(pc.width), H = double(pc.height);
+  const double fx = pc.fx(), fy = pc.fy(), cx = pc.cx(), cy = pc.cy();
+  for (int y = 0; y < d.height; ++y) {
+    const Eigen::Vector3d row =
+        M * Eigen::Vector3d((0.5 - cam.cx()) / cam.fx(), (y + 0.5 - cam.cy()) / cam.fy(), 1);
+    for (int x = 0; x < d.width; ++x, ++z) {
+      if (!std::isfinite(*z)) {
         ++c.holes;
         continue;
       }
       ++c.surface;
-      if (!first) continue;
-      const Eigen::Vector3d X = Rt * cam.Unproject({x + 0.5, y + 0.5}, z) + C;
-      const Eigen::Vector3d xp = first->world_to_camera * X;
-      if (xp.z() <= 0) continue;
-      const Eigen::Vector2d uv = first->camera.Project(xp);
-      const Camera& pc = first->camera;
-      c.covered +=
-          uv.x() >= 0 && uv.y() >= 0 && uv.x() < double(pc.width) && uv.y() < double(pc.height);
+      const Eigen::Vector3d xp = double(*z) * (row + double(x) * dx) + b;
+      if (!(xp.z() > 0)) continue;
+      const double u = fx * xp.x() + cx * xp.z(), w = fy * xp.y() + cy * xp.z();
+      c.covered += u >= 0 && w >= 0 && u < W * xp.z() && w < H * xp.z();
     }
+  }
   return c;
 }
 

@@ -56,6 +56,7 @@ struct SceneSurvey {
 
 class Renderer;
 struct View;
+struct Image;
 
 // One view's share of the survey: pixels with no surface, and of the surface pixels those that
 // `first_projector` (when given) sees inside its image, in front of it.
@@ -64,6 +65,8 @@ struct ViewCoverage {
 };
 // Renders the view's depth (every pixel: a single hole pixel must plan alike in every split).
 ViewCoverage SurveyView(Renderer& renderer, const View& view, const View* first_projector);
+// The same from the view's depth (RenderDepth's, or a Render's with_depth), pinhole cameras.
+ViewCoverage CoverageOf(const Image& depth, const View& view, const View* first_projector);
 // Adds a surveyed view (named `name` in explanations) to the survey.
 void AddToSurvey(SceneSurvey& survey, const ViewCoverage& view, const std::string& name);
 

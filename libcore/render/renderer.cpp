@@ -55,17 +55,37 @@ void RequireGlSize(int w, int h, const std::string& what) {
                 " pixels a side");
 }
 
+// A framebuffer of same-sized texture attachments (colour attachments 0, 1, ...), optionally
+// with a depth buffer.
 struct Target {
-  GLuint fbo = 0, colour = 0, source = 0, depth_rb = 0, lin_depth = 0;
+  struct Format {
+    GLenum internal, format, type;
+  };
+  GLuint fbo = 0, depth_rb = 0;
+  std::vector<GLuint> tex;
   int w = 0, h = 0;
   void Release() {
     if (fbo) glDeleteFramebuffers(1, &fbo);
-    GLuint tex[3] = {colour, source, lin_depth};
-    glDeleteTextures(3, tex);
+    if (!tex.empty()) glDeleteTextures(static_cast<GLsizei>(tex.size()), tex.data());
     if (depth_rb) glDeleteRenderbuffers(1, &depth_rb);
     *this = Target();
   }
 };
+
+const Target::Format kLinearDepth{GL_R32F, GL_RED, GL_FLOAT};
+const Target::Format kRgba8{GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE};
+const Target::Format kSource{GL_R8UI, GL_RED_INTEGER, GL_UNSIGNED_BYTE};
+
+// Linear depth from the red channel of colour attachment 0 of the bound framebuffer.
+Image ReadLinearDepth(int w, int h) {
+  Image out(w, h, 1, 32);
+  std::vector<float> buf(static_cast<size_t>(w) * h);
+  glReadBuffer(GL_COLOR_ATTACHMENT0);
+  glReadPixels(0, 0, w, h, GL_RED, GL_FLOAT, buf.data());
+  for (int y = 0; y < h; ++y)  // GL rows are bottom-up
+    std::copy_n(buf.data() + size_t(h - 1 - y) * w, w, out.data.data() + size_t(y) * w);
+  return out;
+}
 
 }  // namespace
 
@@ -75,8 +95,10 @@ struct Renderer::Impl {
   size_t triangles = 0;
   Eigen::Vector3d lo, hi;
   std::map<std::string, GLuint> programs;  // by defines + stage
-  Target colour_target, depth_target;
-  GLuint images = 0, depths = 0, masks = 0, sky_vao = 0;
+  // Depth renders; the two passes of a colour render: surface (gbuffer.frag), then per pixel
+  // (ptm.frag) into colour + source.
+  Target depth_target, surface_target, colour_target;
+  GLuint images = 0, depths = 0, masks = 0, screen_vao = 0;
   // Projector textures live in layers of three texture arrays (colour, depth, mask) that are
   // reused across frames: a projector whose key is already in a layer is not uploaded again.
   int layer_w = 0, layer_h = 0, layer_count = 0;
@@ -91,13 +113,14 @@ struct Renderer::Impl {
   ~Impl() {
     for (auto& [k, p] : programs) glDeleteProgram(p);
     colour_target.Release();
+    surface_target.Release();
     depth_target.Release();
     GLuint tex[3] = {images, depths, masks};
     glDeleteTextures(3, tex);
     glDeleteBuffers(1, &vbo);
     glDeleteBuffers(1, &ebo);
     glDeleteVertexArrays(1, &vao);
-    glDeleteVertexArrays(1, &sky_vao);
+    glDeleteVertexArrays(1, &screen_vao);
   }
 
   GLuint Program(const std::string& vert, const std::string& frag,
@@ -112,8 +135,8 @@ struct Renderer::Impl {
     return p;
   }
 
-  // Colour (RGBA8) + source (R8UI) + depth, or linear depth (R32F) + depth.
-  void EnsureTarget(Target& t, int w, int h, bool depth_only) {
+  void EnsureTarget(Target& t, int w, int h, const std::vector<Target::Format>& formats,
+                    bool with_depth) {
     if (t.fbo && t.w == w && t.h == h) return;
     RequireGlSize(w, h, "a render");
     t.Release();
@@ -121,28 +144,26 @@ struct Renderer::Impl {
     t.h = h;
     glGenFramebuffers(1, &t.fbo);
     glBindFramebuffer(GL_FRAMEBUFFER, t.fbo);
-    auto tex = [&](GLuint& id, GLenum internal, GLenum format, GLenum type, GLenum attach) {
+    std::vector<GLenum> bufs;
+    for (const Target::Format& f : formats) {
+      GLuint id = 0;
       glGenTextures(1, &id);
       glBindTexture(GL_TEXTURE_2D, id);
-      glTexImage2D(GL_TEXTURE_2D, 0, static_cast<GLint>(internal), w, h, 0, format, type, nullptr);
+      glTexImage2D(GL_TEXTURE_2D, 0, static_cast<GLint>(f.internal), w, h, 0, f.format, f.type,
+                   nullptr);
       glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
       glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-      glFramebufferTexture2D(GL_FRAMEBUFFER, attach, GL_TEXTURE_2D, id, 0);
-    };
-    if (depth_only) {
-      tex(t.lin_depth, GL_R32F, GL_RED, GL_FLOAT, GL_COLOR_ATTACHMENT0);
-      GLenum bufs[1] = {GL_COLOR_ATTACHMENT0};
-      glDrawBuffers(1, bufs);
-    } else {
-      tex(t.colour, GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, GL_COLOR_ATTACHMENT0);
-      tex(t.source, GL_R8UI, GL_RED_INTEGER, GL_UNSIGNED_BYTE, GL_COLOR_ATTACHMENT1);
-      GLenum bufs[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
-      glDrawBuffers(2, bufs);
+      bufs.push_back(GL_COLOR_ATTACHMENT0 + static_cast<GLenum>(t.tex.size()));
+      glFramebufferTexture2D(GL_FRAMEBUFFER, bufs.back(), GL_TEXTURE_2D, id, 0);
+      t.tex.push_back(id);
     }
-    glGenRenderbuffers(1, &t.depth_rb);
-    glBindRenderbuffer(GL_RENDERBUFFER, t.depth_rb);
-    glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, w, h);
-    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, t.depth_rb);
+    glDrawBuffers(static_cast<GLsizei>(bufs.size()), bufs.data());
+    if (with_depth) {
+      glGenRenderbuffers(1, &t.depth_rb);
+      glBindRenderbuffer(GL_RENDERBUFFER, t.depth_rb);
+      glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, w, h);
+      glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, t.depth_rb);
+    }
     if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
       throw Error("OpenGL: incomplete framebuffer " + std::to_string(w) + "x" + std::to_string(h));
   }
@@ -236,25 +257,26 @@ struct Renderer::Impl {
       glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
       glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
     };
-    alloc(images, GL_TEXTURE0, GL_RGB8, GL_RGB, GL_UNSIGNED_BYTE, GL_LINEAR);
+    alloc(images, GL_TEXTURE0, GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, GL_LINEAR);
     alloc(depths, GL_TEXTURE1, GL_R32F, GL_RED, GL_FLOAT, GL_NEAREST);
     alloc(masks, GL_TEXTURE2, GL_R8, GL_RED, GL_UNSIGNED_BYTE, GL_NEAREST);
     layer_w = w, layer_h = h, layer_count = count;
     layers.assign(static_cast<size_t>(count), Layer());
   }
 
+  // RGBA8 (alpha unused), the layout a software GL stores texels in: the upload is a copy.
   void UploadColour(int layer, const Image& im) {
-    std::vector<uint8_t> buf(static_cast<size_t>(layer_w) * layer_h * 3);
+    std::vector<uint8_t> buf(static_cast<size_t>(layer_w) * layer_h * 4, 255);
+    const bool wide = im.bits == 16;
+    auto to8 = [wide](float v) {  // rounded half away from zero (lround) for v ≥ 0
+      return static_cast<uint8_t>(std::clamp(wide ? v / 257.f : v, 0.f, 255.f) + 0.5f);
+    };
     for (size_t p = 0; p < im.pixels(); ++p)
-      for (int c = 0; c < 3; ++c) {
-        int sc = im.channels >= 3 ? c : 0;
-        float val = im.data[p * im.channels + sc];
-        if (im.bits == 16) val /= 257.f;
-        buf[p * 3 + c] = static_cast<uint8_t>(std::clamp(std::lround(val), 0L, 255L));
-      }
+      for (int c = 0; c < 3; ++c)
+        buf[p * 4 + c] = to8(im.data[p * im.channels + (im.channels >= 3 ? c : 0)]);
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D_ARRAY, images);
-    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, layer_w, layer_h, 1, GL_RGB,
+    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, layer_w, layer_h, 1, GL_RGBA,
                     GL_UNSIGNED_BYTE, buf.data());
   }
 
@@ -333,8 +355,10 @@ struct Renderer::Impl {
   }
 
   // Projector uniforms relative to the render camera centre, in double.
-  void DrawSky(const View& view, const std::vector<Projector>& projectors, const EffectsPlan& plan,
-               const std::vector<int>& layer_of);
+  void DrawSurface(Target& t, const std::vector<Target::Format>& formats, const char* frag,
+                   const View& view, RenderStats* stats);
+  void Shade(const View& view, const std::vector<Projector>& projectors, const EffectsPlan& plan,
+             const std::vector<int>& layer_of);
   void SetProjectors(GLuint prog, const View& v, const std::vector<Projector>& ps,
                      const EffectsPlan& plan, const std::vector<int>& layer_of) {
     int n = std::min<int>(plan.projectors, static_cast<int>(ps.size()));
@@ -433,7 +457,7 @@ Renderer::Renderer(const Mesh& mesh, double chunk_size) : impl_(std::make_unique
   glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float),
                         reinterpret_cast<void*>(3 * sizeof(float)));
   glBindVertexArray(0);
-  glGenVertexArrays(1, &m.sky_vao);
+  glGenVertexArrays(1, &m.screen_vao);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
   CheckGlError("mesh upload");
@@ -443,27 +467,30 @@ Renderer::~Renderer() = default;
 size_t Renderer::triangles() const { return impl_->triangles; }
 size_t Renderer::chunks() const { return impl_->chunks.size(); }
 
-Image Renderer::RenderDepth(const View& view, RenderStats* stats) {
-  view.camera.RequireUndistorted();
-  Impl& m = *impl_;
+// The mesh seen from `view` into target t (colour attachment 0 cleared to +inf: no surface), the
+// nearest fragment of each pixel kept.
+void Renderer::Impl::DrawSurface(Target& t, const std::vector<Target::Format>& formats,
+                                 const char* frag, const View& view, RenderStats* stats) {
   int w = static_cast<int>(view.camera.width), h = static_cast<int>(view.camera.height);
-  m.EnsureTarget(m.depth_target, w, h, true);
-  glBindFramebuffer(GL_FRAMEBUFFER, m.depth_target.fbo);
+  EnsureTarget(t, w, h, formats, true);
+  glBindFramebuffer(GL_FRAMEBUFFER, t.fbo);
   glViewport(0, 0, w, h);
   const float inf = std::numeric_limits<float>::infinity();
-  glClearBufferfv(GL_COLOR, 0, &inf);
+  const float none[4] = {inf, 0, 0, 0};
+  glClearBufferfv(GL_COLOR, 0, none);
   glClear(GL_DEPTH_BUFFER_BIT);
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
   glDisable(GL_CULL_FACE);
-  GLuint prog = m.Program("mesh.vert", "depth.frag", {}, {});
-  m.Draw(prog, view, stats);
+  Draw(Program("mesh.vert", frag, {}, {}), view, stats);
+}
+
+Image Renderer::RenderDepth(const View& view, RenderStats* stats) {
+  view.camera.RequireUndistorted();
+  Impl& m = *impl_;
+  m.DrawSurface(m.depth_target, {kLinearDepth}, "depth.frag", view, stats);
   auto t0 = Clock::now();
-  Image out(w, h, 1, 32);
-  std::vector<float> buf(static_cast<size_t>(w) * h);
-  glReadPixels(0, 0, w, h, GL_RED, GL_FLOAT, buf.data());
-  for (int y = 0; y < h; ++y)  // GL rows are bottom-up
-    std::copy_n(buf.data() + size_t(h - 1 - y) * w, w, out.data.data() + size_t(y) * w);
+  Image out = ReadLinearDepth(m.depth_target.w, m.depth_target.h);
   if (stats) stats->readback_ms += Ms(t0, Clock::now());
   CheckGlError("RenderDepth");
   return out;
@@ -510,33 +537,36 @@ Renderer::Frame ReadFrame(int w, int h) {
 
 }  // namespace
 
-// The background behind the mesh: the full-screen sky triangle lies on the far plane and passes
-// the depth test only where no surface was drawn, so its shader runs only on the holes.
-void Renderer::Impl::DrawSky(const View& view, const std::vector<Projector>& projectors,
-                             const EffectsPlan& plan, const std::vector<int>& layer_of) {
-  std::vector<std::string> sky_inc;
-  if (plan.skybox) sky_inc.push_back("ptm_common.glsl");
-  GLuint sky = Program("sky.vert", "sky.frag", plan.Defines(), sky_inc);
-  glUseProgram(sky);
-  glDepthFunc(GL_LEQUAL);
-  glDepthMask(GL_FALSE);
-  glUniform3f(glGetUniformLocation(sky, "u_background"), plan.background[0] / 255.f,
+// The second pass: ptm.frag once per pixel over the surface pass, into colour and source.
+void Renderer::Impl::Shade(const View& view, const std::vector<Projector>& projectors,
+                           const EffectsPlan& plan, const std::vector<int>& layer_of) {
+  std::vector<std::string> inc;
+  if (plan.ptm || plan.skybox) inc.push_back("ptm_common.glsl");
+  GLuint prog = Program("screen.vert", "ptm.frag", plan.Defines(), inc);
+  glUseProgram(prog);
+  glDisable(GL_DEPTH_TEST);
+  glActiveTexture(GL_TEXTURE3);
+  glBindTexture(GL_TEXTURE_2D, surface_target.tex[0]);
+  glActiveTexture(GL_TEXTURE4);
+  glBindTexture(GL_TEXTURE_2D, surface_target.tex[1]);
+  glUniform1i(glGetUniformLocation(prog, "u_depth"), 3);
+  glUniform1i(glGetUniformLocation(prog, "u_vertex_colour"), 4);
+  glUniform3f(glGetUniformLocation(prog, "u_background"), plan.background[0] / 255.f,
               plan.background[1] / 255.f, plan.background[2] / 255.f);
   Eigen::Matrix3f Rt = view.world_to_camera.R().transpose().cast<float>();
-  glUniformMatrix3fv(glGetUniformLocation(sky, "u_Rt"), 1, GL_FALSE, Rt.data());
-  glUniform4f(glGetUniformLocation(sky, "u_K"), float(view.camera.fx()), float(view.camera.fy()),
+  glUniformMatrix3fv(glGetUniformLocation(prog, "u_Rt"), 1, GL_FALSE, Rt.data());
+  glUniform4f(glGetUniformLocation(prog, "u_K"), float(view.camera.fx()), float(view.camera.fy()),
               float(view.camera.cx()), float(view.camera.cy()));
-  glUniform2f(glGetUniformLocation(sky, "u_size"), float(view.camera.width),
+  glUniform2f(glGetUniformLocation(prog, "u_size"), float(view.camera.width),
               float(view.camera.height));
-  if (plan.skybox) SetProjectors(sky, view, projectors, plan, layer_of);
-  glBindVertexArray(sky_vao);
+  if (plan.ptm || plan.skybox) SetProjectors(prog, view, projectors, plan, layer_of);
+  glBindVertexArray(screen_vao);
   glDrawArrays(GL_TRIANGLES, 0, 3);
-  glDepthMask(GL_TRUE);
-  glDepthFunc(GL_LESS);
+  glEnable(GL_DEPTH_TEST);
 }
 
 Renderer::Frame Renderer::Render(const View& view, const std::vector<Projector>& projectors,
-                                 const EffectsPlan& plan_in, RenderStats* stats) {
+                                 const EffectsPlan& plan_in, RenderStats* stats, bool with_depth) {
   view.camera.RequireUndistorted();
   Impl& m = *impl_;
   EffectsPlan plan = plan_in;
@@ -556,23 +586,25 @@ Renderer::Frame Renderer::Render(const View& view, const std::vector<Projector>&
     glActiveTexture(GL_TEXTURE2);
     glBindTexture(GL_TEXTURE_2D_ARRAY, m.masks);
   }
-  m.EnsureTarget(m.colour_target, w, h, false);
+  // Two passes: the surface each pixel sees, then texturing once per pixel (a fragment hidden by
+  // a nearer one costs no texturing, and a software rasteriser shades tiny triangles wastefully).
+  m.DrawSurface(m.surface_target, {kLinearDepth, kRgba8}, "gbuffer.frag", view, stats);
+  auto t_shade = Clock::now();
+  m.EnsureTarget(m.colour_target, w, h, {kRgba8, kSource}, false);
   glBindFramebuffer(GL_FRAMEBUFFER, m.colour_target.fbo);
   glViewport(0, 0, w, h);
-  glClear(GL_DEPTH_BUFFER_BIT);
-  // The mesh first, then the background behind it.
-  std::vector<std::string> inc;
-  if (plan.ptm) inc.push_back("ptm_common.glsl");
-  GLuint prog = m.Program("mesh.vert", "ptm.frag", plan.Defines(), inc);
-  glUseProgram(prog);
-  if (plan.ptm) m.SetProjectors(prog, view, projectors, plan, layer_of);
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LESS);
-  m.Draw(prog, view, stats);
-  m.DrawSky(view, projectors, plan, layer_of);
+  m.Shade(view, projectors, plan, layer_of);
+  glFinish();
   auto t0 = Clock::now();
   Frame out = ReadFrame(w, h);
-  if (stats) stats->readback_ms += Ms(t0, Clock::now());
+  if (with_depth) {
+    glBindFramebuffer(GL_FRAMEBUFFER, m.surface_target.fbo);
+    out.depth = ReadLinearDepth(w, h);
+  }
+  if (stats) {
+    stats->shade_ms += Ms(t_shade, t0);
+    stats->readback_ms += Ms(t0, Clock::now());
+  }
   CheckGlError("Render");
   return out;
 }

@@ -50,6 +50,7 @@ struct Projector {
 struct RenderStats {
   size_t chunks_drawn = 0, chunks_total = 0, triangles_drawn = 0;
   double cull_ms = 0, draw_ms = 0, readback_ms = 0;
+  double shade_ms = 0;  // Render's second pass: texturing each pixel once
 };
 
 // What a frame's pixels came from: 0..K−1 projector rank, 254 vertex colour, 255 background.
@@ -70,13 +71,16 @@ class Renderer {
   struct Frame {
     Image colour;  // 3 channels, 8-bit scale (rounded)
     Image source;  // 1 channel: projector rank / kSourceVertex / kSourceBackground
+    Image depth;   // with_depth: what RenderDepth(view) gives, from the same pass; else empty
   };
   // Renders `view` with the projectors (rank order) under `plan`. Projector images must all
   // have the same size (Error otherwise); depth maps are needed when plan.occlusion or
   // plan.skybox (sky is taken only where a projector sees no surface), masks when
   // plan.masks (a projector without one is treated as unmasked).
+  // Two passes: the mesh once for the surface each pixel sees, then the texturing once per pixel.
+  // The skybox changes only pixels with no surface (those where depth is +inf).
   Frame Render(const View& view, const std::vector<Projector>& projectors, const EffectsPlan& plan,
-               RenderStats* stats = nullptr);
+               RenderStats* stats = nullptr, bool with_depth = false);
 
   size_t triangles() const;
   size_t chunks() const;

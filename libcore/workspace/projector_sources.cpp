@@ -55,51 +55,119 @@ View ProjectorSources::ViewOf(size_t k) const {
   return View{rec_.cameras.at(images_[k]->camera_id), images_[k]->world_to_camera};
 }
 
-const Image& ProjectorSources::ImageOf(size_t k) {
-  auto it = image_.find(k);
-  if (it == image_.end()) {
-    const std::string& name = images_[k]->name;
-    fs::path p = prefer_textures_ ? ws_.SourceImagePath(name) : ws_.ImagePath(name);
-    Image img = ReadImage(p.string());
-    const Camera& cam = rec_.cameras.at(images_[k]->camera_id);
-    RequireImageSize(img, p.string(), cam.width, cam.height);
-    it = image_.emplace(k, std::move(img)).first;
+Image ProjectorSources::ReadColour(size_t k) const {
+  const std::string& name = images_[k]->name;
+  fs::path p = prefer_textures_ ? ws_.SourceImagePath(name) : ws_.ImagePath(name);
+  Image img = ReadImage(p.string());
+  const Camera& cam = rec_.cameras.at(images_[k]->camera_id);
+  RequireImageSize(img, p.string(), cam.width, cam.height);
+  return img;
+}
+
+Image ProjectorSources::ReadDepthFile(size_t k) const {
+  fs::path dp = ws_.DepthPath(images_[k]->name);
+  if (!fs::exists(dp)) return Image();
+  const Camera& cam = rec_.cameras.at(images_[k]->camera_id);
+  return ResizeNearest(ReadFloatMap(dp.string()), int(cam.width), int(cam.height));
+}
+
+Image ProjectorSources::ReadMaskFile(size_t k) const {
+  fs::path mp = ws_.MaskPath(images_[k]->name);
+  if (!fs::exists(mp)) return Image();
+  Image m = ReadMask(mp.string());
+  const Camera& cam = rec_.cameras.at(images_[k]->camera_id);
+  RequireImageSize(m, mp.string(), cam.width, cam.height);
+  return m;
+}
+
+void ProjectorSources::TakePrefetched() {
+  if (!prefetch_.valid()) return;
+  std::array<Batch, 3> got = prefetch_.get();
+  for (size_t i = 0; i < got.size(); ++i) prefetched_[i].merge(got[i]);
+}
+
+const Image& ProjectorSources::Get(Cache& cache, Batch& prefetched, size_t k,
+                                   Image (ProjectorSources::*read)(size_t) const) {
+  TakePrefetched();
+  auto it = cache.find(k);
+  if (it == cache.end()) {
+    Image img;
+    auto p = prefetched.find(k);
+    if (p != prefetched.end()) {
+      Read r = std::move(p->second);
+      prefetched.erase(p);
+      if (r.error) std::rethrow_exception(r.error);
+      img = std::move(r.image);
+    } else {
+      img = (this->*read)(k);
+    }
+    it = cache.emplace(k, Entry{std::move(img), 0}).first;
   }
-  return it->second;
+  it->second.used = ++tick_;
+  return it->second.image;
+}
+
+const Image& ProjectorSources::ImageOf(size_t k) {
+  return Get(image_, prefetched_[0], k, &ProjectorSources::ReadColour);
 }
 
 const Image& ProjectorSources::DepthOf(size_t k) {
-  auto it = depth_.find(k);
-  if (it == depth_.end()) {
-    View v = ViewOf(k);
-    fs::path dp = ws_.DepthPath(images_[k]->name);
-    Image d;
-    if (fs::exists(dp)) {
-      d = ResizeNearest(ReadFloatMap(dp.string()), int(v.camera.width), int(v.camera.height));
-    } else {
-      if (!renderer_) throw Error(dp.string(), 0, "no depth map (run bakedepth)");
-      d = renderer_->RenderDepth(v);
-    }
-    it = depth_.emplace(k, std::move(d)).first;
-  }
-  return it->second;
+  const Image& d = Get(depth_, prefetched_[1], k, &ProjectorSources::ReadDepthFile);
+  if (!d.empty()) return d;
+  if (!renderer_)
+    throw Error(ws_.DepthPath(images_[k]->name).string(), 0, "no depth map (run bakedepth)");
+  Image& slot = depth_[k].image;
+  slot = renderer_->RenderDepth(ViewOf(k));
+  return slot;
 }
 
 const Image* ProjectorSources::MaskOf(size_t k) {
-  auto it = mask_.find(k);
-  if (it == mask_.end()) {
-    fs::path mp = ws_.MaskPath(images_[k]->name);
-    Image m = fs::exists(mp) ? ReadMask(mp.string()) : Image();
-    const Camera& cam = rec_.cameras.at(images_[k]->camera_id);
-    if (!m.empty()) RequireImageSize(m, mp.string(), cam.width, cam.height);
-    it = mask_.emplace(k, std::move(m)).first;
-  }
-  return it->second.empty() ? nullptr : &it->second;
+  const Image& m = Get(mask_, prefetched_[2], k, &ProjectorSources::ReadMaskFile);
+  return m.empty() ? nullptr : &m;
 }
 
+void ProjectorSources::Prefetch(const std::vector<size_t>& ks, bool depth, bool mask) {
+  TakePrefetched();
+  std::array<std::vector<size_t>, 3> todo;
+  auto want = [&](size_t i, const Cache& cache, size_t k) {
+    if (!cache.count(k) && !prefetched_[i].count(k)) todo[i].push_back(k);
+  };
+  for (size_t k : ks) {
+    want(0, image_, k);
+    if (depth) want(1, depth_, k);
+    if (mask) want(2, mask_, k);
+  }
+  if (todo[0].empty() && todo[1].empty() && todo[2].empty()) return;
+  prefetch_ = std::async(std::launch::async, [this, todo] {
+    const std::array<Image (ProjectorSources::*)(size_t) const, 3> read = {
+        &ProjectorSources::ReadColour, &ProjectorSources::ReadDepthFile,
+        &ProjectorSources::ReadMaskFile};
+    std::array<Batch, 3> out;
+    for (size_t i = 0; i < todo.size(); ++i)
+      for (size_t k : todo[i]) try {
+          out[i][k].image = (this->*read[i])(k);
+        } catch (...) {
+          out[i][k].error = std::current_exception();
+        }
+    return out;
+  });
+}
+
+ProjectorSources::~ProjectorSources() {
+  if (prefetch_.valid()) prefetch_.wait();
+}
+
+// Drops the least recently used items of each cache beyond the capacity.
 void ProjectorSources::Trim() {
-  for (auto* cache : {&image_, &depth_, &mask_})
-    if (cache->size() > capacity_) cache->clear();
+  for (Cache* cache : {&image_, &depth_, &mask_}) {
+    if (cache->size() <= capacity_) continue;
+    std::vector<uint64_t> used;
+    for (const auto& [k, e] : *cache) used.push_back(e.used);
+    std::nth_element(used.begin(), used.end() - static_cast<std::ptrdiff_t>(capacity_), used.end());
+    const uint64_t keep_from = *(used.end() - static_cast<std::ptrdiff_t>(capacity_));
+    for (auto it = cache->begin(); it != cache->end();)
+      it = it->second.used < keep_from ? cache->erase(it) : std::next(it);
+  }
 }
 
 }  // namespace mvtm

@@ -4,11 +4,19 @@
 // Shared by ptmrender and inpaint3d. Images are looked up by their index in a list of the
 // model's images (ImagesByName order). Depth maps come from the workspace's baked depth/ (resized
 // to the image size, nearest neighbour, when baked at another --scale) or, when not baked, are
-// rendered with the Renderer given (Error when there is none). Everything is cached; Trim() empties
-// the caches when they hold more than `capacity` items and must only be called between frames,
-// since the returned references point into the caches.
+// rendered with the Renderer given (Error when there is none). Everything is cached; Trim() drops
+// the least recently used items beyond `capacity` and must only be called between frames, since
+// the returned references point into the caches. Prefetch() reads the next frame's files on a
+// second thread while this one renders.
+//
+// Thread safety: one thread calls the methods (the one holding the Renderer's GL context); the
+// prefetch thread only reads files.
 #pragma once
 
+#include <array>
+#include <cstdint>
+#include <exception>
+#include <future>
 #include <map>
 #include <vector>
 
@@ -40,15 +48,45 @@ class ProjectorSources {
   bool ExposureOf(size_t k, float& gain, float& offset);
   View ViewOf(size_t k) const;
   void Trim();
+  // Starts reading the files of the images `ks` that are not cached (colour; with `depth` the
+  // baked depth map, with `mask` the mask) on a second thread; ImageOf, DepthOf and MaskOf take
+  // them from there (an error reading one is thrown by the call that asks for it). Waits for
+  // the previous batch first.
+  void Prefetch(const std::vector<size_t>& ks, bool depth, bool mask);
+  ~ProjectorSources();
 
  private:
+  // A cached item: the image (empty: no mask file) and when it was last asked for.
+  struct Entry {
+    Image image;
+    uint64_t used = 0;
+  };
+  // One read of a file: its image, or the error reading it.
+  struct Read {
+    Image image;
+    std::exception_ptr error;
+  };
+  using Cache = std::map<size_t, Entry>;
+  using Batch = std::map<size_t, Read>;
+  // The file readers (const: the prefetch thread calls them too).
+  Image ReadColour(size_t k) const;
+  Image ReadDepthFile(size_t k) const;  // empty when there is no baked depth map
+  Image ReadMaskFile(size_t k) const;   // empty when there is no mask file
+  // The cached item k, read by `read` unless cached or prefetched.
+  const Image& Get(Cache& cache, Batch& prefetched, size_t k,
+                   Image (ProjectorSources::*read)(size_t) const);
+  void TakePrefetched();
+
   const Workspace& ws_;
   const Reconstruction& rec_;
   std::vector<const ImageRecord*> images_;
   Renderer* renderer_;
   bool prefer_textures_;
   size_t capacity_;
-  std::map<size_t, Image> image_, depth_, mask_;
+  uint64_t tick_ = 0;
+  Cache image_, depth_, mask_;
+  std::future<std::array<Batch, 3>> prefetch_;  // colour, depth, mask
+  std::array<Batch, 3> prefetched_;
   std::map<std::string, ExposureRow> exposure_;  // exposure.tsv, read on first use
   bool exposure_read_ = false;
 };

@@ -250,56 +250,89 @@ struct FrameJob {
   const Camera& cam;
   const std::vector<RenderPose>& poses;
   const ProjectorPicks& picks;
-  const EffectsPlan& plan;
 };
 
-std::vector<Projector> FrameProjectors(const FrameJob& job, size_t i, ProjectorSources& sources,
-                                       PtmRenderReport& rep) {
+std::vector<Projector> FrameProjectors(const FrameJob& job, const EffectsPlan& plan, size_t i,
+                                       ProjectorSources& sources, PtmRenderReport& rep) {
   std::vector<Projector> ps;
   for (const auto& c : job.picks.per_pose[i]) {
     Projector p;
     p.view = sources.ViewOf(c.index);
     p.image = &sources.ImageOf(c.index);
     p.key = static_cast<int64_t>(c.index);
-    if (job.plan.occlusion || job.plan.skybox) {
+    if (plan.occlusion || plan.skybox) {
       auto td = Clock::now();
       p.depth = &sources.DepthOf(c.index);
       rep.depth_ms += Ms(td, Clock::now());
     }
-    if (job.plan.masks) p.mask = sources.MaskOf(c.index);
-    if (job.plan.exposure) sources.ExposureOf(c.index, p.gain, p.offset);
+    if (plan.masks) p.mask = sources.MaskOf(c.index);
+    if (plan.exposure) sources.ExposureOf(c.index, p.gain, p.offset);
     ps.push_back(p);
   }
   return ps;
 }
 
+// Renders the frames, surveying each from its own render (its depth: holes, coverage) instead of
+// a depth pass of its own. The plan starts as the survey without holes; the first frame with a
+// hole turns the skybox on (PlanEffects) and is rendered again. Frames before it are unchanged
+// by that, since the skybox only colours pixels with no surface.
 void RenderFrames(const FrameJob& job, Renderer& renderer, const std::vector<size_t>& todo,
-                  PtmRenderReport& rep) {
+                  SceneSurvey& survey, EffectsPlan& plan, PtmRenderReport& rep) {
   const fs::path outdir(job.o.outdir);
   ProjectorSources sources(job.ws, job.scene.rec, job.scene.images, &renderer,
                            /*prefer_textures=*/true);
   const bool grey = GreySources(job.ws, job.scene, job.picks.used);
   AsyncImageWriter writer;
   Progress bar("ptmrender", todo.size(), job.o.quiet);
-  for (size_t i : todo) {
-    auto t0 = Clock::now();
-    sources.Trim();  // between frames only: a frame's projectors hold references into it
-    std::vector<Projector> ps = FrameProjectors(job, i, sources, rep);
-    auto t1 = Clock::now();
-    Renderer::Frame f = renderer.Render(View{job.cam, job.poses[i].w2c}, ps, job.plan);
-    rep.load_ms += Ms(t0, t1);
-    rep.render_ms += Ms(t1, Clock::now());
-    writer.Push((outdir / job.poses[i].name).string(),
-                OutputImage(std::move(f.colour), grey, job.o.exr));
+  for (size_t n = 0; n < todo.size(); ++n) {
+    const size_t i = todo[n];
+    const View view{job.cam, job.poses[i].w2c};
+    Renderer::Frame f;
+    bool surveyed = false;
+    for (bool again = true; again;) {
+      auto t0 = Clock::now();
+      sources.Trim();  // between frames only: a frame's projectors hold references into it
+      std::vector<Projector> ps = FrameProjectors(job, plan, i, sources, rep);
+      if (n + 1 < todo.size()) {  // the next frame's files are read while this one renders
+        std::vector<size_t> next;
+        for (const auto& c : job.picks.per_pose[todo[n + 1]]) next.push_back(c.index);
+        sources.Prefetch(next, plan.occlusion || plan.skybox, plan.masks);
+      }
+      auto t1 = Clock::now();
+      RenderStats stats;
+      f = renderer.Render(view, ps, plan, &stats, /*with_depth=*/survey.ptm);
+      auto t2 = Clock::now();
+      rep.load_ms += Ms(t0, t1);
+      rep.render_ms += Ms(t1, t2);
+      rep.draw_ms += stats.draw_ms;
+      rep.shade_ms += stats.shade_ms;
+      rep.readback_ms += stats.readback_ms;
+      again = false;
+      if (survey.ptm && !surveyed) {
+        AddToSurvey(survey, CoverageOf(f.depth, view, ps.empty() ? nullptr : &ps[0].view),
+                    job.poses[i].name);
+        surveyed = true;
+        const EffectsPlan now = PlanEffects(survey);
+        again = now.skybox != plan.skybox;
+        plan = now;
+        rep.survey_ms += Ms(t2, Clock::now());
+      }
+    }
+    Image colour = OutputImage(std::move(f.colour), grey, job.o.exr);
+    auto t3 = Clock::now();
+    writer.Push((outdir / job.poses[i].name).string(), std::move(colour));
     if (job.o.provenance) {
       fs::path pp = outdir / "provenance" / job.poses[i].name;
       pp.replace_extension(".png");
       writer.Push(pp.string(), std::move(f.source));
     }
+    rep.write_ms += Ms(t3, Clock::now());
     ++rep.rendered;
     bar.Step();
   }
+  auto t_finish = Clock::now();
   writer.Finish();
+  rep.write_ms += Ms(t_finish, Clock::now());
 }
 
 nlohmann::json PlanJson(const Camera& cam, size_t frames, const std::string& gl,
@@ -368,15 +401,16 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
   rep.gl = ctx->Describe();
   Renderer renderer(mesh);
   auto t_plan = Clock::now();
-  SurveyFrames(survey, renderer, cam, scene, poses, picks, o.explain ? chosen : todo);
-  rep.depth_ms += Ms(t_plan, Clock::now());
-  const EffectsPlan plan = PlanEffects(survey);
-  const nlohmann::json plan_json = PlanJson(cam, chosen.size(), rep.gl, survey, plan);
   if (o.explain) {
-    out << plan_json.dump(2) << "\n";
+    SurveyFrames(survey, renderer, cam, scene, poses, picks, chosen);
+    out << PlanJson(cam, chosen.size(), rep.gl, survey, PlanEffects(survey)).dump(2) << "\n";
     return rep;
   }
-  RenderFrames(FrameJob{o, ws, scene, cam, poses, picks, plan}, renderer, todo, rep);
+  EffectsPlan plan = PlanEffects(survey);
+  RenderFrames(FrameJob{o, ws, scene, cam, poses, picks}, renderer, todo, survey, plan, rep);
+  rep.depth_ms += rep.survey_ms;
+  rep.frames_ms = Ms(t_plan, Clock::now());
+  const nlohmann::json plan_json = PlanJson(cam, chosen.size(), rep.gl, survey, plan);
   WriteRunProvenance(o, ws, plan_json, rep.gl, inputs);
   return rep;
 }

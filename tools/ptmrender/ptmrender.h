@@ -37,9 +37,18 @@ struct PtmRenderOptions : WorkOptions {
   void Check() const;
 };
 
+// Times are totals over the run's frames, in milliseconds.
 struct PtmRenderReport {
   size_t frames = 0, rendered = 0, skipped = 0;
-  double render_ms = 0, depth_ms = 0, load_ms = 0;
+  double render_ms = 0;    // Renderer::Render: uploads, draw, readback
+  double draw_ms = 0;      // ... of which the mesh pass (RenderStats::draw_ms)
+  double shade_ms = 0;     // ... of which the texturing pass (RenderStats::shade_ms)
+  double readback_ms = 0;  // ... of which reading the frame back from GL
+  double depth_ms = 0;     // survey_ms + gathering depth maps (also in load_ms)
+  double survey_ms = 0;    // the plan's depth passes (holes, coverage)
+  double load_ms = 0;      // gathering each frame's projector images, masks and depth maps
+  double write_ms = 0;     // waiting for the writer thread (encoding overlaps rendering)
+  double frames_ms = 0;    // wall time from the plan's survey to the last frame written
   std::string gl;
 };
 
