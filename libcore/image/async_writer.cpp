@@ -8,14 +8,14 @@ AsyncImageWriter::AsyncImageWriter() : thread_([this] { Loop(); }) {}
 
 AsyncImageWriter::~AsyncImageWriter() { Stop(); }
 
-void AsyncImageWriter::Push(std::string path, Image img) {
+void AsyncImageWriter::Push(std::string path, Image img, PngCompression png) {
   std::unique_lock<std::mutex> l(mu_);
   cv_.wait(l, [&] { return queue_.size() < 4 || !error_.empty(); });
   if (!error_.empty()) {
     reported_ = true;
     throw Error(error_);
   }
-  queue_.emplace_back(std::move(path), std::move(img));
+  queue_.push_back(Job{std::move(path), std::move(img), png});
   cv_.notify_all();
 }
 
@@ -38,7 +38,7 @@ void AsyncImageWriter::Finish() {
 
 void AsyncImageWriter::Loop() {
   for (;;) {
-    std::pair<std::string, Image> job;
+    Job job;
     {
       std::unique_lock<std::mutex> l(mu_);
       cv_.wait(l, [&] { return !queue_.empty() || done_; });
@@ -48,7 +48,7 @@ void AsyncImageWriter::Loop() {
       cv_.notify_all();
     }
     try {
-      WriteImage(job.first, job.second);
+      WriteImage(job.path, job.image, job.png);
     } catch (const std::exception& e) {
       std::lock_guard<std::mutex> l(mu_);
       error_ = e.what();

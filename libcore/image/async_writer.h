@@ -25,7 +25,7 @@ class AsyncImageWriter {
   AsyncImageWriter(const AsyncImageWriter&) = delete;
   AsyncImageWriter& operator=(const AsyncImageWriter&) = delete;
 
-  void Push(std::string path, Image img);
+  void Push(std::string path, Image img, PngCompression png = PngCompression::kDefault);
   void Finish();
 
  private:
@@ -34,7 +34,12 @@ class AsyncImageWriter {
 
   std::mutex mu_;
   std::condition_variable cv_;
-  std::deque<std::pair<std::string, Image>> queue_;
+  struct Job {
+    std::string path;
+    Image image;
+    PngCompression png;
+  };
+  std::deque<Job> queue_;
   bool done_ = false, reported_ = false;
   std::string error_;
   std::thread thread_;

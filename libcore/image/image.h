@@ -57,9 +57,12 @@ Image ReadFloatMap(const std::string& path);
 void RequireImageSize(const Image& img, const std::string& path, uint64_t w, uint64_t h);
 // How a PNG is compressed; the pixels are the same either way.
 enum class PngCompression {
-  kDefault,  // zlib level 6, libpng's adaptive row filters: the bytes OpenImageIO 2.4 wrote
-  kFast,     // zlib level 1, run-length strategy, no row filter: 4-5x faster to encode, and for
-             // masks (long runs of one value) about the same size as kDefault
+  kDefault,   // zlib level 6, libpng's adaptive row filters: the bytes OpenImageIO 2.4 wrote
+  kFast,      // zlib level 1, run-length strategy, adaptive row filters: for photos and renders
+              // 3x faster to encode than kDefault and smaller (a KITTI colour frame: 731 KB
+              // against 797 KB)
+  kFastFlat,  // zlib level 1, run-length strategy, no row filter: for masks and index maps
+              // (long runs of one value) 4-5x faster than kDefault at about the same size
 };
 
 // Writes atomically; the format follows the extension. Throws Error.

@@ -159,10 +159,12 @@ void Flush(png_structp) {}
 
 // Plain C calls only (libpng may longjmp out of it).
 void WritePngRows(png_structp png, png_infop info, png_uint_32 w, png_uint_32 h, int bits,
-                  int colour, bool fast, png_bytepp rows) {
+                  int colour, int mode, png_bytepp rows) {
+  const bool fast = mode != int(PngCompression::kDefault);
   png_set_compression_level(png, fast ? 1 : 6);
   png_set_compression_strategy(png, fast ? Z_RLE : Z_DEFAULT_STRATEGY);
-  if (fast) png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_NONE);
+  if (mode == int(PngCompression::kFastFlat))
+    png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_NONE);
   png_set_IHDR(png, info, w, h, bits, colour, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
                PNG_FILTER_TYPE_DEFAULT);
   png_set_oFFs(png, info, 0, 0, PNG_OFFSET_PIXEL);
@@ -210,7 +212,7 @@ std::vector<unsigned char> EncodePng(const std::string& path, const Image& img,
   if (setjmp(png_jmpbuf(ws.png)) == 0) {
     png_set_write_fn(ws.png, &out, AppendBytes, Flush);
     WritePngRows(ws.png, ws.info, png_uint_32(img.width), png_uint_32(img.height), img.bits,
-                 kColour[img.channels - 1], compression == PngCompression::kFast, rows.data());
+                 kColour[img.channels - 1], int(compression), rows.data());
     ok = true;
   }
   if (!ok)

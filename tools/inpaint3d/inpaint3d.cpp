@@ -166,7 +166,8 @@ void CopyUnmasked(const fs::path& src, const fs::path& out, const fs::path& prov
     fs::copy_file(src, af.temp_path(), fs::copy_options::overwrite_existing);
     af.Commit();
   }
-  WriteImage(prov.string(), Image(spec.width, spec.height, 1, 8, kProvenanceOriginal));
+  WriteImage(prov.string(), Image(spec.width, spec.height, 1, 8, kProvenanceOriginal),
+             PngCompression::kFastFlat);
 }
 
 // Writes textures/NAME and its provenance image for image `i`, unless up to date.
@@ -195,8 +196,8 @@ void ProcessImage(Run& run, size_t i) {
     RequireImageSize(img, src.string(), cam.width, cam.height);
     CheckMaskSize(img, mask, mp.string());
     Inpainted r = InpaintImage(run, i, src, img, DilateMask(mask, run.o.dilate));
-    WriteImage(out.string(), r.image);
-    WriteImage(prov.string(), r.provenance);
+    WriteImage(out.string(), r.image, PngCompression::kFast);  // photo-like: fast settings
+    WriteImage(prov.string(), r.provenance, PngCompression::kFastFlat);
     Add(run.rep, r.counts);
     ++run.rep.inpainted;
   }
