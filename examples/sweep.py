@@ -371,8 +371,9 @@ def sweep_ptmrender(c):
         "baseline. Each knob is varied alone; masks: the fixture's truth masks. Poses: the "
         "fixture's off-path truth poses (1.5 m lane changes and 15&deg; turns of drive A), "
         "projected from the recorded photographs of both drives. <b>Accuracy:</b> mean SSIM "
-        "against the ray-traced truth at those poses. <b>Time:</b> ptmrender's own milliseconds per frame "
-        "(render + depth + load; PNG encoding excluded, it overlaps rendering). <b>Read:</b> "
+        "against the ray-traced truth at those poses. <b>Time:</b> ptmrender's own "
+        "milliseconds per frame (render + depth + load; PNG encoding excluded, it overlaps "
+        "rendering). <b>Read:</b> "
         "higher is better, left is faster; the default (K=4, bias 0.005, baked depth at scale 1, "
         "every effect the scene needs) is ringed.")
     return sl.emit(c.out, s, "ms_per_frame", "ssim", xlabel="milliseconds per frame "
