@@ -100,7 +100,7 @@ def sweep_pickview(c):
     settings = [("exact", "kdtree", []), ("exact", "brute", []), ("grid9", "grid9", [])]
     checks = (1, 8, 32, 128) if c.short else (1, 2, 4, 8, 16, 32, 64, 128, 256)
     settings += [("flann", f"flann checks={n}", ["--checks", n]) for n in checks]
-    rows, exact = [], None
+    rows, exact, exact_table = [], None, None
     for group, name, extra in settings:
         method = name.split()[0]
         # flann builds different trees on every run (std::random_device): average the misses.
@@ -108,7 +108,10 @@ def sweep_pickview(c):
         for _ in range(c.repeat):
             out, err, _ = c.tools.run("pickview", "--method", method, *extra, folder, queries)
             got = picks(out)
-            exact = exact or got  # kdtree runs first
+            if exact is None:  # kdtree runs first
+                exact, exact_table = got, out
+            if group == "exact":
+                c.checks(out == exact_table, f"pickview {name}: the same table as kdtree's")
             slots = sum(len(v) for v in exact.values())
             missed = sum(len(v - got.get(q, set())) for q, v in exact.items())
             misses.append(missed)
@@ -118,16 +121,14 @@ def sweep_pickview(c):
                 c.checks(int(m.group(1)) == missed and int(m.group(2)) == slots,
                          f"pickview {name}: its reported misses ({m.group(1)} of {m.group(2)}) "
                          f"= misses counted from its table ({missed} of {slots})")
-            if group != "flann":
-                break
-        if group == "exact":
-            c.checks(max(misses) == 0, f"pickview {name}: exact, no misses against kdtree")
         rows.append({"group": group, "setting": name, "default": name == "kdtree",
                      "miss_percent": round(100 * float(np.mean(misses)) / slots, 4),
                      "misses": float(np.mean(misses)), "slots": slots,
                      "us_per_query": round(float(np.median(times)), 3), "runs": len(misses)})
         sl.log("pickview", name, f"misses {rows[-1]['miss_percent']:.3f} %  "
                f"{rows[-1]['us_per_query']:8.2f} us/query")
+    kd = rows[0]
+    fast = min((r for r in rows if r["group"] != "exact"), key=lambda r: r["us_per_query"])
     s = sl.Section(
         "pickview", "pickview: view selection, misses against microseconds per query", rows,
         ["group", "setting", "default", "miss_percent", "misses", "slots", "us_per_query",
@@ -139,9 +140,12 @@ def sweep_pickview(c):
         f"query poses along drive A, K = 4, &plusmn;45&deg; gate. <b>Accuracy:</b> the share "
         f"of the exact picks (kdtree's table) missing from the method's table, in percent "
         f"(symmetric-log axis: 0 is exact). <b>Time:</b> pickview's own microseconds per query, "
-        f"index build included. flann's trees differ on every run, so its misses are the mean "
-        f"of {c.repeat} runs. <b>Read:</b> lower left is better; the default (ringed) is exact "
-        f"and fastest here, so an approximate method buys nothing on a road-sized index.")
+        f"index build included, the median of {c.repeat} runs. flann's trees differ on every "
+        f"run, so its misses are the mean of those runs. <b>Read:</b> lower left is better; "
+        f"the default (kdtree) is ringed. In this run it took {kd['us_per_query']} &micro;s "
+        f"per query; the fastest approximate setting, {fast['setting']}, took "
+        f"{fast['us_per_query']} &micro;s and "
+        f"missed {fast['miss_percent']} % of the exact picks.")
     return sl.emit(c.out, s, "us_per_query", "miss_percent", xlabel="microseconds per query "
                    "(pickview's own timing: index build + search)", ylabel="missed picks (%)",
                    logx=True, yscale=("symlog", {"linthresh": 0.01}), ylim=(0, 300))
