@@ -111,7 +111,8 @@ def sweep_pickview(c):
             if exact is None:  # kdtree runs first
                 exact, exact_table = got, out
             if group == "exact":
-                c.checks(out == exact_table, f"pickview {name}: the same table as kdtree's first run")
+                c.checks(out == exact_table,
+                         f"pickview {name}: the same table as kdtree's first run")
             slots = sum(len(v) for v in exact.values())
             missed = sum(len(v - got.get(q, set())) for q, v in exact.items())
             misses.append(missed)
