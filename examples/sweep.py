@@ -345,17 +345,22 @@ def sweep_ptmrender(c):
             c.tools.run("bakedepth", "--quiet", "--scale", scale, ws)
 
     def score(name, extra):
-        """Mean SSIM over the variants and ptmrender's ms per frame for one setting."""
+        """Mean SSIM over the variants and ptmrender's ms per frame for one setting (each
+        variant's fastest of c.repeat runs; the frames are the same every run)."""
         ssims, ms, frames = [], 0.0, 0
         for v in variants:
             dst = os.path.join(c.work, "ptmrender", "renders", name.replace(" ", "_"), v)
-            _, err, _ = c.tools.run("ptmrender", "--force", "--poses",
-                                    os.path.join(offpath, v, "sparse", "images.txt"),
-                                    *extra, ws, dst)
-            m = re.search(r"(\d+) frames rendered.*\(([\d.]+) ms render, ([\d.]+) ms depth, "
-                          r"([\d.]+) ms load", err)
+            best = None
+            for _ in range(c.repeat):
+                _, err, _ = c.tools.run("ptmrender", "--force", "--poses",
+                                        os.path.join(offpath, v, "sparse", "images.txt"),
+                                        *extra, ws, dst)
+                m = re.search(r"(\d+) frames rendered.*\(([\d.]+) ms render, ([\d.]+) ms "
+                              r"depth, ([\d.]+) ms load", err)
+                t = float(m.group(2)) + float(m.group(3)) + float(m.group(4))
+                best = t if best is None else min(best, t)
             n = int(m.group(1))
-            ms += n * (float(m.group(2)) + float(m.group(3)) + float(m.group(4)))
+            ms += n * best
             frames += n
             ssims.append(c.tools.ssim_mean(dst, os.path.join(offpath, v, "images")))
         return sum(ssims) / len(ssims), ms / frames
@@ -370,7 +375,7 @@ def sweep_ptmrender(c):
         settings += [("projectors", f"K={k}", ["--projectors", k] if k != 4 else [], 1)
                      for k in (1, 2, 4, 8)]
         settings += [("bias", f"bias={b}", ["--bias", b], 1) for b in (0, 0.001, 0.02, 0.1)]
-        settings += [("depth", f"baked depth scale {s}", [], s) for s in (0.25, 0.5)]
+        settings += [("depth", f"baked depth scale {s}", [], s) for s in (0.25, 0.5, 2)]
         settings += [("depth", "depth pre-pass (not baked)", [], None)]
         settings += [("effects", f"no {e}", [f"--no-{e}"], 1)
                      for e in ("occlusion", "skybox", "masks")]
@@ -399,8 +404,8 @@ def sweep_ptmrender(c):
         "fixture's off-path truth poses (1.5 m lane changes and 15&deg; turns of drive A), "
         "projected from the recorded photographs of both drives. <b>Accuracy:</b> mean SSIM "
         "against the ray-traced truth at those poses. <b>Time:</b> ptmrender's own "
-        "milliseconds per frame (render + depth + load; PNG encoding excluded, it overlaps "
-        "rendering). <b>Read:</b> "
+        f"milliseconds per frame (render + depth + load; PNG encoding excluded, it overlaps "
+        f"rendering), fastest of {c.repeat} runs. <b>Read:</b> "
         "higher is better, left is faster; the default (K=4, bias 0.005, baked depth at scale 1, "
         "every effect the scene needs) is ringed.")
     return sl.emit(c.out, s, "ms_per_frame", "ssim", xlabel="milliseconds per frame "
