@@ -41,9 +41,10 @@ class Tools:
         return r.stdout, r.stderr, wall
 
     def best_wall(self, repeat, tool, *args):
-        """The run with the shortest wall time of `repeat` runs (less noise from other load)."""
+        """(stdout, stderr, wall seconds) of the fastest of `repeat` runs (less noise from other
+        load), and the slowest run's wall seconds: the spread shows what is noise."""
         runs = [self.run(tool, *args) for _ in range(repeat)]
-        return min(runs, key=lambda r: r[2])
+        return min(runs, key=lambda r: r[2]), max(r[2] for r in runs)
 
     def mkroad(self, ws, *options):
         """An mkroad workspace at ws (kept when it exists: mkroad is a pure function of options)."""
@@ -128,11 +129,12 @@ def write_csv(path, rows, fields):
 
 
 def plot(path, rows, x, y, *, xlabel, ylabel, title, logx=False, yscale=None, ylim=None,
-         lines=(), label="setting", group="group"):
+         lines=(), xmax=None, label="setting", group="group"):
     """One scatter plot: accuracy (y) against time (x), a colour per group (a line through each
     group's points in order), every point labelled with its setting, the rows whose "default"
     is true ringed (and labelled once: they are one setting, run again in each group).
-    lines: (y, text) horizontal references; yscale: a name or (name, keyword arguments)."""
+    lines: (y, text) horizontal references; yscale: a name or (name, keyword arguments);
+    xmax: a column with the slowest of the runs, drawn as a bar from the point (the fastest)."""
     fig, ax = plt.subplots(figsize=(8.5, 5.2), dpi=100)
     groups = list(dict.fromkeys(r[group] for r in rows))
     colours = plt.get_cmap("tab10")
@@ -141,6 +143,10 @@ def plot(path, rows, x, y, *, xlabel, ylabel, title, logx=False, yscale=None, yl
         ax.plot([r[x] for r in pts], [r[y] for r in pts], "o", color=colours(i % 10), label=g,
                 markersize=6, linestyle="-" if len(pts) > 1 else "none", linewidth=0.8,
                 alpha=0.9)
+        if xmax:
+            ax.errorbar([r[x] for r in pts], [r[y] for r in pts], fmt="none",
+                        xerr=[[0] * len(pts), [r[xmax] - r[x] for r in pts]],
+                        ecolor=colours(i % 10), elinewidth=0.8, alpha=0.5)
         for r in pts:
             if not r.get("default"):
                 ax.annotate(r[label], (r[x], r[y]), textcoords="offset points", xytext=(5, 4),
