@@ -124,7 +124,7 @@ def sweep_pickview(c):
                          f"= misses counted from its table ({missed} of {slots})")
         rows.append({"group": group, "setting": name, "default": name == "kdtree",
                      "miss_percent": round(100 * float(np.mean(misses)) / slots, 4),
-                     "misses": float(np.mean(misses)), "slots": slots,
+                     "misses": round(float(np.mean(misses)), 1), "slots": slots,
                      "us_per_query": round(float(np.median(times)), 3), "runs": len(misses)})
         sl.log("pickview", name, f"misses {rows[-1]['miss_percent']:.3f} %  "
                f"{rows[-1]['us_per_query']:8.2f} us/query")
