@@ -1,123 +1,482 @@
 #!/usr/bin/env python3
-"""Accuracy against time: sweep ptmrender's and bakedepth's knobs on the mkroad fixture.
+"""What accuracy costs, for every tool: sweep each program's accuracy knobs on the mkroad fixture.
 
-usage: examples/sweep.py [--bin build/bin] [--out out/sweep] [--frames N]
+usage: /usr/bin/python3 examples/sweep.py [--bin build/bin] [--out out/sweep] [--frames N]
+                                          [--only TOOL,...] [--repeat N] [--short]
 
-Renders the fixture's off-path truth poses (1.5 m lane changes and 15 degree turns, pass A) with
-every setting below, scores each against the ray-traced truth with `ssim`, and takes the
-milliseconds per frame that ptmrender reports (render + depth + load; PNG encoding excluded,
-it overlaps rendering). Writes OUT/sweep.csv and OUT/sweep.svg (SSIM against ms per frame).
+For each tool, every setting below runs on an mkroad road and is scored against the fixture's
+ray-traced truth; writes OUT/TOOL.csv and OUT/TOOL.png (accuracy against time, matplotlib) per
+tool and OUT/index.html, the page to read before choosing settings. Work folders: OUT/work/.
 
-Knobs: --projectors K (1, 2, 4, 8), --bias B (0, 0.001, 0.005, 0.02, 0.1),
-baked depth at --scale 0.25 / 0.5 / 1 against a depth pre-pass (no baked maps), and the
-effects (occlusion, skybox) on and off. Only the standard library and the mvtm tools are used.
+  pickview   --method kdtree|brute|flann|grid9, flann --checks: misses against the exact
+             kdtree's picks, against pickview's own microseconds per query (index + search)
+  segtrack   --smooth, --max-gap, --min-life on damaged labels: mask IoU against truth/masks,
+             against whole-process milliseconds per frame
+  inpaint3d  --method 3d|telea|ns|patch2d, --partners, --dilate: SSIM inside the vehicle masks
+             against truth/background, against whole-process milliseconds per inpainted image
+  bakedepth  --scale: share of the truth's surface pixels whose looked-up depth is within 1 %,
+             against bakedepth's own milliseconds per map (render + write)
+  ptmrender  --projectors, --bias, baked depth scale or a depth pre-pass, effects off: SSIM
+             against the ray-traced off-path truth, against ptmrender's own ms per frame
+  densify    (examples/sweep_densify.py) depth within 2 % against densify's ms per image
+
+Cheap runs are repeated (--repeat, default 3) and the fastest kept, to damp the noise of other
+load. --short (the ctest sweep_short) runs a few settings of every tool on a small road. Either
+way the sweep checks what must hold (the exact pickview methods agree, the page shows every plot,
+...) and exits 1 when a check fails. Needs /usr/bin/python3 with python3-matplotlib, -numpy,
+-scipy, -imageio and -openimageio.
 """
 import argparse
-import csv
 import os
 import re
 import shutil
-import subprocess
 import sys
+import types
 
-ap = argparse.ArgumentParser()
-ap.add_argument("--bin", default=os.path.join(os.path.dirname(__file__), "..", "build", "bin"))
-ap.add_argument("--out", default=os.path.join(os.path.dirname(__file__), "..", "out", "sweep"))
-ap.add_argument("--frames", type=int, default=20, help="mkroad frames per pass")
-args = ap.parse_args()
-B = os.path.abspath(args.bin)
-out = os.path.abspath(args.out)
-ws = os.path.join(out, "road")
-os.makedirs(out, exist_ok=True)
+import imageio
+import numpy as np
+from scipy.spatial.transform import Rotation
 
-
-def run(*cmd, capture=False):
-    r = subprocess.run([os.path.join(B, cmd[0]), *cmd[1:]], check=True, text=True,
-                       stdout=subprocess.PIPE if capture else None, stderr=subprocess.PIPE)
-    return r.stdout if capture else r.stderr
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+sys.path.insert(0, os.path.join(HERE, "..", "tests", "unit", "track"))
+import sweep_densify  # noqa: E402
+import sweeplib as sl  # noqa: E402
+from segtrack_recovery import CAR, damage, iou  # noqa: E402  (the recovery test's damage)
 
 
-if not os.path.exists(os.path.join(ws, "truth", "mkroad.txt")):
-    run("mkroad", "--quiet", "--frames", str(args.frames), "--fullsize-frames", "0", ws)
-# Vehicle masks: the fixture's truth, where segtrack would put them.
-os.makedirs(os.path.join(ws, "masks"), exist_ok=True)
-for f in os.listdir(os.path.join(ws, "truth", "masks")):
-    shutil.copy(os.path.join(ws, "truth", "masks", f), os.path.join(ws, "masks", f))
+def pickview_cloud(road, folder, n_index, n_query, seed=7):
+    """An index workspace of n_index poses scattered around the road's two drives (centres moved
+    by N(0, 2 m), turned by N(0, 15 deg), one in five turned round: the set-up of bench_pickview),
+    and n_query render-like queries along drive A (N(0, 1.5 m) sideways, N(0, 10 deg) of yaw)."""
+    rng = np.random.default_rng(seed)
+    drives = [np.loadtxt(os.path.join(road, "truth", f"trajectory_{p}.txt")) for p in "AB"]
 
-variants = ["lane_left", "lane_right", "yaw_left", "yaw_right"]
+    def along(traj, n):
+        i = rng.integers(0, len(traj) - 1, n)
+        f = rng.random(n)[:, None]
+        pos = traj[i, 1:4] * (1 - f) + traj[i + 1, 1:4] * f
+        return pos, Rotation.from_quat(traj[i, 4:8])  # c2w, TUM order x y z w
+
+    pos, rot = zip(*(along(d, n_index // 2) for d in drives))
+    pos, rot = np.vstack(pos), Rotation.concatenate(rot)
+    pos[:, :2] += rng.normal(0, 2.0, (len(pos), 2))
+    yaw = rng.normal(0, 15, len(pos)) + 180 * (rng.random(len(pos)) < 0.2)
+    c2w = Rotation.from_euler("z", yaw, degrees=True) * rot  # world z is up
+    w2c = c2w.inv()
+    t = -w2c.apply(pos)
+    q = w2c.as_quat()  # x y z w
+    sparse = os.path.join(folder, "sparse")
+    os.makedirs(sparse, exist_ok=True)
+    shutil.copy(os.path.join(road, "sparse", "cameras.txt"), sparse)
+    with open(os.path.join(sparse, "points3D.txt"), "w") as f:
+        f.write("# 3D point list with one line of data per point:\n")
+    with open(os.path.join(sparse, "images.txt"), "w") as f:
+        for k in range(len(pos)):
+            f.write(f"{k + 1} {q[k, 3]:.17g} {q[k, 0]:.17g} {q[k, 1]:.17g} {q[k, 2]:.17g} "
+                    f"{t[k, 0]:.17g} {t[k, 1]:.17g} {t[k, 2]:.17g} 1 P_{k:05d}.png\n\n")
+    qpos, qrot = along(drives[0], n_query)
+    qrot = Rotation.from_euler("z", rng.normal(0, 10, n_query), degrees=True) * qrot
+    qpos += qrot.apply(np.array([1.0, 0, 0]) * rng.normal(0, 1.5, (n_query, 1)))  # camera x
+    queries = os.path.join(folder, "queries.txt")
+    qq = qrot.as_quat()
+    np.savetxt(queries, np.column_stack([np.arange(n_query) * 0.1, qpos, qq]), fmt="%.17g")
+    return queries
 
 
-def bake(scale):
-    d = os.path.join(ws, "depth")
-    shutil.rmtree(d, ignore_errors=True)
-    if scale is not None:
-        run("bakedepth", "--quiet", "--scale", str(scale), ws)
+def picks(tsv):
+    """query -> set of picked images, from pickview's table."""
+    out = {}
+    for line in tsv.splitlines()[1:]:
+        query, _, image = line.split("\t")[:3]
+        out.setdefault(query, set()).add(image)
+    return out
 
 
-def score(name, extra):
-    """Mean SSIM over all variants and ms per frame for one setting."""
-    ssims, ms, frames = [], 0.0, 0
-    for v in variants:
-        dst = os.path.join(out, "renders", name, v)
-        err = run("ptmrender", "--force", "--poses", os.path.join(ws, "truth", "offpath", v, "sparse", "images.txt"),
-                  *extra, ws, dst)
-        m = re.search(r"(\d+) frames rendered.*\(([\d.]+) ms render, ([\d.]+) ms depth, ([\d.]+) ms load", err)
-        n = int(m.group(1))
-        ms += n * (float(m.group(2)) + float(m.group(3)) + float(m.group(4)))
-        frames += n
-        table = run("ssim", dst, os.path.join(ws, "truth", "offpath", v, "images"), capture=True)
-        ssims.append(float([l for l in table.splitlines() if l.startswith("mean\t")][0].split("\t")[1]))
-    return sum(ssims) / len(ssims), ms / frames
+def sweep_pickview(c):
+    folder = os.path.join(c.work, "pickview")
+    n_index, n_query = (2000, 1000) if c.short else (10000, 5000)
+    queries = pickview_cloud(c.road, folder, n_index, n_query)
+    settings = [("exact", "kdtree", []), ("exact", "brute", []), ("grid9", "grid9", [])]
+    checks = (1, 8, 32, 128) if c.short else (1, 2, 4, 8, 16, 32, 64, 128, 256)
+    settings += [("flann", f"flann checks={n}", ["--checks", n]) for n in checks]
+    rows, exact, exact_table = [], None, None
+    for group, name, extra in settings:
+        method = name.split()[0]
+        # flann builds different trees on every run (std::random_device): average the misses.
+        misses, slots, times = [], 0, []
+        for _ in range(c.repeat):
+            out, err, _ = c.tools.run("pickview", "--method", method, *extra, folder, queries)
+            got = picks(out)
+            if exact is None:  # kdtree runs first
+                exact, exact_table = got, out
+            if group == "exact":
+                c.checks(out == exact_table,
+                         f"pickview {name}: the same table as kdtree's first run")
+            slots = sum(len(v) for v in exact.values())
+            missed = sum(len(v - got.get(q, set())) for q, v in exact.items())
+            misses.append(missed)
+            times.append(float(re.search(r"([\d.]+) us/query", err).group(1)))
+            m = re.search(r"miss rate [\d.]+ \((\d+) of (\d+)\)", err)
+            if m:  # pickview's own comparison must count what we count from its table
+                c.checks(int(m.group(1)) == missed and int(m.group(2)) == slots,
+                         f"pickview {name}: its reported misses ({m.group(1)} of {m.group(2)}) "
+                         f"= misses counted from its table ({missed} of {slots})")
+        rows.append({"group": group, "setting": name, "default": name == "kdtree",
+                     "miss_percent": round(100 * float(np.mean(misses)) / slots, 4),
+                     "misses": round(float(np.mean(misses)), 1), "slots": slots,
+                     "us_per_query": round(float(np.median(times)), 3), "runs": len(misses)})
+        sl.log("pickview", name, f"misses {rows[-1]['miss_percent']:.3f} %  "
+               f"{rows[-1]['us_per_query']:8.2f} us/query")
+    kd = rows[0]
+    fast = min((r for r in rows if r["group"] != "exact"), key=lambda r: r["us_per_query"])
+    s = sl.Section(
+        "pickview", "pickview: view selection, misses against microseconds per query", rows,
+        ["group", "setting", "default", "miss_percent", "misses", "slots", "us_per_query",
+         "runs"],
+        f"<b>Knob:</b> <code>--method</code> (kdtree, brute: exact; flann, grid9: approximate) "
+        f"and, for flann, <code>--checks</code> (leaves visited per query). "
+        f"{n_index} projector poses scattered around the road's two drives (centres moved by "
+        f"N(0, 2 m), turned by N(0, 15&deg;), one in five turned round), {n_query} render-like "
+        f"query poses along drive A, K = 4, &plusmn;45&deg; gate. <b>Accuracy:</b> the share "
+        f"of the exact picks (kdtree's table) missing from the method's table, in percent "
+        f"(symmetric-log axis: 0 is exact). <b>Time:</b> pickview's own microseconds per query, "
+        f"index build included, the median of {c.repeat} runs. flann's trees differ on every "
+        f"run, so its misses are the mean of those runs. <b>Read:</b> lower left is better; "
+        f"the default (kdtree) is ringed. In this run it took {kd['us_per_query']} &micro;s "
+        f"per query; the fastest approximate setting, {fast['setting']}, took "
+        f"{fast['us_per_query']} &micro;s and "
+        f"missed {fast['miss_percent']} % of the exact picks.")
+    return sl.emit(c.out, s, "us_per_query", "miss_percent", xlabel="microseconds per query "
+                   "(pickview's own timing: index build + search)", ylabel="missed picks (%)",
+                   logx=True, yscale=("symlog", {"linthresh": 0.01}), ylim=(0, 300))
 
 
-rows = []
-def add(group, name, extra, depth_scale):
-    bake(depth_scale)
-    s, ms = score(name, extra)
-    rows.append({"group": group, "setting": name, "ssim": round(s, 5), "ms_per_frame": round(ms, 2)})
-    print(f"{group:12s} {name:28s} SSIM {s:.4f}  {ms:7.1f} ms/frame", file=sys.stderr)
+def sweep_segtrack(c):
+    folder = os.path.join(c.work, "segtrack")
+    names = sorted(n for n in os.listdir(os.path.join(c.road, "truth", "masks")))
+    labels = [imageio.imread(os.path.join(c.road, "labels", n)) for n in names]
+    truths = [imageio.imread(os.path.join(c.road, "truth", "masks", n)) > 0 for n in names]
+    k = 4
+    damaged = damage(labels, k, np.random.default_rng(5))
+    ldir = os.path.join(folder, "labels")
+    shutil.rmtree(ldir, ignore_errors=True)
+    os.makedirs(ldir)
+    for n, lab in zip(names, damaged):
+        imageio.imwrite(os.path.join(ldir, n), lab)
+    input_iou = iou([d == CAR for d in damaged], truths)
+    clean_iou = iou([lab == CAR for lab in labels], truths)
+    if c.short:
+        knobs = [("smooth", "--smooth", (0, 1, 4)), ("max-gap", "--max-gap", (0, 10)),
+                 ("min-life", "--min-life", (1, 3))]
+    else:
+        knobs = [("smooth", "--smooth", (0, 0.5, 1, 2, 4, 8)),
+                 ("max-gap", "--max-gap", (0, 1, 2, 5, 10, 20)),
+                 ("min-life", "--min-life", (1, 2, 3, 5, 8))]
+    defaults = {"--smooth": 1, "--max-gap": 10, "--min-life": 3}
+    rows = []
+    ws = os.path.join(folder, "ws")
+    for group, opt, values in knobs:
+        for v in values:
+            (_, _, wall), slow = c.tools.best_wall(c.repeat, "segtrack", "-q", opt, v, ldir, ws)
+            masks = [imageio.imread(os.path.join(ws, "masks", n)) > 0 for n in names]
+            rows.append({"group": group, "setting": f"{group}={v}", "default": v == defaults[opt],
+                         "iou": round(iou(masks, truths), 4),
+                         "ms_per_frame": round(1000 * wall / len(names), 3),
+                         "slowest_ms_per_frame": round(1000 * slow / len(names), 3)})
+            sl.log("segtrack", rows[-1]["setting"], f"IoU {rows[-1]['iou']:.4f}  "
+                   f"{rows[-1]['ms_per_frame']:7.2f} ms/frame")
+    best_default = max(r["iou"] for r in rows if r["default"])
+    c.checks(best_default > input_iou,
+             f"segtrack defaults: IoU {best_default:.4f} beats the damaged labels' {input_iou:.4f}")
+    s = sl.Section(
+        "segtrack", "segtrack: vehicle masks, IoU against milliseconds per frame", rows,
+        ["group", "setting", "default", "iou", "ms_per_frame", "slowest_ms_per_frame"],
+        f"<b>Knobs:</b> <code>--smooth</code> (Gaussian sigma in frames for centroid and size), "
+        f"<code>--max-gap</code> (longest run of missed frames filled by interpolation), "
+        f"<code>--min-life</code> (shortest track kept). Each knob is varied alone, the others "
+        f"at their defaults. Input: the {len(names)} label images of drive A, damaged as in the "
+        f"test track.segtrack_recovery_mkroad (every {k}th frame loses its cars, a third of the "
+        f"frames gain a spurious blob). <b>Accuracy:</b> IoU of the masks against the "
+        f"ray-traced truth/masks, pooled over frames (dashed: the damaged labels as they are, "
+        f"and the clean labels). <b>Time:</b> whole-process wall time per frame (PNG decoding "
+        f"and writing included), fastest of {c.repeat} runs (the bar reaches the slowest: the "
+        f"spread is other load). <b>Read:</b> higher is better; "
+        f"the default settings are ringed (one per knob: the same setting run again).",
+        note="The settings cost the same to within noise: choose by IoU alone.")
+    return sl.emit(c.out, s, "ms_per_frame", "iou", xmax="slowest_ms_per_frame",
+                   xlabel="milliseconds per frame "
+                   "(whole-process wall time)", ylabel="mask IoU against the truth (pooled)",
+                   lines=[(input_iou, "damaged labels, no segtrack"),
+                          (clean_iou, "undamaged labels")])
 
-add("baseline", "vertex colours", ["--mode", "vertex"], 1.0)
-for k in (1, 2, 4, 8):
-    add("projectors", f"K={k}", ["--projectors", str(k)], 1.0)
-for b in (0, 0.001, 0.005, 0.02, 0.1):
-    add("bias", f"bias={b}", ["--bias", str(b)], 1.0)
-for sc in (0.25, 0.5, 1.0):
-    add("depth", f"baked depth scale {sc}", [], sc)
-add("depth", "depth pre-pass (not baked)", [], None)
-add("effects", "no occlusion", ["--no-occlusion"], 1.0)
-add("effects", "no skybox", ["--no-skybox"], 1.0)
-add("effects", "no masks", ["--no-masks"], 1.0)
 
-with open(os.path.join(out, "sweep.csv"), "w", newline="") as f:
-    w = csv.DictWriter(f, fieldnames=["group", "setting", "ssim", "ms_per_frame"])
-    w.writeheader()
-    w.writerows(rows)
+def sweep_inpaint3d(c):
+    folder = os.path.join(c.work, "inpaint3d")
+    ws = sl.copy_workspace(c.road, os.path.join(folder, "ws"))
+    truth = os.path.join(c.road, "truth")
+    names = sorted(os.listdir(os.path.join(truth, "masks")))
+    shutil.copytree(os.path.join(truth, "masks"), os.path.join(ws, "masks"), dirs_exist_ok=True)
+    c.tools.run("pickview", "-q", "--partners", ws)
+    c.tools.run("bakedepth", "-q", ws)
+    bg = sl.link_subset(os.path.join(truth, "background"), names, os.path.join(folder, "truth"))
+    score = lambda d: c.tools.ssim_mean(bg, d, "--mask", os.path.join(truth, "masks"))  # noqa
+    recorded = score(os.path.join(ws, "images"))
+    if c.short:
+        settings = [("3d partners", "3d partners=1", ["--partners", 1]),
+                    ("3d partners", "3d (defaults)", []), ("2-D", "telea", ["--method", "telea"])]
+    else:
+        settings = [("3d partners", f"3d partners={n}", ["--partners", n]) for n in (1, 2)]
+        settings += [("3d partners", "3d (defaults)", [])]
+        settings += [("3d partners", f"3d partners={n}", ["--partners", n]) for n in (8, 16)]
+        settings += [("3d dilate", f"3d dilate={d}", ["--dilate", d]) for d in (0, 3, 6)]
+        settings += [("2-D", m, ["--method", m]) for m in ("telea", "ns", "patch2d")]
+        settings += [("2-D", "telea radius=9", ["--method", "telea", "--radius", 9])]
+    rows = []
+    for group, name, extra in settings:
+        (_, _, wall), slow = c.tools.best_wall(c.repeat, "inpaint3d", "--force", "-q", *extra,
+                                               ws)
+        rows.append({"group": group, "setting": name, "default": not extra,
+                     "in_mask_ssim": round(score(os.path.join(ws, "textures")), 4),
+                     "ms_per_image": round(1000 * wall / len(names), 2),
+                     "slowest_ms_per_image": round(1000 * slow / len(names), 2)})
+        sl.log("inpaint3d", name, f"in-mask SSIM {rows[-1]['in_mask_ssim']:.4f}  "
+               f"{rows[-1]['ms_per_image']:7.1f} ms/image")
+    best = {r["setting"]: r["in_mask_ssim"] for r in rows}
+    c.checks(best["3d (defaults)"] > max(best["telea"], recorded),
+             f"inpaint3d: 3d ({best['3d (defaults)']:.4f}) beats telea ({best['telea']:.4f}) "
+             f"and the recorded image ({recorded:.4f}) inside the masks")
+    s = sl.Section(
+        "inpaint3d", "inpaint3d: vehicle removal, in-mask SSIM against milliseconds per image",
+        rows, ["group", "setting", "default", "in_mask_ssim", "ms_per_image",
+               "slowest_ms_per_image"],
+        f"<b>Knobs:</b> <code>--method</code> (3d: partner images of the other drive through the "
+        f"mesh; telea, ns: OpenCV 2-D inpainting; patch2d: the thesis's 2-D templates), for 3d "
+        f"<code>--partners</code> (partners tried per image) and <code>--dilate</code> (pixels "
+        f"the mask grows by first). Masks: the fixture's truth masks; partners from "
+        f"<code>pickview --partners</code>; baked depth. <b>Accuracy:</b> mean SSIM inside the "
+        f"truth vehicle masks of the {len(names)} images of drive A against the ray-traced "
+        f"background without vehicles (dashed: the recorded image, vehicles still in). "
+        f"<b>Time:</b> whole-process wall time (GL start-up, reading, writing all "
+        f"{2 * len(names)} textures) divided by the images with a vehicle, fastest of "
+        f"{c.repeat} runs (the bar reaches the slowest: the spread is other load). "
+        f"<b>Read:</b> higher is better; the default (3d, 4 partners, dilate 1) is ringed.")
+    return sl.emit(c.out, s, "ms_per_image", "in_mask_ssim", xmax="slowest_ms_per_image",
+                   xlabel="milliseconds per inpainted "
+                   "image (whole-process wall time)", ylabel="SSIM inside the vehicle masks",
+                   lines=[(recorded, "recorded image (no inpainting)")])
 
-# A plain SVG scatter plot: SSIM (y) against ms per frame (x), one colour per group.
-W, H, M = 760, 460, 60
-xs = [r["ms_per_frame"] for r in rows]
-ys = [r["ssim"] for r in rows]
-x0, x1 = 0, max(xs) * 1.1
-y0, y1 = min(ys) - 0.02, max(ys) + 0.02
-X = lambda v: M + (v - x0) / (x1 - x0) * (W - 2 * M)
-Y = lambda v: H - M - (v - y0) / (y1 - y0) * (H - 2 * M)
-colours = {"baseline": "#000", "projectors": "#c33", "bias": "#36c", "depth": "#393", "effects": "#c90"}
-svg = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{H}" font-family="sans-serif" font-size="11">',
-       f'<rect width="{W}" height="{H}" fill="white"/>',
-       f'<line x1="{M}" y1="{H-M}" x2="{W-M}" y2="{H-M}" stroke="#000"/><line x1="{M}" y1="{M}" x2="{M}" y2="{H-M}" stroke="#000"/>',
-       f'<text x="{W/2}" y="{H-20}" text-anchor="middle">ms per frame (render + depth + load)</text>',
-       f'<text x="15" y="{H/2}" transform="rotate(-90 15 {H/2})" text-anchor="middle">mean SSIM vs ray-traced truth</text>']
-for i in range(6):
-    xv = x0 + (x1 - x0) * i / 5
-    yv = y0 + (y1 - y0) * i / 5
-    svg.append(f'<text x="{X(xv)}" y="{H-M+15}" text-anchor="middle">{xv:.0f}</text>')
-    svg.append(f'<text x="{M-5}" y="{Y(yv)+4}" text-anchor="end">{yv:.3f}</text>')
-for r in rows:
-    c = colours[r["group"]]
-    svg.append(f'<circle cx="{X(r["ms_per_frame"]):.1f}" cy="{Y(r["ssim"]):.1f}" r="4" fill="{c}"/>')
-    svg.append(f'<text x="{X(r["ms_per_frame"])+6:.1f}" y="{Y(r["ssim"])-4:.1f}" fill="{c}">{r["setting"]}</text>')
-svg.append("</svg>")
-with open(os.path.join(out, "sweep.svg"), "w") as f:
-    f.write("\n".join(svg))
-print(os.path.join(out, "sweep.csv"))
+
+def depth_scores(maps, truths, via=None):
+    """Each map looked up (nearest texel, as the occlusion test samples it) at the pixel centres
+    of its truth, after resizing it to the shape `via` first (nearest, as ptmrender and inpaint3d
+    load maps: libcore/workspace/projector_sources.cpp) when given: (% of the truth's surface
+    pixels within 1 %, % that ptmrender's default bias 0.005 would wrongly call occluded, % of all
+    pixels where map and truth disagree about there being a surface)."""
+    good = surface = occluded = disagree = pixels = 0
+    for n, t in truths.items():
+        d = sl.read_float(os.path.join(maps, n))
+        d = sl.resample_nearest(sl.resample_nearest(d, via) if via else d, t.shape)
+        s = np.isfinite(t)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            good += int((s & (np.abs(d / t - 1) <= 0.01)).sum())
+            occluded += int((s & (t > d * 1.005)).sum())
+        surface += int(s.sum())
+        disagree += int((np.isfinite(d) != s).sum())
+        pixels += s.size
+    return (round(100 * good / surface, 3), round(100 * occluded / surface, 3),
+            round(100 * disagree / pixels, 3))
+
+
+def sweep_bakedepth(c):
+    ws = sl.copy_workspace(c.road, os.path.join(c.work, "bakedepth", "ws"))
+
+    def truth(*sub):
+        d = os.path.join(c.road, "truth", *sub, "depth")
+        return {n: sl.read_float(os.path.join(d, n)) for n in sorted(os.listdir(d))}
+
+    own, fine = truth(), truth("fullsize")
+    w, h = fine[next(iter(fine))].shape[::-1]
+    image = own[next(iter(own))].shape
+    maps = os.path.join(ws, "depth")
+    rows = []
+    for scale in ((0.25, 1) if c.short else (0.125, 0.25, 0.5, 1, 2, 4)):
+        (_, err, _), _ = c.tools.best_wall(c.repeat, "bakedepth", "--force", "--scale", scale,
+                                           ws)
+        m = re.search(r"\(([\d.]+) ms render, ([\d.]+) ms write per map", err)
+        shape = sl.read_float(os.path.join(maps, next(iter(own)))).shape
+        for group, via in (("map as written", None), ("as ptmrender loads it", image)):
+            within1, false_occ, disagree = depth_scores(maps, fine, via)
+            rows.append({"group": group, "setting": f"scale={scale}",
+                         "default": scale == 1 and via is None,
+                         "within1_percent": within1, "false_occlusion_percent": false_occ,
+                         "surface_disagrees_percent": disagree,
+                         "own_centres_within1_percent": depth_scores(maps, own, via)[0],
+                         "ms_per_map": round(float(m.group(1)) + float(m.group(2)), 2),
+                         "map_size": f"{shape[1]}x{shape[0]}"})
+            sl.log("bakedepth", f"{rows[-1]['setting']} {group}", f"within 1 % {within1:.2f} %"
+                   f"  {rows[-1]['ms_per_map']:6.2f} ms/map")
+    by = {(r["group"], r["setting"]): r for r in rows}
+    one = by[("map as written", "scale=1")]
+    c.checks(one["own_centres_within1_percent"] > 99,
+             f"bakedepth --scale 1: {one['own_centres_within1_percent']} % of the truth's surface "
+             f"pixels within 1 % at the image's own pixel centres (the mesh is the traced "
+             f"geometry)")
+    c.checks(one["within1_percent"] > by[("map as written", "scale=0.25")]["within1_percent"],
+             "bakedepth: scale 1 maps are more accurate than scale 0.25 maps")
+    s = sl.Section(
+        "bakedepth", "bakedepth: depth maps, depth accuracy against milliseconds per map", rows,
+        ["group", "setting", "default", "within1_percent", "false_occlusion_percent",
+         "surface_disagrees_percent", "own_centres_within1_percent", "ms_per_map", "map_size"],
+        f"<b>Knob:</b> <code>--scale</code>, the depth map's size relative to the image "
+        f"({image[1]}x{image[0]} here). "
+        f"<b>Accuracy:</b> the maps of the {len(fine)} images that mkroad also ray-traced at "
+        f"{w}x{h} (truth/fullsize), looked up (nearest texel, as ptmrender's occlusion test "
+        f"samples them) at those finer pixel centres, which fall anywhere inside a texel as "
+        f"projected points do: the share of the truth's surface pixels within 1 % of the true "
+        f"depth. Two groups: the map as bakedepth wrote it, and the map as ptmrender and "
+        f"inpaint3d load it: resized to the image's size (nearest), which throws away what a "
+        f"scale above 1 adds and shifts its samples by a quarter pixel. The CSV also gives the "
+        f"share the occlusion test at ptmrender's default bias 0.005 would wrongly call "
+        f"occluded, the share of all pixels where map and truth disagree about there being a "
+        f"surface, and the score at the images' own pixel centres "
+        f"(all {len(own)} images; exact at scale 1, since the mesh is the traced geometry). "
+        f"<b>Time:</b> bakedepth's own milliseconds per map (render + EXR write), fastest of "
+        f"{c.repeat} runs (both groups share it). <b>Read:</b> higher is better; the default "
+        f"(scale 1) is ringed. "
+        f"What the scale does to the rendered frames is in the ptmrender plot (group "
+        f"&ldquo;depth&rdquo;).")
+    return sl.emit(c.out, s, "ms_per_map", "within1_percent", xlabel="milliseconds per map "
+                   "(bakedepth's own timing: render + write)",
+                   ylabel="truth surface pixels within 1 % (%)")
+
+
+def sweep_ptmrender(c):
+    ws = sl.copy_workspace(c.road, os.path.join(c.work, "ptmrender", "ws"))
+    shutil.copytree(os.path.join(ws, "truth", "masks"), os.path.join(ws, "masks"))
+    variants = ["lane_left", "lane_right", "yaw_left", "yaw_right"]
+    offpath = os.path.join(ws, "truth", "offpath")
+
+    def bake(scale):
+        shutil.rmtree(os.path.join(ws, "depth"), ignore_errors=True)
+        if scale is not None:
+            c.tools.run("bakedepth", "--quiet", "--scale", scale, ws)
+
+    def score(name, extra):
+        """Mean SSIM over the variants and ptmrender's ms per frame for one setting (each
+        variant's fastest of c.repeat runs; the frames are the same every run)."""
+        ssims, ms, frames = [], 0.0, 0
+        for v in variants:
+            dst = os.path.join(c.work, "ptmrender", "renders", name.replace(" ", "_"), v)
+            best = None
+            for _ in range(c.repeat):
+                _, err, _ = c.tools.run("ptmrender", "--force", "--poses",
+                                        os.path.join(offpath, v, "sparse", "images.txt"),
+                                        *extra, ws, dst)
+                m = re.search(r"(\d+) frames rendered.*\(([\d.]+) ms render, ([\d.]+) ms "
+                              r"depth, ([\d.]+) ms load", err)
+                t = float(m.group(2)) + float(m.group(3)) + float(m.group(4))
+                best = t if best is None else min(best, t)
+            n = int(m.group(1))
+            ms += n * best
+            frames += n
+            ssims.append(c.tools.ssim_mean(dst, os.path.join(offpath, v, "images")))
+        return sum(ssims) / len(ssims), ms / frames
+
+    if c.short:
+        settings = [("baseline", "vertex colours", ["--mode", "vertex"], 1),
+                    ("projectors", "K=1", ["--projectors", 1], 1),
+                    ("projectors", "K=4", [], 1),
+                    ("depth", "depth pre-pass (not baked)", [], None)]
+    else:
+        settings = [("baseline", "vertex colours", ["--mode", "vertex"], 1)]
+        settings += [("projectors", f"K={k}", ["--projectors", k] if k != 4 else [], 1)
+                     for k in (1, 2, 4, 8)]
+        settings += [("bias", f"bias={b}", ["--bias", b], 1) for b in (0, 0.001, 0.02, 0.1)]
+        settings += [("depth", f"baked depth scale {s}", [], s) for s in (0.25, 0.5, 2)]
+        settings += [("depth", "depth pre-pass (not baked)", [], None)]
+        settings += [("effects", f"no {e}", [f"--no-{e}"], 1)
+                     for e in ("occlusion", "skybox", "masks")]
+    rows, baked = [], "unset"
+    for group, name, extra, scale in settings:
+        if scale != baked:
+            bake(scale)
+            baked = scale
+        s, ms = score(name, extra)
+        rows.append({"group": group, "setting": name, "default": name == "K=4",
+                     "ssim": round(s, 5), "ms_per_frame": round(ms, 2)})
+        sl.log("ptmrender", name, f"SSIM {s:.4f}  {ms:7.1f} ms/frame")
+    by = {r["setting"]: r["ssim"] for r in rows}
+    c.checks(by["K=4"] > by["vertex colours"],
+             f"ptmrender: projecting photographs ({by['K=4']:.4f}) beats vertex colours "
+             f"({by['vertex colours']:.4f})")
+    s = sl.Section(
+        "ptmrender", "ptmrender (and bakedepth's scale): SSIM against milliseconds per frame",
+        rows, ["group", "setting", "default", "ssim", "ms_per_frame"],
+        "<b>Knobs:</b> <code>--projectors</code> K (projectors tried per pixel), "
+        "<code>--bias</code> (relative occlusion bias), the baked depth maps' scale "
+        "(<code>bakedepth --scale</code>) or no baked maps (a depth pre-pass per frame), the "
+        "effects turned off (<code>--no-occlusion</code>, <code>--no-skybox</code>, "
+        "<code>--no-masks</code>), and vertex colours only (<code>--mode vertex</code>) as the "
+        "baseline. Each knob is varied alone; masks: the fixture's truth masks. Poses: the "
+        "fixture's off-path truth poses (1.5 m lane changes and 15&deg; turns of drive A), "
+        "projected from the recorded photographs of both drives. <b>Accuracy:</b> mean SSIM "
+        "against the ray-traced truth at those poses. <b>Time:</b> ptmrender's own "
+        f"milliseconds per frame (render + depth + load; PNG encoding excluded, it overlaps "
+        f"rendering), fastest of {c.repeat} runs. <b>Read:</b> "
+        "higher is better, left is faster; the default (K=4, bias 0.005, baked depth at scale 1, "
+        "every effect the scene needs) is ringed.")
+    return sl.emit(c.out, s, "ms_per_frame", "ssim", xlabel="milliseconds per frame "
+                   "(ptmrender's own timing: render + depth + load)",
+                   ylabel="mean SSIM against the ray-traced truth")
+
+
+SWEEPS = {"pickview": sweep_pickview, "segtrack": sweep_segtrack, "inpaint3d": sweep_inpaint3d,
+          "bakedepth": sweep_bakedepth, "ptmrender": sweep_ptmrender,
+          "densify": sweep_densify.sweep}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--bin", default=os.path.join(HERE, "..", "build", "bin"))
+    ap.add_argument("--out", default=os.path.join(HERE, "..", "out", "sweep"))
+    ap.add_argument("--frames", type=int, help="mkroad frames per pass (default 40; short 16)")
+    ap.add_argument("--only", help="comma-separated tools (default: all): " + ",".join(SWEEPS)
+                    + "; the page then shows only these, and other tools' files in OUT go")
+    ap.add_argument("--repeat", type=int, help="runs of each cheap setting (default 3; short 1)")
+    ap.add_argument("--short", action="store_true", help="a few settings per tool, small roads")
+    a = ap.parse_args()
+    only = a.only.split(",") if a.only else list(SWEEPS)
+    unknown = [t for t in only if t not in SWEEPS]
+    if unknown:
+        ap.error(f"--only: unknown tool {unknown[0]} (choose from {', '.join(SWEEPS)})")
+    out = os.path.abspath(a.out)
+    os.makedirs(os.path.join(out, "work"), exist_ok=True)
+    c = types.SimpleNamespace(tools=sl.Tools(a.bin), out=out, work=os.path.join(out, "work"),
+                              short=a.short, checks=sl.Checks(),
+                              repeat=a.repeat or (1 if a.short else 3))
+    frames = a.frames or (16 if a.short else 40)
+    c.road = c.tools.mkroad(os.path.join(c.work, "road"), "--frames", frames,
+                            "--fullsize-frames", 1 if a.short else 4)
+    for f in os.listdir(out):  # plots of tools not swept this time would be stale
+        if f.endswith((".png", ".csv")) and f[:-4] not in only:
+            os.remove(os.path.join(out, f))
+    sections = [SWEEPS[t](c) for t in only]
+    page = sl.write_page(
+        out, sections, "mvtm: what accuracy costs, for every tool",
+        f"Each plot is one tool's accuracy knobs, swept on the synthetic mkroad road "
+        f"({frames} frames per drive{', short mode' if a.short else ''}) and scored against its "
+        f"ray-traced truth. Read it before choosing settings: up is more accurate (down, for "
+        f"pickview's misses), left is faster; the ringed point is the tool's default. Made by "
+        f"<code>make -f Makefile.examples sweep</code> (<code>examples/sweep.py</code>); "
+        f"times are from one shared machine, so compare them within a plot, not across runs.")
+    c.checks.page(out, sections)
+    print(page)
+    if c.checks.failed:
+        print(f"sweep: {len(c.checks.failed)} check(s) failed", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
