@@ -17,4 +17,19 @@ namespace mvtm {
 // with the folders tried; not loadable, with the loader's message). Thread-safe.
 void* PluginEntry(const std::string& module, const std::string& entry, std::string* failure);
 
+// A module's function table: `entry` is an extern "C" function returning a const Table* whose
+// first member is `int abi`. Returns it when its abi is `abi`, else nullptr with *failure set.
+// Callers keep the result in a function-local static (opened once per process).
+template <class Table>
+const Table* PluginTable(const std::string& module, const std::string& entry, int abi,
+                         std::string* failure) {
+  void* sym = PluginEntry(module, entry, failure);
+  const Table* table = sym ? reinterpret_cast<const Table* (*)()>(sym)() : nullptr;
+  if (sym && (!table || table->abi != abi)) {
+    *failure = module + " is not this mvtm's module (ABI " + std::to_string(abi) + " expected)";
+    return nullptr;
+  }
+  return table;
+}
+
 }  // namespace mvtm

@@ -1,6 +1,5 @@
 // TsdfVolume: argument checks here, the volume itself in libmvtm_vdb.so (tsdf_backend.h).
 #include <cmath>
-#include <mutex>
 #include <string>
 
 #include "base/error.h"
@@ -12,18 +11,9 @@ namespace mvtm {
 
 namespace {
 const VdbPlugin& Plugin() {
-  static std::once_flag once;
-  static const VdbPlugin* plugin = nullptr;
   static std::string failure;
-  std::call_once(once, [] {
-    auto entry = reinterpret_cast<const VdbPlugin* (*)()>(
-        PluginEntry("libmvtm_vdb.so", "mvtm_vdb_plugin", &failure));
-    const VdbPlugin* p = entry ? entry() : nullptr;
-    if (p && p->abi != kVdbPluginAbi)
-      failure = "libmvtm_vdb.so is not this mvtm's module";
-    else
-      plugin = p;
-  });
+  static const VdbPlugin* plugin =
+      PluginTable<VdbPlugin>("libmvtm_vdb.so", "mvtm_vdb_plugin", kVdbPluginAbi, &failure);
   if (!plugin) throw Error("depth fusion needs OpenVDB, which could not be loaded: " + failure);
   return *plugin;
 }

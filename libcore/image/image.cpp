@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <filesystem>
-#include <mutex>
 
 #include "base/atomic_file.h"
 #include "base/error.h"
@@ -20,18 +19,9 @@ namespace {
 // The OpenImageIO plugin, opened once per process. Throws Error(path, 0, ...) naming the file
 // that needed it.
 const OiioPlugin& Plugin(const std::string& path) {
-  static std::once_flag once;
-  static const OiioPlugin* plugin = nullptr;
   static std::string failure;
-  std::call_once(once, [] {
-    auto entry = reinterpret_cast<const OiioPlugin* (*)()>(
-        PluginEntry("libmvtm_oiio.so", "mvtm_oiio_plugin", &failure));
-    const OiioPlugin* p = entry ? entry() : nullptr;
-    if (p && p->abi != kOiioPluginAbi)
-      failure = "libmvtm_oiio.so is not this mvtm's plugin";
-    else
-      plugin = p;
-  });
+  static const OiioPlugin* plugin =
+      PluginTable<OiioPlugin>("libmvtm_oiio.so", "mvtm_oiio_plugin", kOiioPluginAbi, &failure);
   if (!plugin)
     throw Error(path, 0,
                 "this image format needs OpenImageIO, which could not be loaded: " + failure);
