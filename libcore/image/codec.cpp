@@ -1,6 +1,7 @@
 #include "image/codec.h"
 
 #include <cstring>
+#include <filesystem>
 
 #include "base/error.h"
 #include "image/image.h"
@@ -15,6 +16,17 @@ void CheckImageDims(const std::string& path, int64_t width, int64_t height, int6
                 "image claims " + std::to_string(width) + "x" + std::to_string(height) + "x" +
                     std::to_string(channels) +
                     ", beyond mvtm's limits (65536 pixels a side, 2^30 pixels, 16 channels)");
+}
+
+void CheckHeaderFitsFile(const std::string& path, int64_t width, int64_t height, double raw,
+                         double max_per_byte, double slack) {
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (!ec && raw > max_per_byte * double(size) + slack)
+    throw Error(path, 0,
+                "cannot read image: the file (" + std::to_string(size) +
+                    " bytes) is too small for its " + std::to_string(width) + "x" +
+                    std::to_string(height) + " header (truncated?)");
 }
 
 std::string LibraryText(std::string s) {

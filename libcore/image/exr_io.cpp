@@ -150,13 +150,8 @@ bool ReadExr(const std::string& path, bool header_only, Image* img) {
     // Deflate expands at most 1032:1 and run-length coding before it at most 128:1 more; a
     // file smaller than that share of its pixels was cut short (or lies): refused before the
     // allocation.
-    std::error_code ec;
-    const auto size = std::filesystem::file_size(path, ec);
-    if (!ec && double(w) * double(hgt) * double(listed) * 4 > 4096.0 * double(size) + (1 << 20))
-      throw Error(path, 0,
-                  "cannot read image: the file (" + std::to_string(size) +
-                      " bytes) is too small for its " + std::to_string(w) + "x" +
-                      std::to_string(hgt) + " header (truncated?)");
+    CheckHeaderFitsFile(path, w, hgt, double(w) * double(hgt) * double(listed) * 4, 4096.0,
+                        1 << 20);
     Imf::PixelType type = Imf::FLOAT;
     const std::vector<std::string> names = ChannelOrder(h.channels(), &type);
     if (names.empty()) return false;

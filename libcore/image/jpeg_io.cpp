@@ -9,7 +9,6 @@
 // clang-format on
 
 #include <csetjmp>
-#include <filesystem>
 
 #include "base/error.h"
 #include "image/codec.h"
@@ -120,13 +119,8 @@ bool ReadJpeg(const std::string& path, bool header_only, Image* img) {
   }
   // A JPEG compresses at most about 1:5000 (an all-grey image); smaller than that share of its
   // pixels, the file was cut short: refused before the allocation.
-  std::error_code ec;
-  const auto size = std::filesystem::file_size(path, ec);
-  if (!ec && double(out.pixels()) * out.channels > 10000.0 * double(size) + (1 << 20))
-    throw Error(path, 0,
-                "cannot read image: the file (" + std::to_string(size) +
-                    " bytes) is too small for its " + std::to_string(out.width) + "x" +
-                    std::to_string(out.height) + " header (truncated?)");
+  CheckHeaderFitsFile(path, out.width, out.height, double(out.pixels()) * out.channels, 10000.0,
+                      1 << 20);
   const size_t rowbytes = size_t(out.width) * size_t(out.channels);
   std::vector<unsigned char> buf(rowbytes * size_t(out.height));
   std::vector<JSAMPROW> rows(size_t(out.height));

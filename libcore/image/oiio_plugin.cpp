@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
-#include <filesystem>
 
 #include "base/error.h"
 #include "image/codec.h"
@@ -52,13 +51,9 @@ std::string Read(const std::string& path, bool header_only, Image* img) {
     // No image format compresses real pictures beyond a few thousand to one; a header claiming
     // more than that share of the file was forged or cut short (fuzzing: a 30-byte file read as
     // a 7968x15485 WebP took 8 s and 3 GB).
-    std::error_code ec;
-    const auto bytes = std::filesystem::file_size(path, ec);
     const double samples = double(spec.width) * spec.height * spec.nchannels;
-    if (!ec && samples > double(1 << 24) && samples > 4096.0 * double(bytes))
-      return "cannot read image: the file (" + std::to_string(bytes) +
-             " bytes) is too small for its " + std::to_string(spec.width) + "x" +
-             std::to_string(spec.height) + " header (truncated?)";
+    if (samples > double(1 << 24))
+      CheckHeaderFitsFile(path, spec.width, spec.height, samples, 4096.0, 0);
     Image out;
     out.width = spec.width, out.height = spec.height, out.channels = spec.nchannels;
     out.bits = BitsOf(spec.format);

@@ -7,11 +7,11 @@
 #include <cmath>
 #include <csetjmp>
 #include <cstdio>
-#include <filesystem>
 #include <memory>
 #include <new>
 
 #include "base/error.h"
+#include "image/codec.h"
 
 namespace mvtm {
 
@@ -110,13 +110,7 @@ Image ReadPng(const std::string& path, bool header_only) {
   // Deflate expands at most 1032:1, so a file smaller than that share of its pixel rows is cut
   // short: refused before the (possibly huge) allocation.
   const double raw = double(png_get_rowbytes(rs.png, rs.info)) * hdr.h;
-  std::error_code ec;
-  const auto size = std::filesystem::file_size(path, ec);
-  if (!ec && raw > 1032.0 * double(size) + 65536)
-    throw Error(path, 0,
-                "cannot read image: the file (" + std::to_string(size) +
-                    " bytes) is too small for its " + std::to_string(hdr.w) + "x" +
-                    std::to_string(hdr.h) + " header (truncated?)");
+  CheckHeaderFitsFile(path, hdr.w, hdr.h, raw, 1032.0, 65536);
   Image img(int(hdr.w), int(hdr.h), hdr.channels, hdr.bits);
   const size_t rowbytes = png_get_rowbytes(rs.png, rs.info);
   std::vector<unsigned char> buf(rowbytes * hdr.h);

@@ -125,6 +125,20 @@ void ExpectSamePixels(const Image& a, const Image& b, const std::string& what) {
   EXPECT_EQ(differ, 0u) << what << ": samples that differ";
 }
 
+// `encoded` (the codec's bytes) and the public writer's file (atomic) are the bytes OpenImageIO
+// wrote for `img`, and both readers read `img` back from the file.
+void ExpectWrittenLikeOpenImageIO(const std::string& ext, const Image& img,
+                                  const std::vector<unsigned char>& encoded,
+                                  const std::string& what) {
+  const std::string want = OiioBytes(Dir() / ("oiio." + ext), img);
+  EXPECT_TRUE(want == std::string(encoded.begin(), encoded.end())) << what;
+  const fs::path mine = Dir() / ("mvtm." + ext);
+  WriteImage(mine.string(), img);
+  EXPECT_TRUE(Slurp(mine) == want) << what;
+  ExpectSamePixels(ReadImage(mine.string()), img, what);
+  ExpectSamePixels(OiioRead(mine), img, what);
+}
+
 TEST(ImageFormats, PngBytesAreOpenImageIOs) {
   for (int bits : {8, 16})
     for (int c = 1; c <= 4; ++c)
@@ -132,14 +146,7 @@ TEST(ImageFormats, PngBytesAreOpenImageIOs) {
         const Image img = Pattern(w, h, c, bits, unsigned(w + c + bits));
         const std::string what = std::to_string(w) + "x" + std::to_string(h) + "x" +
                                  std::to_string(c) + " " + std::to_string(bits) + "-bit PNG";
-        const std::string want = OiioBytes(Dir() / "oiio.png", img);
-        const auto got = EncodePng("x.png", img);
-        EXPECT_TRUE(want == std::string(got.begin(), got.end())) << what;
-        // And through the public writer (atomic file), read back by both readers.
-        WriteImage((Dir() / "mvtm.png").string(), img);
-        EXPECT_TRUE(Slurp(Dir() / "mvtm.png") == want) << what;
-        ExpectSamePixels(ReadImage((Dir() / "mvtm.png").string()), img, what);
-        ExpectSamePixels(OiioRead(Dir() / "mvtm.png"), img, what);
+        ExpectWrittenLikeOpenImageIO("png", img, EncodePng("x.png", img), what);
       }
 }
 
@@ -172,13 +179,7 @@ TEST(ImageFormats, ExrBytesAreOpenImageIOs) {
       img.data[img.data.size() / 2] = -0.f;
       const std::string what =
           std::to_string(w) + "x" + std::to_string(h) + "x" + std::to_string(c) + " EXR";
-      const std::string want = OiioBytes(Dir() / "oiio.exr", img);
-      const auto got = EncodeExr("x.exr", img);
-      EXPECT_TRUE(want == std::string(got.begin(), got.end())) << what;
-      WriteImage((Dir() / "mvtm.exr").string(), img);
-      EXPECT_TRUE(Slurp(Dir() / "mvtm.exr") == want) << what;
-      ExpectSamePixels(ReadImage((Dir() / "mvtm.exr").string()), img, what);
-      ExpectSamePixels(OiioRead(Dir() / "mvtm.exr"), img, what);
+      ExpectWrittenLikeOpenImageIO("exr", img, EncodeExr("x.exr", img), what);
     }
 }
 
