@@ -6,6 +6,7 @@
 
 #include "base/error.h"
 #include "base/stats.h"
+#include "index/pose_index.h"
 
 namespace mvtm {
 
@@ -17,7 +18,6 @@ void NeighbourOptions::Check() const {
     throw UsageError("--max-angle: must be in (0, 90]");
   if (!(min_coverage >= 0 && min_coverage <= 1))
     throw UsageError("--min-coverage: must be in [0, 1]");
-  if (max_offset < 1) throw UsageError("--max-offset: must be >= 1");
 }
 
 double MedianSpacing(const std::vector<Rigid3d>& w2c) {
@@ -49,20 +49,40 @@ std::vector<size_t> SelectStereoNeighbours(const std::vector<Rigid3d>& w2c,
                                            const NeighbourOptions& o) {
   const double min_base = o.min_baseline * MedianSpacing(w2c);
   const Eigen::Vector3d ci = w2c[i].Centre(), zi = w2c[i].R().row(2).transpose();
-  const double cos_max = std::cos(o.max_angle_deg * M_PI / 180.0);
+  // Candidates: the nearest camera centres within the angle gate, from the pose index (any
+  // image of the model: a second drive along the same road is as good a neighbour as the
+  // frames before and after), nearest first.
+  ViewSelectionOptions sel;
+  sel.k = size_t(std::max(4 * o.count, o.count + 8));
+  sel.max_heading_deg = o.max_angle_deg;
+  sel.ahead_weight = 0;  // pure distance: both sides are wanted
+  const PoseIndex index(w2c, sel);
+  std::vector<size_t> sides[2];  // 0: behind the reference, 1: ahead of it
+  for (const Candidate& c : index.Select(w2c[i], i)) {
+    const Rigid3d& p = w2c[c.index];
+    const double base = (p.Centre() - ci).norm();
+    if (!(base > min_base) || base == 0) continue;  // no baseline: every plane maps alike
+    if (!ref_points.empty() && Coverage(p, cameras[c.index], ref_points) < o.min_coverage) continue;
+    sides[(p.Centre() - ci).dot(zi) > 0 ? 1 : 0].push_back(c.index);
+  }
+  // Alternately from either side, nearest first: a forward-moving camera's neighbours behind
+  // it see what it sees smaller, those ahead see the far scene larger; both together cover
+  // occlusions either way. A side that runs out leaves the rest to the other.
   std::vector<size_t> out;
-  for (int step = 1; step <= o.max_offset && int(out.size()) < o.count; ++step)
-    for (int sign : {-1, 1}) {
-      const long j = long(i) + sign * step;
-      if (j < 0 || j >= long(w2c.size()) || int(out.size()) >= o.count) continue;
-      const Rigid3d& p = w2c[size_t(j)];
-      const double base = (p.Centre() - ci).norm();
-      if (!(base > min_base) || base == 0) continue;  // no baseline: every plane maps alike
-      if (p.R().row(2).dot(zi.transpose()) < cos_max) continue;
-      if (!ref_points.empty() && Coverage(p, cameras[size_t(j)], ref_points) < o.min_coverage)
-        continue;
-      out.push_back(size_t(j));
-    }
+  size_t next[2] = {0, 0};
+  auto dist = [&](size_t j) { return (w2c[j].Centre() - ci).norm(); };
+  int side = -1;
+  while (int(out.size()) < o.count && (next[0] < sides[0].size() || next[1] < sides[1].size())) {
+    if (next[0] >= sides[0].size())
+      side = 1;
+    else if (next[1] >= sides[1].size())
+      side = 0;
+    else if (side < 0)  // the nearest of all first
+      side = dist(sides[1][next[1]]) < dist(sides[0][next[0]]) ? 1 : 0;
+    else
+      side = 1 - side;
+    out.push_back(sides[side][next[side]++]);
+  }
   return out;
 }
 

@@ -19,13 +19,12 @@
 namespace mvtm {
 
 struct NeighbourOptions {
-  int count = 4;  // neighbours per image (--neighbours), taken alternately before/after in time
+  int count = 4;  // neighbours per image (--neighbours), alternately behind and ahead
   double min_baseline =
       0.25;  // fraction of the median camera spacing below which a neighbour is too close
   double max_angle_deg = 40;  // largest angle between the viewing directions
   double min_coverage =
       0.3;  // share of the reference's sparse points the neighbour must see (when it has any)
-  int max_offset = 12;  // furthest neighbour, in images along the drive
 
   void Check() const;  // throws UsageError naming the option
 };
@@ -33,10 +32,11 @@ struct NeighbourOptions {
 // Median distance between consecutive camera centres (0 when fewer than two images).
 double MedianSpacing(const std::vector<Rigid3d>& w2c);
 
-// Neighbours of image `i`: the nearest in time on both sides (alternating), skipping those with
-// too little baseline, too different a viewing direction, or (when `ref_points` is not empty)
-// seeing too few of the reference's points. Fewer than options.count (even none) when the drive
-// offers no more.
+// Neighbours of image `i`: the nearest camera centres of the whole model (libcore/index; other
+// drives of the same road included) on both sides along i's optical axis, alternating, the
+// nearest of all first; skipping those with too little baseline, too different a viewing
+// direction, or (when `ref_points` is not empty) seeing too few of the reference's points.
+// Fewer than options.count (even none) when the model offers no more.
 std::vector<size_t> SelectStereoNeighbours(const std::vector<Rigid3d>& w2c,
                                            const std::vector<Camera>& cameras, size_t i,
                                            const std::vector<Eigen::Vector3d>& ref_points,

@@ -146,12 +146,22 @@ std::vector<cv::Mat> FamilyScores(const StereoView& ref, const RefWindows& rw,
 
 // Per pixel, the family's best plane refined by a parabola through its neighbours' scores; keeps
 // it where it beats `best` (depth and score of the best family so far).
-void TakeBest(const SweepFamily& f, const std::vector<cv::Mat>& scores, const cv::Mat& ray_dot,
-              cv::Mat& best_z, cv::Mat& best_s, cv::Mat& best_margin) {
+struct Winners {
+  cv::Mat z, score, margin;  // CV_32F: depth (+inf: none), aggregated ZNCC, margin
+  cv::Mat family;            // CV_32S: index of the winning family (-1: none)
+  cv::Mat param;             // CV_64F: its plane parameter (offset, or 1/offset for fronto)
+};
+
+// The parameter that spaces a family's planes evenly (inverse depth for fronto planes).
+double FamilyParam(const SweepFamily& f, size_t p) {
+  return f.inverse_spacing ? 1.0 / f.offsets[p] : f.offsets[p];
+}
+
+void TakeBest(const SweepFamily& f, int fi, const std::vector<cv::Mat>& scores,
+              const cv::Mat& ray_dot, Winners& w) {
+  cv::Mat &best_z = w.z, &best_s = w.score, &best_margin = w.margin;
   const int P = static_cast<int>(scores.size());
-  auto param = [&](int p) {
-    return f.inverse_spacing ? 1.0 / f.offsets[size_t(p)] : f.offsets[size_t(p)];
-  };
+  auto param = [&](int p) { return FamilyParam(f, size_t(p)); };
   for (int y = 0; y < best_z.rows; ++y)
     for (int x = 0; x < best_z.cols; ++x) {
       int bp = -1, n = 0;
@@ -178,10 +188,147 @@ void TakeBest(const SweepFamily& f, const std::vector<cv::Mat>& scores, const cv
       if (!(z > 0) || !std::isfinite(z)) continue;
       best_z.at<float>(y, x) = static_cast<float>(z);
       best_s.at<float>(y, x) = bs;
+      w.family.at<int>(y, x) = fi;
+      w.param.at<double>(y, x) = s;
       // How much the best plane stands out from the family's mean: near the epipole of a
       // forward-moving camera every plane warps alike and the match says nothing.
       best_margin.at<float>(y, x) = static_cast<float>(bs - sum / n);
     }
+}
+
+// The aggregated ZNCC of one pixel's window on one plane, each neighbour's window warped through
+// that plane's homography H = A + b cᵀ / d (A = Kn R Kr⁻¹, b = Kn t, cᵀx = n·ray(x)); the best-k
+// mean, or kNoScore when fewer than k neighbours see the whole window in front of them. The
+// reference window (reflected at the borders, as the box filters of the sweep) is given.
+struct PixelMatcher {
+  struct Nb {
+    Eigen::Matrix3d A;
+    Eigen::Vector3d b;
+    const cv::Mat* grey;
+  };
+  std::vector<Nb> nbs;
+  int win = 7, k = 2;
+
+  float Score(const float* ref_win, double ref_mean, double ref_sd, int x0, int y0,
+              const Eigen::Vector3d& c, double d, std::vector<float>& scores) const {
+    const int r = win / 2, n = win * win;
+    scores.clear();
+    for (const Nb& nb : nbs) {
+      const Eigen::Matrix3d H = nb.A + nb.b * c.transpose() / d;
+      const cv::Mat& J = *nb.grey;
+      const float wmax = float(J.cols - 1), hmax = float(J.rows - 1);
+      double sj = 0, sjj = 0, sij = 0;
+      bool ok = true;
+      for (int dy = -r, i = 0; dy <= r && ok; ++dy)
+        for (int dx = -r; dx <= r; ++dx, ++i) {
+          const Eigen::Vector3d q = H * Eigen::Vector3d(x0 + dx + 0.5, y0 + dy + 0.5, 1.0);
+          if (!(q.z() > 0)) {
+            ok = false;
+            break;
+          }
+          const float u = float(q.x() / q.z() - 0.5), v = float(q.y() / q.z() - 0.5);
+          if (!(u >= 0 && v >= 0 && u <= wmax && v <= hmax)) {
+            ok = false;
+            break;
+          }
+          const int iu = std::min(int(u), J.cols - 2 < 0 ? 0 : J.cols - 2),
+                    iv = std::min(int(v), J.rows - 2 < 0 ? 0 : J.rows - 2);
+          const float fu = u - float(iu), fv = v - float(iv);
+          const float* row0 = J.ptr<float>(iv);
+          const float* row1 = J.ptr<float>(std::min(iv + 1, J.rows - 1));
+          const int iu1 = std::min(iu + 1, J.cols - 1);
+          const float val = (1 - fv) * ((1 - fu) * row0[iu] + fu * row0[iu1]) +
+                            fv * ((1 - fu) * row1[iu] + fu * row1[iu1]);
+          sj += val;
+          sjj += double(val) * val;
+          sij += double(val) * ref_win[i];
+        }
+      if (!ok) continue;
+      const double mj = sj / n, var_j = sjj / n - mj * mj;
+      if (var_j <= 1e-6) continue;
+      scores.push_back(
+          float(std::clamp((sij / n - ref_mean * mj) / (ref_sd * std::sqrt(var_j)), -1.0, 1.0)));
+    }
+    if (int(scores.size()) < k) return kNoScore;
+    std::partial_sort(scores.begin(), scores.begin() + k, scores.end(), std::greater<float>());
+    float sum = 0;
+    for (int j = 0; j < k; ++j) sum += scores[size_t(j)];
+    return sum / float(k);
+  }
+};
+
+// Refines every pixel's winning plane on its own: the aggregated score at `steps` sub-steps per
+// plane spacing on both sides of the winner, then a parabola through the best and its sides.
+void RefineWinners(const StereoView& ref, const std::vector<StereoView>& nbs,
+                   const std::vector<SweepFamily>& fams, const PlaneSweepOptions& o, int k,
+                   const cv::Mat& ref_sd, Winners& w) {
+  PixelMatcher m;
+  m.win = o.window;
+  m.k = k;
+  const Eigen::Matrix3d Kri = ref.camera.K().inverse();
+  const Eigen::Matrix3d Rr = ref.world_to_camera.R();
+  for (const StereoView& nb : nbs) {
+    const Eigen::Matrix3d R = nb.world_to_camera.R() * Rr.transpose();
+    const Eigen::Vector3d t = nb.world_to_camera.t - R * ref.world_to_camera.t;
+    m.nbs.push_back({nb.camera.K() * R * Kri, nb.camera.K() * t, &nb.grey});
+  }
+  std::vector<Eigen::Vector3d> cs;
+  std::vector<double> spacing;
+  for (const SweepFamily& f : fams) {
+    cs.push_back(Kri.transpose() * f.normal);
+    const size_t P = f.offsets.size();
+    spacing.push_back(std::abs(FamilyParam(f, P - 1) - FamilyParam(f, 0)) / double(P - 1));
+  }
+  const int steps = o.refine, r = o.window / 2, W = ref.grey.cols, Hh = ref.grey.rows;
+  cv::parallel_for_(cv::Range(0, Hh), [&](const cv::Range& rows) {
+    std::vector<float> win(size_t(o.window * o.window)), scratch;
+    std::vector<float> sc(size_t(2 * steps + 1));
+    for (int y = rows.start; y < rows.end; ++y)
+      for (int x = 0; x < W; ++x) {
+        const int fi = w.family.at<int>(y, x);
+        const float sd = ref_sd.at<float>(y, x);
+        // Pixels the thresholds will drop anyway (ambiguous or textureless) are not refined.
+        if (fi < 0 || !(sd > 1e-3f) || sd < o.min_texture ||
+            w.margin.at<float>(y, x) < o.min_margin)
+          continue;
+        double mean = 0;
+        for (int dy = -r, i = 0; dy <= r; ++dy)
+          for (int dx = -r; dx <= r; ++dx, ++i) {
+            win[size_t(i)] =
+                ref.grey.at<float>(cv::borderInterpolate(y + dy, Hh, cv::BORDER_REFLECT),
+                                   cv::borderInterpolate(x + dx, W, cv::BORDER_REFLECT));
+            mean += win[size_t(i)];
+          }
+        mean /= double(win.size());
+        double var = 0;
+        for (float v : win) var += (v - mean) * (v - mean);
+        const double sdev = std::sqrt(var / double(win.size()));
+        if (!(sdev > 1e-3)) continue;
+        const SweepFamily& f = fams[size_t(fi)];
+        const double p0 = w.param.at<double>(y, x), h = spacing[size_t(fi)] / steps;
+        const double ray = cs[size_t(fi)].dot(Eigen::Vector3d(x + 0.5, y + 0.5, 1.0));
+        int bj = -1;
+        for (int j = 0; j <= 2 * steps; ++j) {
+          const double p = p0 + (j - steps) * h, d = f.inverse_spacing ? 1.0 / p : p;
+          sc[size_t(j)] = kNoScore;
+          if (!(p != 0 && std::isfinite(d) && d / ray > 0)) continue;
+          sc[size_t(j)] = m.Score(win.data(), mean, sdev, x, y, cs[size_t(fi)], d, scratch);
+          if (sc[size_t(j)] > kNoScore && (bj < 0 || sc[size_t(j)] > sc[size_t(bj)])) bj = j;
+        }
+        if (bj < 0) continue;
+        double p = p0 + (bj - steps) * h;
+        if (bj > 0 && bj < 2 * steps) {
+          const double a = sc[size_t(bj - 1)], b = sc[size_t(bj)], c = sc[size_t(bj + 1)];
+          const double den = a - 2.0 * b + c;
+          if (a > kNoScore && c > kNoScore && den < 0)
+            p += std::clamp(0.5 * (a - c) / den, -0.5, 0.5) * h;
+        }
+        const double d = f.inverse_spacing ? 1.0 / p : p, z = d / ray;
+        if (!(z > 0) || !std::isfinite(z)) continue;
+        w.z.at<float>(y, x) = static_cast<float>(z);
+        w.score.at<float>(y, x) = sc[size_t(bj)];
+      }
+  });
 }
 
 }  // namespace
@@ -194,6 +341,7 @@ void PlaneSweepOptions::Check() const {
   if (!(min_texture >= 0 && std::isfinite(min_texture)))
     throw UsageError("--min-texture: must be >= 0");
   if (!(min_margin >= 0 && min_margin <= 2)) throw UsageError("--min-margin: must be in [0, 2]");
+  if (refine < 0 || refine > 64) throw UsageError("--refine: must be 0..64");
 }
 
 SweepFamily MakeFrontoSweep(double near_z, double far_z, int planes) {
@@ -245,12 +393,16 @@ DepthMap SweepDepth(const StereoView& ref, const std::vector<StereoView>& nbs,
   RefWindows rw;
   rw.win = o.window;
   WindowStats(ref.grey, o.window, rw.mean, rw.sd);
-  cv::Mat best_z(h, w, CV_32F, cv::Scalar(std::numeric_limits<float>::infinity()));
-  cv::Mat best_s(h, w, CV_32F, cv::Scalar(kNoScore)), best_margin(h, w, CV_32F, cv::Scalar(0));
-  for (const SweepFamily& f : families) {
-    const cv::Mat ray_dot = RayDot(ref.camera, f.normal, w, h);
-    TakeBest(f, FamilyScores(ref, rw, nbs, f, ray_dot, k), ray_dot, best_z, best_s, best_margin);
+  Winners win{cv::Mat(h, w, CV_32F, cv::Scalar(std::numeric_limits<float>::infinity())),
+              cv::Mat(h, w, CV_32F, cv::Scalar(kNoScore)), cv::Mat(h, w, CV_32F, cv::Scalar(0)),
+              cv::Mat(h, w, CV_32S, cv::Scalar(-1)), cv::Mat(h, w, CV_64F, cv::Scalar(0))};
+  for (size_t fi = 0; fi < families.size(); ++fi) {
+    const cv::Mat ray_dot = RayDot(ref.camera, families[fi].normal, w, h);
+    TakeBest(families[fi], int(fi), FamilyScores(ref, rw, nbs, families[fi], ray_dot, k), ray_dot,
+             win);
   }
+  if (o.refine > 0) RefineWinners(ref, nbs, families, o, k, rw.sd, win);
+  const cv::Mat &best_z = win.z, &best_s = win.score, &best_margin = win.margin;
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       const float s = best_s.at<float>(y, x), margin = best_margin.at<float>(y, x);

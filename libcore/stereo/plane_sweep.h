@@ -13,7 +13,12 @@
 //    the reference image and each neighbour warped onto it through the plane-induced
 //    homography. Occlusion-robust aggregation: the mean of the best k of the neighbours' ZNCC.
 //    Each sweep family (a normal and its plane offsets, ordered) is searched exhaustively; the
-//    best plane is refined by a parabola through its neighbours' scores (sub-plane).
+//    best plane is refined by a parabola through its neighbours' scores (sub-plane). Then each
+//    pixel's winning plane is refined on its own (`refine` > 0): the aggregated ZNCC is
+//    evaluated again at `refine` sub-steps per plane spacing on both sides of it, the window
+//    warped by the homography of the pixel's own plane, and a parabola through the best
+//    sub-step and its two sides gives the depth. Precision is then no longer bound by the plane
+//    spacing (a facade 10 m to the side swept in 0.6 m steps), at about one sweep family's cost.
 //  * Output: linear depth z (float32), +inf where nothing is trusted (score below the minimum,
 //    a best plane that does not stand out from the others — no parallax, as near the epipole of
 //    a forward-moving camera, or a repetitive texture —, a textureless window, fewer than k
@@ -62,7 +67,8 @@ struct PlaneSweepOptions {
   double min_texture =
       2.0;  // grey standard deviation (0..255 scale) below which a window is textureless
   double min_margin =
-      0.2;  // best score minus the family's mean score below which the match is ambiguous
+      0.2;         // best score minus the family's mean score below which the match is ambiguous
+  int refine = 4;  // sub-steps per plane spacing of the per-pixel refinement (0: parabola only)
 
   void Check() const;  // throws UsageError naming the option
 };

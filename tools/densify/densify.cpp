@@ -153,6 +153,7 @@ DensifyReport RunDensify(const DensifyOptions& o) {
                          {"min_score", o.sweep.min_score},
                          {"min_texture", o.sweep.min_texture},
                          {"min_margin", o.sweep.min_margin},
+                         {"refine", o.sweep.refine},
                          {"no_ground", o.no_ground},
                          {"no_facade", o.no_facade},
                          {"no_fronto", o.no_fronto},

@@ -43,6 +43,10 @@ int main(int argc, char** argv) {
   app.add_option("--min-margin", o.sweep.min_margin,
                  "Best score minus the mean over planes below which a match is ambiguous")
       ->capture_default_str();
+  app.add_option("--refine", o.sweep.refine,
+                 "Sub-steps per plane spacing of the per-pixel refinement of the best plane "
+                 "(0..64; 0: a parabola through the planes only)")
+      ->capture_default_str();
   app.add_option("--min-texture", o.sweep.min_texture,
                  "Grey standard deviation (0..255) below which a window is textureless")
       ->capture_default_str();

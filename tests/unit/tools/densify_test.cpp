@@ -40,7 +40,8 @@ void MakeRoad(const fs::path& out, double scale_origin_x) {
 }
 
 struct Accuracy {
-  double median_rel = 0, within1 = 0, within5 = 0, completeness = 0, conf_good = 0, conf_bad = 0;
+  double median_rel = 0, within1 = 0, within2 = 0, within5 = 0, completeness = 0, conf_good = 0,
+         conf_bad = 0;
   size_t compared = 0;
 };
 
@@ -74,6 +75,8 @@ Accuracy Score(const fs::path& ws, const std::string& prefix, const std::string&
   a.completeness = double(rel.size()) / double(truth_px);
   a.within1 = double(std::count_if(rel.begin(), rel.end(), [](double r) { return r <= 0.01; })) /
               double(rel.size());
+  a.within2 = double(std::count_if(rel.begin(), rel.end(), [](double r) { return r <= 0.02; })) /
+              double(rel.size());
   a.within5 = double(std::count_if(rel.begin(), rel.end(), [](double r) { return r <= 0.05; })) /
               double(rel.size());
   std::nth_element(rel.begin(), rel.begin() + long(rel.size() / 2), rel.end());
@@ -99,16 +102,17 @@ TEST(Densify, MkroadDepthAgainstRayTracedTruth) {
   EXPECT_EQ(r.no_neighbours, 0u);
   const Accuracy a = Score(ws, "");
   std::printf(
-      "[densify mkroad 320x96, %zu px] median rel %.4f, within 1 %% %.3f, within 5 %% %.3f, "
-      "completeness %.3f, confidence %.2f (<=1 %%) vs %.2f (>5 %%), %.0f ms/image\n",
-      a.compared, a.median_rel, a.within1, a.within5, a.completeness, a.conf_good, a.conf_bad,
-      r.ms_per_image);
-  // Measured at 320x96 (12 frames a pass): median 0.033, within 5 % 0.59, completeness 0.60. Raw
-  // single-view stereo at this size is coarse (1 px is ~1.5 % of depth at 10 m); fusion below
-  // is what the mesh is made of.
-  EXPECT_LT(a.median_rel, 0.045);
-  EXPECT_GT(a.within5, 0.50);
-  EXPECT_GT(a.completeness, 0.50);
+      "[densify mkroad 320x96, %zu px] median rel %.4f, within 1 %% %.3f, within 2 %% %.3f, within "
+      "5 %% %.3f, completeness %.3f, confidence %.2f (<=1 %%) vs %.2f (>5 %%), %.0f ms/image\n",
+      a.compared, a.median_rel, a.within1, a.within2, a.within5, a.completeness, a.conf_good,
+      a.conf_bad, r.ms_per_image);
+  // Measured at 320x96 (12 frames a pass): median 0.020, within 5 % 0.70, completeness 0.65
+  // (0.033, 0.59 and 0.60 before the per-pixel refinement and the neighbours from the other
+  // drive). Raw single-view stereo at this size is coarse (1 px is ~1.5 % of depth at 10 m);
+  // fusion below is what the mesh is made of.
+  EXPECT_LT(a.median_rel, 0.03);
+  EXPECT_GT(a.within5, 0.62);
+  EXPECT_GT(a.completeness, 0.60);
   EXPECT_GT(a.conf_good, a.conf_bad);  // the confidence ranks good depths above bad ones
 
   // roadmesh --dense (fused, closed by the corridor ground) against the corridor proxy alone,
@@ -131,15 +135,15 @@ TEST(Densify, MkroadDepthAgainstRayTracedTruth) {
                                 {"dense, no walls", fused},
                                 {"dense, walls behind", closed}})
     std::printf(
-        "[mesh %s] median rel %.4f, within 1 %% %.3f, within 5 %% %.3f, surface on %.3f of truth "
-        "pixels\n",
-        name, x.median_rel, x.within1, x.within5, x.completeness);
+        "[mesh %s] median rel %.4f, within 1 %% %.3f, within 2 %% %.3f, within 5 %% %.3f, surface "
+        "on %.3f of truth pixels\n",
+        name, x.median_rel, x.within1, x.within2, x.within5, x.completeness);
   // Where the fused surface exists it is nearer the truth than the corridor proxy...
-  EXPECT_GT(fused.within1, corridor.within1);  // measured 0.60 vs 0.59
-  EXPECT_GT(fused.within5, corridor.within5);  // measured 0.84 vs 0.75
-  EXPECT_GT(fused.completeness, 0.70);         // measured 0.74
+  EXPECT_GT(fused.within1, corridor.within1 + 0.03);  // measured 0.65 vs 0.59
+  EXPECT_GT(fused.within5, corridor.within5 + 0.05);  // measured 0.86 vs 0.75
+  EXPECT_GT(fused.completeness, 0.75);                // measured 0.80
   // ...and the corridor's walls behind it close the holes (they show through them only).
-  EXPECT_GT(closed.completeness, 0.85);  // measured 0.90 (the corridor alone: 0.91)
+  EXPECT_GT(closed.completeness, 0.88);  // measured 0.91 (the corridor alone: 0.91)
 }
 
 TEST(Densify, AnImageWithoutSparsePointsSweepsOverItsNeighbours) {
