@@ -73,7 +73,10 @@ void Velocities(IvtResult& r, const ScreenGeometry& screen, double window) {
   const long n = static_cast<long>(s.size());
   std::vector<double> dt;
   for (long i = 1; i < n; ++i) dt.push_back(s[i].time - s[i - 1].time);
-  const long k = std::max(1L, std::lround(window / (2 * Median(dt))));
+  // The half window in samples; beyond the trace's length it changes nothing, and the bound keeps
+  // i ± k from overflowing for absurd windows or sample rates (in double before any cast).
+  const double half = window / (2 * Median(dt));
+  const long k = !(half < double(n)) ? std::max(1L, n) : std::max(1L, std::lround(half));
   r.velocity_half_window = static_cast<int>(k);
   r.velocity.assign(s.size(), std::numeric_limits<double>::quiet_NaN());
   for (long i = 0; i < n; ++i) {

@@ -66,6 +66,24 @@ TEST(Ivt, SaccadeSplitsFixationsAtTheThreshold) {
   EXPECT_EQ(all.fixations[0].x, 200);
 }
 
+TEST(Ivt, AVelocityWindowLongerThanTheTraceSpansIt) {
+  // Samples 2^-69 s apart and a 31 ms window: the half window would be ~10^19 samples (i + k
+  // overflowed a long before). Beyond the trace it is the trace: every velocity spans first to
+  // last sample, 200 px = 5° over 39 · 2^-69 s.
+  std::vector<P> p;
+  Hold(p, 20, 100);
+  Hold(p, 20, 300);
+  std::vector<GazeSample> s = Trace(p);
+  for (size_t i = 0; i < s.size(); ++i) s[i].time = std::ldexp(double(i), -69);
+  IvtOptions o;
+  o.velocity_window = 0.031;
+  o.min_duration = 0;
+  const IvtResult r = RunIvt(s, Ppd40(), o);
+  EXPECT_EQ(r.velocity_half_window, 40);
+  EXPECT_DOUBLE_EQ(r.velocity[0], 5 / std::ldexp(39.0, -69));
+  EXPECT_DOUBLE_EQ(r.velocity[39], r.velocity[0]);
+}
+
 TEST(Ivt, VelocityIsInOcularDegreesNotPixels) {
   // Screen 1000 px = 500 mm wide (0.5 mm per px) seen from 500 mm. The same drift of 2 px per
   // sample is faster in degrees at the centre than near the edge (230 mm out); a threshold
