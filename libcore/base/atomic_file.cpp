@@ -2,10 +2,13 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <cctype>
 #include <cerrno>
+#include <chrono>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -21,7 +24,29 @@ std::atomic<unsigned> g_counter{0};
 bool ProcessAlive(long pid) {
   return pid > 0 && (kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM);
 }
+
+// Where a process id means something: the host name and the process-id namespace (containers on
+// one host share its name, not their pid namespace), as letters, digits and '-' only.
+std::string MakeProcessSpace() {
+  char host[256] = {};
+  if (gethostname(host, sizeof host - 1) != 0) host[0] = 0;
+  std::string out;
+  for (const char* c = host; *c && out.size() < 64; ++c)
+    out += std::isalnum(static_cast<unsigned char>(*c)) || *c == '-' ? *c : '-';
+  struct stat st {};
+  if (stat("/proc/self/ns/pid", &st) == 0) out += "~" + std::to_string(st.st_ino);
+  return out.empty() ? "local" : out;
+}
+
+// A temporary of another host or namespace is judged by its age only: nothing mvtm writes takes
+// an hour between two writes, so one untouched that long belongs to a dead run.
+constexpr auto kForeignTemporaryAge = std::chrono::hours(1);
 }  // namespace
+
+const std::string& ProcessSpace() {
+  static const std::string space = MakeProcessSpace();
+  return space;
+}
 
 void CreateFolder(const fs::path& dir) {
   std::error_code ec;
@@ -33,7 +58,8 @@ AtomicFile::AtomicFile(const fs::path& final_path) : final_(final_path) {
   fs::path dir = final_.parent_path();
   if (!dir.empty()) CreateFolder(dir);
   std::string name = "." + final_.stem().string() + ".tmp-" + std::to_string(getpid()) + "-" +
-                     std::to_string(g_counter++) + final_.extension().string();
+                     std::to_string(g_counter++) + "@" + ProcessSpace() +
+                     final_.extension().string();
   temp_ = dir / name;
 }
 
@@ -116,8 +142,19 @@ void RemoveStaleTemporaries(const fs::path& dir) {
     std::string n = it->path().filename().string();
     auto p = n.find(".tmp-");
     if (n.empty() || n[0] != '.' || p == std::string::npos) continue;
-    long pid = std::strtol(n.c_str() + p + 5, nullptr, 10);
-    if (!ProcessAlive(pid)) fs::remove(it->path(), ec);
+    char* pid_end = nullptr;
+    const long pid = std::strtol(n.c_str() + p + 5, &pid_end, 10);
+    // ".tmp-PID-N@SPACE.EXT"; a name without "@SPACE" is from this machine (older mvtm).
+    const size_t at = n.find('@', size_t(pid_end - n.c_str()));
+    const std::string space =
+        at == std::string::npos ? ProcessSpace() : n.substr(at + 1, n.find('.', at) - at - 1);
+    std::error_code age_ec;
+    bool dead = !ProcessAlive(pid);
+    if (space != ProcessSpace()) {
+      const auto written = it->last_write_time(age_ec);
+      dead = !age_ec && fs::file_time_type::clock::now() - written > kForeignTemporaryAge;
+    }
+    if (dead) fs::remove(it->path(), ec);
   }
 }
 

@@ -1,8 +1,9 @@
 // mvtm — atomic output files and up-to-date checks.
 //
 // Every output of every tool is written to a temporary name in the destination folder
-// (".STEM.tmp-PID-N.EXT": hidden, unique per process and file, same extension so
-// format-by-extension writers still work) and
+// (".STEM.tmp-PID-N@SPACE.EXT": hidden, unique per process and file, SPACE naming the host and
+// process-id namespace the PID belongs to, same extension so format-by-extension writers still
+// work) and
 // renamed over the final name only once it is complete, so a crash or `kill -9` never leaves a
 // half-written output. A re-run skips outputs that exist and are newer than all their inputs
 // (unless the tool is given --force).
@@ -55,7 +56,13 @@ void CreateFolder(const fs::path& dir);
 // True when `output` exists and is at least as new as every existing input.
 bool IsUpToDate(const fs::path& output, const std::vector<fs::path>& inputs);
 
-// Removes stale temporary files ".STEM.tmp-PID-N.EXT" left in `dir` by processes that died.
+// Removes stale temporary files ".STEM.tmp-PID-N@SPACE.EXT" left in `dir` by processes that
+// died: of this host and namespace when process PID is gone; of another (a cluster node or a
+// container sharing the folder, where PID says nothing) when untouched for an hour. A name
+// without "@SPACE" counts as this host's.
 void RemoveStaleTemporaries(const fs::path& dir);
+
+// This process's SPACE: host name and pid-namespace inode, letters, digits, '-' and '~'.
+const std::string& ProcessSpace();
 
 }  // namespace mvtm

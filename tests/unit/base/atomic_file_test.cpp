@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <fstream>
 
 #include "base/error.h"
@@ -66,9 +67,36 @@ TEST(AtomicFile, RemovesTemporariesOfDeadProcesses) {
   fs::path d = TempDir("stale");
   std::ofstream(d / ".a.tmp-999999999-0.png") << "x";                           // no such pid
   std::ofstream(d / (".b.tmp-" + std::to_string(getpid()) + "-0.png")) << "x";  // alive: kept
+  // This host's, named as written now: dead pid removed, live kept.
+  const std::string here = "@" + ProcessSpace();
+  std::ofstream(d / (".c.tmp-999999999-1" + here + ".exr")) << "x";
+  std::ofstream(d / (".d.tmp-" + std::to_string(getpid()) + "-1" + here + ".exr")) << "x";
+  // Another host's (a cluster node sharing the folder): its pid says nothing here, so it stays
+  // while recent, even with a pid that is not alive here, and goes once untouched for an hour.
+  std::ofstream(d / ".e.tmp-999999999-2@node7~4026531836.png") << "x";
+  std::ofstream(d / ".f.tmp-999999999-3@node7~4026531836.png") << "x";
+  fs::last_write_time(d / ".f.tmp-999999999-3@node7~4026531836.png",
+                      fs::file_time_type::clock::now() - std::chrono::minutes(61));
   RemoveStaleTemporaries(d);
   EXPECT_FALSE(fs::exists(d / ".a.tmp-999999999-0.png"));
   EXPECT_TRUE(fs::exists(d / (".b.tmp-" + std::to_string(getpid()) + "-0.png")));
+  EXPECT_FALSE(fs::exists(d / (".c.tmp-999999999-1" + here + ".exr")));
+  EXPECT_TRUE(fs::exists(d / (".d.tmp-" + std::to_string(getpid()) + "-1" + here + ".exr")));
+  EXPECT_TRUE(fs::exists(d / ".e.tmp-999999999-2@node7~4026531836.png"));
+  EXPECT_FALSE(fs::exists(d / ".f.tmp-999999999-3@node7~4026531836.png"));
+  fs::remove_all(d);
+}
+
+TEST(AtomicFile, TemporaryNamesCarryTheProcessSpaceAndKeepTheExtension) {
+  fs::path d = TempDir("space");
+  AtomicFile f(d / "frame.png");
+  const std::string n = f.temp_path().filename().string();
+  EXPECT_EQ(n.rfind(".frame.tmp-" + std::to_string(getpid()) + "-", 0), 0u) << n;
+  EXPECT_NE(n.find("@" + ProcessSpace() + ".png"), std::string::npos) << n;
+  EXPECT_EQ(f.temp_path().extension(), ".png");
+  EXPECT_EQ(ProcessSpace().find_first_not_of(
+                "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-~"),
+            std::string::npos);
   fs::remove_all(d);
 }
 
