@@ -1,8 +1,10 @@
 #include "mesh/merge.h"
 
 #include <Eigen/Geometry>
+#include <array>
 #include <cmath>
 #include <map>
+#include <set>
 
 #include "base/error.h"
 
@@ -16,6 +18,24 @@ Mesh MergeProxyBehind(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3
   if (walls_behind > 0 && !proxy.has_normals())
     throw Error("merge: the proxy has no vertex normals");
   const Eigen::Vector3d u = up.normalized();
+  // A wall moved back leaves a gap above the ground's edge through which a ray would see
+  // nothing; the wall's foot (its vertices where the ground's edge is) goes down by as much as
+  // the wall goes back, which closes the gap for every camera farther from the wall than it is
+  // high above the ground (the gap's far side is then at most walls_behind below the ground).
+  std::set<std::array<float, 3>> ground_points;
+  auto key = [&](uint32_t v) {
+    const Eigen::Vector3f p = proxy.vertices[v].cast<float>();
+    return std::array<float, 3>{p.x(), p.y(), p.z()};
+  };
+  auto is_ground = [&](const std::array<uint32_t, 3>& f) {
+    const Eigen::Vector3d n = (proxy.vertices[f[1]] - proxy.vertices[f[0]])
+                                  .cross(proxy.vertices[f[2]] - proxy.vertices[f[0]]);
+    return n.norm() > 0 && n.normalized().dot(u) >= std::cos(M_PI / 4);
+  };
+  if (walls_behind > 0)
+    for (const auto& f : proxy.faces)
+      if (is_ground(f))
+        for (uint32_t v : f) ground_points.insert(key(v));
   Mesh out;
   out.vertices = dense.vertices;
   out.faces = dense.faces;
@@ -23,9 +43,10 @@ Mesh MergeProxyBehind(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3
   auto vertex = [&](uint32_t v, bool ground) {
     auto it = index.find(v);
     if (it != index.end()) return it->second;
-    const Eigen::Vector3d shift =
-        ground ? Eigen::Vector3d(-ground_below * u)
-               : Eigen::Vector3d(-walls_behind * proxy.normals[v].cast<double>());
+    Eigen::Vector3d shift = ground
+                                ? Eigen::Vector3d(-ground_below * u)
+                                : Eigen::Vector3d(-walls_behind * proxy.normals[v].cast<double>());
+    if (!ground && ground_points.count(key(v))) shift -= walls_behind * u;  // the wall's foot
     out.vertices.push_back(proxy.vertices[v] + shift);
     return index[v] = static_cast<uint32_t>(out.vertices.size() - 1);
   };
@@ -34,7 +55,7 @@ Mesh MergeProxyBehind(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3
     const Eigen::Vector3d n = (proxy.vertices[f[1]] - proxy.vertices[f[0]])
                                   .cross(proxy.vertices[f[2]] - proxy.vertices[f[0]]);
     if (n.norm() == 0) continue;
-    const bool ground = n.normalized().dot(u) >= std::cos(M_PI / 4);
+    const bool ground = is_ground(f);
     if (!ground && walls_behind < 0) continue;
     out.faces.push_back({vertex(f[0], ground), vertex(f[1], ground), vertex(f[2], ground)});
     ++(ground ? r.ground_faces : r.wall_faces);

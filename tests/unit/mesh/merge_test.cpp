@@ -39,6 +39,34 @@ TEST(Merge, GroundLoweredWallsMovedBackDenseKept) {
   EXPECT_TRUE(m.has_normals());
 }
 
+TEST(Merge, AWallMovedBackTakesItsFootDownSoNoGapOpensAtTheGroundsEdge) {
+  // The corridor's case: the ground reaches the wall (y = 5), whose own vertices sit on the
+  // ground's edge. Moved back by 2, the wall's foot also goes 2 down: a ray from a camera 1.65
+  // above the ground at y = 0 that grazes the ground's edge (2, 5, 0) goes on to y = 7 at
+  // z = -1.65 · 2 / 5 = -0.66, on the wall (z from -2 to 3), not through a gap to nothing.
+  Mesh proxy;
+  proxy.vertices = {{0, -1, 0}, {4, -1, 0}, {4, 5, 0}, {0, 5, 0},
+                    {0, 5, 0},  {4, 5, 0},  {4, 5, 3}, {0, 5, 3}};
+  proxy.faces = {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {4, 6, 7}};
+  proxy.ComputeNormals();
+  const Mesh m = MergeProxyBehind(Mesh(), proxy, {0, 0, 1}, 0, 2.0);
+  ASSERT_EQ(m.vertices.size(), 8u);
+  for (uint32_t v : {4u, 5u}) {  // the foot: back and down
+    EXPECT_NEAR(m.vertices[v].y(), 7.0, 1e-6);
+    EXPECT_NEAR(m.vertices[v].z(), -2.0, 1e-6);
+  }
+  for (uint32_t v : {6u, 7u}) {  // the top: back only
+    EXPECT_NEAR(m.vertices[v].y(), 7.0, 1e-6);
+    EXPECT_NEAR(m.vertices[v].z(), 3.0, 1e-6);
+  }
+  const double z_at_wall = 1.65 - 1.65 * 7.0 / 5.0;
+  EXPECT_GT(z_at_wall, m.vertices[4].z());
+  EXPECT_LT(z_at_wall, m.vertices[6].z());
+  // Without walls moved back nothing moves down.
+  const Mesh same = MergeProxyBehind(Mesh(), proxy, {0, 0, 1}, 0, 0);
+  EXPECT_NEAR(same.vertices[4].z(), 0, 1e-12);
+}
+
 TEST(Merge, NoWallsAndBadInput) {
   MergeReport r;
   const Mesh m = MergeProxyBehind(Mesh(), Proxy(), {0, 0, 2}, 0, -1, &r);
