@@ -9,7 +9,8 @@
 #   INTRINSICS  orb2colmap's intrinsics options, e.g. --kitti-calib calib.txt, or
 #               --camera "PINHOLE W H fx fy cx cy", or --orb-settings TUM1.yaml [--frames rgb.txt]
 # environment: MVTM_BIN (default build/bin), HOLDOUT (every Nth frame scored, default 5),
-#              LATERAL (lane change in metres for the final render, default 1.5),
+#              LATERAL (lane change for the final render in model units, default 1.5: metres
+#              for a metric model; a non-metric one needs 1.5 x its units per metre),
 #              MATCH_OVERLAP (COLMAP sequential matching overlap, default 5),
 #              MESH (dense | corridor: the mesh where COLMAP has no CUDA, default dense),
 #              HOLDOUT_STRICT (1: also score a strict hold-out: a second workspace without the
@@ -90,7 +91,7 @@ log "5. bakedepth, inpaint3d"
 "$bin/bakedepth" "$ws"
 if [ -d "$ws/masks" ] && [ -f "$ws/partners.tsv" ]; then "$bin/inpaint3d" "$ws"; fi
 
-log "6. ptmrender: every ${holdout}th pose held out (vertex colours, PTM), and a ${lateral} m lane change"
+log "6. ptmrender: every ${holdout}th pose held out (vertex colours, PTM), and a lane change of ${lateral} (model units: metres when the model is metric)"
 n=$(ls "$ws/images" | wc -l)
 mkdir -p "$out/heldout_truth"
 sel=()
