@@ -11,9 +11,9 @@ of the truth's surface pixels that get such a depth ("good coverage"). Time is d
 milliseconds per image. --short runs three settings.
 
 Knobs: --planes (16, 32, 48, 96), --window (5, 7, 11), --neighbours (2, 4, 6), --best-k (1, 2, 3),
---scale (0.25, 0.5, 1), --min-score (0.3, 0.5, 0.7), sweep directions (fronto only, no facade),
-and the fused mesh of the default setting (roadmesh --dense, baked back with bakedepth) beside the
-corridor proxy alone (in the CSV and the page's table; they have no time of their own).
+--scale (0.25, 0.5, 1), --min-score (0.3, 0.5, 0.7), --refine (0, 2, 4, 8), sweep directions
+(fronto only, no facade), and the fused mesh of the default setting (roadmesh --dense, baked
+back with bakedepth) beside the corridor proxy alone (in the CSV and the page's table; they have no time of their own).
 """
 import os
 import re
@@ -74,6 +74,8 @@ def sweep(c):
             add("scale", f"scale={s}", ["--scale", s])
         for s in (0.3, 0.7):
             add("min-score", f"min-score={s}", ["--min-score", s])
+        for r in (0, 2, 8):
+            add("refine", f"refine={r}", ["--refine", r])
         add("sweeps", "fronto only", ["--no-ground", "--no-facade"])
         add("sweeps", "no facade", ["--no-facade"])
         # The meshes, baked back at the images' size: fused (default densify) against the corridor.
@@ -91,7 +93,8 @@ def sweep(c):
         ["group", "setting", "default", "within2", "good_coverage", "ms_per_image"],
         f"<b>Knobs:</b> <code>--planes</code> (planes per sweep family), <code>--window</code> "
         f"(ZNCC window), <code>--neighbours</code>, <code>--best-k</code>, <code>--scale</code> "
-        f"(depth map size), <code>--min-score</code> (confidence cut), the sweep families "
+        f"(depth map size), <code>--min-score</code> (confidence cut), <code>--refine</code> "
+        f"(per-pixel refinement sub-steps), the sweep families "
         f"(<code>--no-ground</code>, <code>--no-facade</code>); each varied alone. A static "
         f"mkroad road ({frames} frames per drive at {size}, no vehicles). <b>Accuracy:</b> "
         f"&ldquo;good coverage&rdquo;, the share of the ray-traced truth's surface pixels that "
