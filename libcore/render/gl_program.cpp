@@ -53,12 +53,20 @@ std::string Relocate(const std::string& log, const std::vector<std::string>& fil
   return files.back() + " " + variant + ": " + (out.empty() ? "compile failed" : out);
 }
 
-unsigned Compile(GLenum type, const std::vector<std::string>& files,
+// A source file: its name (for messages) and its text.
+struct Source {
+  std::string name, text;
+};
+
+unsigned Compile(GLenum type, const std::vector<Source>& files,
                  const std::vector<std::string>& defines) {
   std::string src = "#version 330 core\n";
   for (const auto& d : defines) src += "#define " + d + "\n";
-  for (size_t i = 0; i < files.size(); ++i)
-    src += "#line 1 " + std::to_string(i + 1) + "\n" + ShaderSource(files[i]) + "\n";
+  std::vector<std::string> names;
+  for (size_t i = 0; i < files.size(); ++i) {
+    src += "#line 1 " + std::to_string(i + 1) + "\n" + files[i].text + "\n";
+    names.push_back(files[i].name);
+  }
   GLuint s = glCreateShader(type);
   const char* p = src.c_str();
   glShaderSource(s, 1, &p, nullptr);
@@ -71,22 +79,17 @@ unsigned Compile(GLenum type, const std::vector<std::string>& files,
     std::string log(static_cast<size_t>(std::max(len, 1)), '\0');
     glGetShaderInfoLog(s, len, nullptr, log.data());
     glDeleteShader(s);
-    throw Error(Relocate(log, files, Variant(defines)));
+    throw Error(Relocate(log, names, Variant(defines)));
   }
   return s;
 }
 
-}  // namespace
-
-unsigned BuildProgram(const std::string& vertex, const std::string& fragment,
-                      const std::vector<std::string>& defines,
-                      const std::vector<std::string>& fragment_includes) {
-  GLuint vs = Compile(GL_VERTEX_SHADER, {vertex}, defines);
-  std::vector<std::string> ff = fragment_includes;
-  ff.push_back(fragment);
+unsigned Link(const std::vector<Source>& vertex, const std::vector<Source>& fragment,
+              const std::vector<std::string>& defines) {
+  GLuint vs = Compile(GL_VERTEX_SHADER, vertex, defines);
   GLuint fs;
   try {
-    fs = Compile(GL_FRAGMENT_SHADER, ff, defines);
+    fs = Compile(GL_FRAGMENT_SHADER, fragment, defines);
   } catch (...) {
     glDeleteShader(vs);
     throw;
@@ -103,10 +106,26 @@ unsigned BuildProgram(const std::string& vertex, const std::string& fragment,
     char log[2048] = {0};
     glGetProgramInfoLog(prog, sizeof log, nullptr, log);
     glDeleteProgram(prog);
-    throw Error("shaders/" + vertex + " + " + fragment + " " + Variant(defines) +
-                ": link failed: " + log);
+    throw Error("shaders/" + vertex.back().name + " + " + fragment.back().name + " " +
+                Variant(defines) + ": link failed: " + log);
   }
   return prog;
+}
+
+}  // namespace
+
+unsigned BuildProgram(const std::string& vertex, const std::string& fragment,
+                      const std::vector<std::string>& defines,
+                      const std::vector<std::string>& fragment_includes) {
+  std::vector<Source> ff;
+  for (const auto& f : fragment_includes) ff.push_back({f, ShaderSource(f)});
+  ff.push_back({fragment, ShaderSource(fragment)});
+  return Link({{vertex, ShaderSource(vertex)}}, ff, defines);
+}
+
+unsigned BuildProgramFromText(const std::string& name, const std::string& vertex_text,
+                              const std::string& fragment_text) {
+  return Link({{name + ".vert", vertex_text}}, {{name + ".frag", fragment_text}}, {});
 }
 
 }  // namespace mvtm

@@ -15,6 +15,11 @@ unsigned BuildProgram(const std::string& vertex, const std::string& fragment,
                       const std::vector<std::string>& defines,
                       const std::vector<std::string>& fragment_includes);
 
+// The same for shaders made at run time (benchmarks, experiments): the texts without the
+// #version line, named NAME.vert and NAME.frag in messages.
+unsigned BuildProgramFromText(const std::string& name, const std::string& vertex_text,
+                              const std::string& fragment_text);
+
 // The source text of an embedded shader; throws Error when there is none of that name.
 const std::string& ShaderSource(const std::string& name);
 

@@ -45,6 +45,7 @@
 
 #include "bench_util.h"
 #include "render/context.h"
+#include "render/gl_program.h"
 #include "stereo/plane_sweep.h"
 
 using namespace mvtm;
@@ -286,35 +287,6 @@ std::string ScoreShader(int n, int radius, int k) {
          "}\n";
 }
 
-unsigned Compile(const std::string& vs, const std::string& fs) {
-  auto stage = [](GLenum type, const std::string& src) {
-    const std::string text = "#version 330 core\n" + src;
-    const char* p = text.c_str();
-    GLuint s = glCreateShader(type);
-    glShaderSource(s, 1, &p, nullptr);
-    glCompileShader(s);
-    GLint ok = 0;
-    glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-      char log[4096];
-      glGetShaderInfoLog(s, sizeof log, nullptr, log);
-      throw std::runtime_error(std::string("shader: ") + log + "\n" + text);
-    }
-    return s;
-  };
-  GLuint v = stage(GL_VERTEX_SHADER, vs), f = stage(GL_FRAGMENT_SHADER, fs);
-  GLuint p = glCreateProgram();
-  glAttachShader(p, v);
-  glAttachShader(p, f);
-  glLinkProgram(p);
-  glDeleteShader(v);
-  glDeleteShader(f);
-  GLint ok = 0;
-  glGetProgramiv(p, GL_LINK_STATUS, &ok);
-  if (!ok) throw std::runtime_error("shader program does not link");
-  return p;
-}
-
 GLuint Texture(int w, int h, GLenum internal, GLenum format, bool linear) {
   GLuint t = 0;
   glGenTextures(1, &t);
@@ -358,9 +330,9 @@ class GlSweep {
   GlSweep(int w, int h, int n, int window, int k) : w_(w), h_(h), n_(n) {
     if (n < 1 || n > 4) throw std::runtime_error("GL sweep: 1..4 neighbours");
     const int r = window / 2;
-    warp_ = Compile(kVertex, WarpShader(n));
-    hbox_ = Compile(kVertex, HBoxShader(n, r));
-    score_ = Compile(kVertex, ScoreShader(n, r, k));
+    warp_ = BuildProgramFromText("planesweep_warp", kVertex, WarpShader(n));
+    hbox_ = BuildProgramFromText("planesweep_hbox", kVertex, HBoxShader(n, r));
+    score_ = BuildProgramFromText("planesweep_score", kVertex, ScoreShader(n, r, k));
     glGenVertexArrays(1, &vao_);
     ref_ = Texture(w, h, GL_R32F, GL_RED, false);
     stats_ = Texture(w, h, GL_RG32F, GL_RG, false);
