@@ -276,8 +276,9 @@ void RefineWinners(const StereoView& ref, const std::vector<StereoView>& nbs,
   std::vector<double> spacing;
   for (const SweepFamily& f : fams) {
     cs.push_back(Kri.transpose() * f.normal);
-    const size_t P = f.offsets.size();
-    spacing.push_back(std::abs(FamilyParam(f, P - 1) - FamilyParam(f, 0)) / double(P - 1));
+    const size_t P = f.offsets.size();  // a family of fewer than 2 planes has no spacing
+    spacing.push_back(P < 2 ? 0.0
+                            : std::abs(FamilyParam(f, P - 1) - FamilyParam(f, 0)) / double(P - 1));
   }
   const int steps = o.refine, r = o.window / 2, W = ref.grey.cols, Hh = ref.grey.rows;
   cv::parallel_for_(cv::Range(0, Hh), [&](const cv::Range& rows) {
@@ -306,6 +307,7 @@ void RefineWinners(const StereoView& ref, const std::vector<StereoView>& nbs,
         if (!(sdev > 1e-3)) continue;
         const SweepFamily& f = fams[size_t(fi)];
         const double p0 = w.param.at<double>(y, x), h = spacing[size_t(fi)] / steps;
+        if (!(h > 0)) continue;
         const double ray = cs[size_t(fi)].dot(Eigen::Vector3d(x + 0.5, y + 0.5, 1.0));
         int bj = -1;
         for (int j = 0; j <= 2 * steps; ++j) {

@@ -189,6 +189,31 @@ TEST(PlaneSweep, NoNeighboursGivesNoDepth) {
   for (float z : m.depth.data) ASSERT_TRUE(std::isinf(z));
 }
 
+TEST(PlaneSweep, FamiliesOfNoneOrOnePlaneAreHarmless) {
+  // An empty family finds nothing; a family of one plane (at the wall, z = 8) has no spacing to
+  // refine within: its pixels keep that plane's depth exactly.
+  const Eigen::Vector3d n(0, 0, 1);
+  const Camera cam = Cam();
+  StereoView ref{cam, At({0, 0, 0}), See(cam, At({0, 0, 0}), n, 8)};
+  std::vector<StereoView> nbs;
+  for (double bx : {-0.6, 0.6})
+    nbs.push_back({cam, At({bx, 0, 0}), See(cam, At({bx, 0, 0}), n, 8)});
+  SweepFamily empty, one;
+  empty.name = "empty";
+  one.name = "one";
+  one.offsets = {8.0};
+  PlaneSweepOptions o;
+  o.min_margin = 0;  // one plane: its margin over the family's mean is 0
+  for (float z : SweepDepth(ref, nbs, {empty}, o).depth.data) ASSERT_TRUE(std::isinf(z));
+  size_t found = 0;
+  for (float z : SweepDepth(ref, nbs, {empty, one}, o).depth.data) {
+    if (std::isinf(z)) continue;
+    ASSERT_FLOAT_EQ(z, 8.0f);
+    ++found;
+  }
+  EXPECT_GT(found, cam.width * cam.height / 2);
+}
+
 TEST(PlaneSweep, PlanesThroughACameraCentreStayFinite) {
   // Facade planes x = d, including d = 0 (through the reference centre) and d = 0.6 (through the
   // neighbour's centre): no NaN, and the wall at x = -2 is still found.
