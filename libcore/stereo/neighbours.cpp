@@ -6,7 +6,6 @@
 
 #include "base/error.h"
 #include "base/stats.h"
-#include "index/pose_index.h"
 
 namespace mvtm {
 
@@ -43,47 +42,66 @@ double Coverage(const Rigid3d& w2c, const Camera& cam, const std::vector<Eigen::
 
 }  // namespace
 
-std::vector<size_t> SelectStereoNeighbours(const std::vector<Rigid3d>& w2c,
-                                           const std::vector<Camera>& cameras, size_t i,
-                                           const std::vector<Eigen::Vector3d>& ref_points,
-                                           const NeighbourOptions& o) {
-  const double min_base = o.min_baseline * MedianSpacing(w2c);
-  const Eigen::Vector3d ci = w2c[i].Centre(), zi = w2c[i].R().row(2).transpose();
-  // Candidates: the nearest camera centres within the angle gate, from the pose index (any
-  // image of the model: a second drive along the same road is as good a neighbour as the
-  // frames before and after), nearest first.
+namespace {
+
+ViewSelectionOptions CandidateSelection(const NeighbourOptions& o) {
   ViewSelectionOptions sel;
   sel.k = size_t(std::max(4 * o.count, o.count + 8));
   sel.max_heading_deg = o.max_angle_deg;
   sel.ahead_weight = 0;  // pure distance: both sides are wanted
-  const PoseIndex index(w2c, sel);
-  std::vector<size_t> sides[2];  // 0: behind the reference, 1: ahead of it
-  for (const Candidate& c : index.Select(w2c[i], i)) {
-    const Rigid3d& p = w2c[c.index];
-    const double base = (p.Centre() - ci).norm();
-    if (!(base > min_base) || base == 0) continue;  // no baseline: every plane maps alike
-    if (!ref_points.empty() && Coverage(p, cameras[c.index], ref_points) < o.min_coverage) continue;
-    sides[(p.Centre() - ci).dot(zi) > 0 ? 1 : 0].push_back(c.index);
+  return sel;
+}
+
+}  // namespace
+
+StereoNeighbourFinder::StereoNeighbourFinder(const std::vector<Rigid3d>& w2c,
+                                             const std::vector<Camera>& cameras,
+                                             const NeighbourOptions& o)
+    : w2c_(w2c),
+      cameras_(cameras),
+      o_(o),
+      min_base_(o.min_baseline * MedianSpacing(w2c)),
+      index_(w2c, CandidateSelection(o)) {}
+
+std::vector<size_t> StereoNeighbourFinder::Select(
+    size_t i, const std::vector<Eigen::Vector3d>& ref_points) const {
+  const Eigen::Vector3d ci = w2c_[i].Centre(), zi = w2c_[i].R().row(2).transpose();
+  // Candidates: the nearest camera centres within the angle gate, from the pose index (any
+  // image of the model: a second drive along the same road is as good a neighbour as the
+  // frames before and after), nearest first.
+  std::vector<Candidate> sides[2];  // 0: behind the reference, 1: ahead of it
+  for (const Candidate& c : index_.Select(w2c_[i], i)) {
+    if (!(c.distance > min_base_) || c.distance == 0) continue;  // no baseline: planes map alike
+    const Rigid3d& p = w2c_[c.index];
+    if (!ref_points.empty() && Coverage(p, cameras_[c.index], ref_points) < o_.min_coverage)
+      continue;
+    sides[(p.Centre() - ci).dot(zi) > 0 ? 1 : 0].push_back(c);
   }
   // Alternately from either side, nearest first: a forward-moving camera's neighbours behind
   // it see what it sees smaller, those ahead see the far scene larger; both together cover
   // occlusions either way. A side that runs out leaves the rest to the other.
   std::vector<size_t> out;
   size_t next[2] = {0, 0};
-  auto dist = [&](size_t j) { return (w2c[j].Centre() - ci).norm(); };
   int side = -1;
-  while (int(out.size()) < o.count && (next[0] < sides[0].size() || next[1] < sides[1].size())) {
+  while (int(out.size()) < o_.count && (next[0] < sides[0].size() || next[1] < sides[1].size())) {
     if (next[0] >= sides[0].size())
       side = 1;
     else if (next[1] >= sides[1].size())
       side = 0;
     else if (side < 0)  // the nearest of all first
-      side = dist(sides[1][next[1]]) < dist(sides[0][next[0]]) ? 1 : 0;
+      side = sides[1][next[1]].distance < sides[0][next[0]].distance ? 1 : 0;
     else
       side = 1 - side;
-    out.push_back(sides[side][next[side]++]);
+    out.push_back(sides[side][next[side]++].index);
   }
   return out;
+}
+
+std::vector<size_t> SelectStereoNeighbours(const std::vector<Rigid3d>& w2c,
+                                           const std::vector<Camera>& cameras, size_t i,
+                                           const std::vector<Eigen::Vector3d>& ref_points,
+                                           const NeighbourOptions& o) {
+  return StereoNeighbourFinder(w2c, cameras, o).Select(i, ref_points);
 }
 
 void DriveAxes(const std::vector<Rigid3d>& w2c, Eigen::Vector3d& down, Eigen::Vector3d& side) {

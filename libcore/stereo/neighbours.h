@@ -14,6 +14,7 @@
 
 #include "camera/camera.h"
 #include "geometry/rigid.h"
+#include "index/pose_index.h"
 #include "stereo/plane_sweep.h"
 
 namespace mvtm {
@@ -37,6 +38,23 @@ double MedianSpacing(const std::vector<Rigid3d>& w2c);
 // nearest of all first; skipping those with too little baseline, too different a viewing
 // direction, or (when `ref_points` is not empty) seeing too few of the reference's points.
 // Fewer than options.count (even none) when the model offers no more.
+// The same for every image of one model: the pose index and the median spacing are built once.
+// Keeps references to `w2c` and `cameras`, which must outlive it. Select() is const and
+// thread-safe.
+class StereoNeighbourFinder {
+ public:
+  StereoNeighbourFinder(const std::vector<Rigid3d>& w2c, const std::vector<Camera>& cameras,
+                        const NeighbourOptions& options);
+  std::vector<size_t> Select(size_t i, const std::vector<Eigen::Vector3d>& ref_points) const;
+
+ private:
+  const std::vector<Rigid3d>& w2c_;
+  const std::vector<Camera>& cameras_;
+  NeighbourOptions o_;
+  double min_base_;
+  PoseIndex index_;
+};
+
 std::vector<size_t> SelectStereoNeighbours(const std::vector<Rigid3d>& w2c,
                                            const std::vector<Camera>& cameras, size_t i,
                                            const std::vector<Eigen::Vector3d>& ref_points,

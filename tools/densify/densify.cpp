@@ -87,10 +87,10 @@ std::vector<SweepFamily> Families(const DensifyOptions& o, const DenseScene& s, 
 }
 
 // Sweeps image i and writes its depth and confidence maps (atomically). Returns the valid share.
-double DensifyOne(const DensifyOptions& o, const Workspace& ws, const DenseScene& s, size_t i,
-                  DensifyReport& rep) {
+double DensifyOne(const DensifyOptions& o, const Workspace& ws, const DenseScene& s,
+                  const StereoNeighbourFinder& finder, size_t i, DensifyReport& rep) {
   std::vector<Eigen::Vector3d> pts = PointsSeenBy(s.rec, *s.images[i]);
-  const std::vector<size_t> nbs = SelectStereoNeighbours(s.w2c, s.cameras, i, pts, o.neighbours);
+  const std::vector<size_t> nbs = finder.Select(i, pts);
   if (nbs.empty()) ++rep.no_neighbours;
   if (pts.size() < 3)  // an image with (almost) no sparse points sweeps over its neighbours' points
     for (size_t j : nbs)
@@ -137,8 +137,9 @@ DensifyReport RunDensify(const DensifyOptions& o) {
   Progress bar("densify", todo.size(), o.quiet);
   double share = 0;
   const auto t0 = Clock::now();
+  const StereoNeighbourFinder finder(s.w2c, s.cameras, o.neighbours);
   for (size_t i : todo) {
-    share += DensifyOne(o, ws, s, i, rep);
+    share += DensifyOne(o, ws, s, finder, i, rep);
     ++rep.written;
     bar.Step();
   }
