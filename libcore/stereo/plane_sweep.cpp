@@ -13,6 +13,13 @@ namespace {
 
 constexpr float kNoScore = -2.f;  // below every ZNCC: "this neighbour / plane says nothing"
 
+// The neighbour's pose relative to the reference: x_nb = R x_ref + t.
+void RelativePose(const StereoView& ref, const StereoView& nb, Eigen::Matrix3d& R,
+                  Eigen::Vector3d& t) {
+  R = nb.world_to_camera.R() * ref.world_to_camera.R().transpose();
+  t = nb.world_to_camera.t - R * ref.world_to_camera.t;
+}
+
 // Window mean and standard deviation of an image (box filter, reflected borders).
 void WindowStats(const cv::Mat& I, int win, cv::Mat& mean, cv::Mat& sd) {
   cv::Mat sq;
@@ -104,6 +111,17 @@ cv::Mat NeighbourScore(const StereoView& ref, const RefWindows& rw, const Stereo
   return Zncc(ref.grey, rw, J, seen);
 }
 
+// Mean of the best k of the scores in `v` (reordered), or kNoScore when fewer than k say
+// something.
+float MeanOfBestK(std::vector<float>& v, int k) {
+  if (int(v.size()) < k) return kNoScore;
+  std::partial_sort(v.begin(), v.begin() + k, v.end(), std::greater<float>());
+  if (!(v[size_t(k) - 1] > kNoScore)) return kNoScore;
+  float sum = 0;
+  for (int j = 0; j < k; ++j) sum += v[size_t(j)];
+  return sum / float(k);
+}
+
 // Mean of the best k scores per pixel (kNoScore when fewer than k neighbours say something).
 cv::Mat BestK(const std::vector<cv::Mat>& scores, int k) {
   const cv::Size sz = scores.front().size();
@@ -112,11 +130,7 @@ cv::Mat BestK(const std::vector<cv::Mat>& scores, int k) {
   for (int y = 0; y < sz.height; ++y)
     for (int x = 0; x < sz.width; ++x) {
       for (size_t j = 0; j < scores.size(); ++j) v[j] = scores[j].at<float>(y, x);
-      std::partial_sort(v.begin(), v.begin() + k, v.end(), std::greater<float>());
-      float sum = 0;
-      bool ok = v[size_t(k) - 1] > kNoScore;
-      for (int j = 0; j < k && ok; ++j) sum += v[size_t(j)];
-      out.at<float>(y, x) = ok ? sum / float(k) : kNoScore;
+      out.at<float>(y, x) = MeanOfBestK(v, k);
     }
   return out;
 }
@@ -146,6 +160,14 @@ std::vector<cv::Mat> FamilyScores(const StereoView& ref, const RefWindows& rw,
 
 // Per pixel, the family's best plane refined by a parabola through its neighbours' scores; keeps
 // it where it beats `best` (depth and score of the best family so far).
+// The peak of the parabola through scores a, b, c at steps -1, 0, +1 (b the best), in steps,
+// within ±0.5; 0 when a side has no score or the three do not make a maximum.
+double ParabolaPeak(double a, double b, double c) {
+  const double den = a - 2.0 * b + c;
+  if (!(a > kNoScore && c > kNoScore && den < 0)) return 0;
+  return std::clamp(0.5 * (a - c) / den, -0.5, 0.5);
+}
+
 struct Winners {
   cv::Mat z, score, margin;  // CV_32F: depth (+inf: none), aggregated ZNCC, margin
   cv::Mat family;            // CV_32S: index of the winning family (-1: none)
@@ -175,13 +197,9 @@ void TakeBest(const SweepFamily& f, int fi, const std::vector<cv::Mat>& scores,
       if (bp < 0 || bs <= best_s.at<float>(y, x)) continue;
       double s = param(bp);
       if (bp > 0 && bp + 1 < P) {
-        const double a = scores[size_t(bp - 1)].at<float>(y, x),
-                     c = scores[size_t(bp + 1)].at<float>(y, x);
-        const double den = a - 2.0 * bs + c;
-        if (a > kNoScore && c > kNoScore && den < 0) {
-          const double delta = std::clamp(0.5 * (a - c) / den, -0.5, 0.5);
-          s += delta * (delta > 0 ? param(bp + 1) - s : s - param(bp - 1));
-        }
+        const double delta = ParabolaPeak(scores[size_t(bp - 1)].at<float>(y, x), bs,
+                                          scores[size_t(bp + 1)].at<float>(y, x));
+        s += delta * (delta > 0 ? param(bp + 1) - s : s - param(bp - 1));
       }
       const double d = f.inverse_spacing ? 1.0 / s : s;
       const double z = d / ray_dot.at<float>(y, x);
@@ -249,11 +267,7 @@ struct PixelMatcher {
       scores.push_back(
           float(std::clamp((sij / n - ref_mean * mj) / (ref_sd * std::sqrt(var_j)), -1.0, 1.0)));
     }
-    if (int(scores.size()) < k) return kNoScore;
-    std::partial_sort(scores.begin(), scores.begin() + k, scores.end(), std::greater<float>());
-    float sum = 0;
-    for (int j = 0; j < k; ++j) sum += scores[size_t(j)];
-    return sum / float(k);
+    return MeanOfBestK(scores, k);
   }
 };
 
@@ -261,15 +275,15 @@ struct PixelMatcher {
 // plane spacing on both sides of the winner, then a parabola through the best and its sides.
 void RefineWinners(const StereoView& ref, const std::vector<StereoView>& nbs,
                    const std::vector<SweepFamily>& fams, const PlaneSweepOptions& o, int k,
-                   const cv::Mat& ref_sd, Winners& w) {
+                   const RefWindows& rw, Winners& w) {
   PixelMatcher m;
   m.win = o.window;
   m.k = k;
   const Eigen::Matrix3d Kri = ref.camera.K().inverse();
-  const Eigen::Matrix3d Rr = ref.world_to_camera.R();
   for (const StereoView& nb : nbs) {
-    const Eigen::Matrix3d R = nb.world_to_camera.R() * Rr.transpose();
-    const Eigen::Vector3d t = nb.world_to_camera.t - R * ref.world_to_camera.t;
+    Eigen::Matrix3d R;
+    Eigen::Vector3d t;
+    RelativePose(ref, nb, R, t);
     m.nbs.push_back({nb.camera.K() * R * Kri, nb.camera.K() * t, &nb.grey});
   }
   std::vector<Eigen::Vector3d> cs;
@@ -287,24 +301,18 @@ void RefineWinners(const StereoView& ref, const std::vector<StereoView>& nbs,
     for (int y = rows.start; y < rows.end; ++y)
       for (int x = 0; x < W; ++x) {
         const int fi = w.family.at<int>(y, x);
-        const float sd = ref_sd.at<float>(y, x);
+        const float sd = rw.sd.at<float>(y, x);
         // Pixels the thresholds will drop anyway (ambiguous or textureless) are not refined.
         if (fi < 0 || !(sd > 1e-3f) || sd < o.min_texture ||
             w.margin.at<float>(y, x) < o.min_margin)
           continue;
-        double mean = 0;
+        // The reference window, reflected at the borders as the box filters of the sweep do.
         for (int dy = -r, i = 0; dy <= r; ++dy)
-          for (int dx = -r; dx <= r; ++dx, ++i) {
+          for (int dx = -r; dx <= r; ++dx, ++i)
             win[size_t(i)] =
                 ref.grey.at<float>(cv::borderInterpolate(y + dy, Hh, cv::BORDER_REFLECT),
                                    cv::borderInterpolate(x + dx, W, cv::BORDER_REFLECT));
-            mean += win[size_t(i)];
-          }
-        mean /= double(win.size());
-        double var = 0;
-        for (float v : win) var += (v - mean) * (v - mean);
-        const double sdev = std::sqrt(var / double(win.size()));
-        if (!(sdev > 1e-3)) continue;
+        const double mean = rw.mean.at<float>(y, x), sdev = sd;
         const SweepFamily& f = fams[size_t(fi)];
         const double p0 = w.param.at<double>(y, x), h = spacing[size_t(fi)] / steps;
         if (!(h > 0)) continue;
@@ -319,12 +327,8 @@ void RefineWinners(const StereoView& ref, const std::vector<StereoView>& nbs,
         }
         if (bj < 0) continue;
         double p = p0 + (bj - steps) * h;
-        if (bj > 0 && bj < 2 * steps) {
-          const double a = sc[size_t(bj - 1)], b = sc[size_t(bj)], c = sc[size_t(bj + 1)];
-          const double den = a - 2.0 * b + c;
-          if (a > kNoScore && c > kNoScore && den < 0)
-            p += std::clamp(0.5 * (a - c) / den, -0.5, 0.5) * h;
-        }
+        if (bj > 0 && bj < 2 * steps)
+          p += ParabolaPeak(sc[size_t(bj - 1)], sc[size_t(bj)], sc[size_t(bj + 1)]) * h;
         const double d = f.inverse_spacing ? 1.0 / p : p, z = d / ray;
         if (!(z > 0) || !std::isfinite(z)) continue;
         w.z.at<float>(y, x) = static_cast<float>(z);
@@ -373,9 +377,9 @@ SweepFamily MakeOffsetSweep(const std::string& name, const Eigen::Vector3d& norm
 
 Eigen::Matrix3d PlaneHomography(const StereoView& ref, const StereoView& nb,
                                 const Eigen::Vector3d& n, double d) {
-  const Eigen::Matrix3d Rr = ref.world_to_camera.R(), Rn = nb.world_to_camera.R();
-  const Eigen::Matrix3d R = Rn * Rr.transpose();
-  const Eigen::Vector3d t = nb.world_to_camera.t - R * ref.world_to_camera.t;
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+  RelativePose(ref, nb, R, t);
   const Eigen::Matrix3d M = R + t * n.transpose() / d;
   return nb.camera.K() * M * ref.camera.K().inverse();
 }
@@ -403,7 +407,7 @@ DepthMap SweepDepth(const StereoView& ref, const std::vector<StereoView>& nbs,
     TakeBest(families[fi], int(fi), FamilyScores(ref, rw, nbs, families[fi], ray_dot, k), ray_dot,
              win);
   }
-  if (o.refine > 0) RefineWinners(ref, nbs, families, o, k, rw.sd, win);
+  if (o.refine > 0) RefineWinners(ref, nbs, families, o, k, rw, win);
   const cv::Mat &best_z = win.z, &best_s = win.score, &best_margin = win.margin;
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {

@@ -61,6 +61,11 @@ cv::Mat See(const Camera& cam, const Rigid3d& w2c, const Eigen::Vector3d& n, dou
   return im;
 }
 
+// The view of the plane n·X = d (world) from a camera at (bx, 0, 0) looking down +z.
+StereoView ViewAt(const Camera& cam, double bx, const Eigen::Vector3d& n, double d) {
+  return {cam, At({bx, 0, 0}), See(cam, At({bx, 0, 0}), n, d)};
+}
+
 // Relative depth error statistics over the pixels with a depth.
 struct Score {
   double median_rel = 1e9, valid = 0;
@@ -104,10 +109,9 @@ TEST(PlaneSweep, FrontoParallelWallAtKnownDepth) {
   const Eigen::Vector3d n(0, 0, 1);
   const double Z = 8.0;
   const Camera cam = Cam();
-  StereoView ref{cam, At({0, 0, 0}), See(cam, At({0, 0, 0}), n, Z)};
+  const StereoView ref = ViewAt(cam, 0, n, Z);
   std::vector<StereoView> nbs;
-  for (double bx : {-0.6, 0.6, 1.2})
-    nbs.push_back({cam, At({bx, 0, 0}), See(cam, At({bx, 0, 0}), n, Z)});
+  for (double bx : {-0.6, 0.6, 1.2}) nbs.push_back(ViewAt(cam, bx, n, Z));
   const DepthMap m = SweepDepth(ref, nbs, {MakeFrontoSweep(3, 30, 64)}, PlaneSweepOptions());
   const Score s = Compare(m, [&](int, int) { return Z; });
   std::printf("[fronto wall] valid %.3f, median relative error %.2e\n", s.valid, s.median_rel);
@@ -125,10 +129,9 @@ TEST(PlaneSweep, PerPixelRefinementIsNotBoundByThePlaneSpacing) {
   const Eigen::Vector3d n(0, 0, 1);
   const double Z = 8.0;
   const Camera cam = Cam();
-  StereoView ref{cam, At({0, 0, 0}), See(cam, At({0, 0, 0}), n, Z)};
+  const StereoView ref = ViewAt(cam, 0, n, Z);
   std::vector<StereoView> nbs;
-  for (double bx : {-0.6, 0.6, 1.2})
-    nbs.push_back({cam, At({bx, 0, 0}), See(cam, At({bx, 0, 0}), n, Z)});
+  for (double bx : {-0.6, 0.6, 1.2}) nbs.push_back(ViewAt(cam, bx, n, Z));
   PlaneSweepOptions o;
   o.min_margin = 0;  // few planes: keep every match, the test is about precision
   o.refine = 0;
@@ -194,10 +197,9 @@ TEST(PlaneSweep, FamiliesOfNoneOrOnePlaneAreHarmless) {
   // refine within: its pixels keep that plane's depth exactly.
   const Eigen::Vector3d n(0, 0, 1);
   const Camera cam = Cam();
-  StereoView ref{cam, At({0, 0, 0}), See(cam, At({0, 0, 0}), n, 8)};
+  const StereoView ref = ViewAt(cam, 0, n, 8);
   std::vector<StereoView> nbs;
-  for (double bx : {-0.6, 0.6})
-    nbs.push_back({cam, At({bx, 0, 0}), See(cam, At({bx, 0, 0}), n, 8)});
+  for (double bx : {-0.6, 0.6}) nbs.push_back(ViewAt(cam, bx, n, 8));
   SweepFamily empty, one;
   empty.name = "empty";
   one.name = "one";
