@@ -5,6 +5,7 @@
 #include <cmath>
 #include <map>
 #include <set>
+#include <vector>
 
 #include "base/error.h"
 
@@ -27,15 +28,16 @@ Mesh MergeProxyBehind(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3
     const Eigen::Vector3f p = proxy.vertices[v].cast<float>();
     return std::array<float, 3>{p.x(), p.y(), p.z()};
   };
-  auto is_ground = [&](const std::array<uint32_t, 3>& f) {
+  // Each proxy face once: 0 degenerate (dropped), 1 wall, 2 ground (normal within 45° of up).
+  std::vector<uint8_t> kind(proxy.faces.size(), 0);
+  for (size_t i = 0; i < proxy.faces.size(); ++i) {
+    const auto& f = proxy.faces[i];
     const Eigen::Vector3d n = (proxy.vertices[f[1]] - proxy.vertices[f[0]])
                                   .cross(proxy.vertices[f[2]] - proxy.vertices[f[0]]);
-    return n.norm() > 0 && n.normalized().dot(u) >= std::cos(M_PI / 4);
-  };
-  if (walls_behind > 0)
-    for (const auto& f : proxy.faces)
-      if (is_ground(f))
-        for (uint32_t v : f) ground_points.insert(key(v));
+    if (n.norm() > 0) kind[i] = n.normalized().dot(u) >= std::cos(M_PI / 4) ? 2 : 1;
+    if (kind[i] == 2 && walls_behind > 0)
+      for (uint32_t v : f) ground_points.insert(key(v));
+  }
   Mesh out;
   out.vertices = dense.vertices;
   out.faces = dense.faces;
@@ -51,11 +53,10 @@ Mesh MergeProxyBehind(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3
     return index[v] = static_cast<uint32_t>(out.vertices.size() - 1);
   };
   MergeReport r;
-  for (const auto& f : proxy.faces) {
-    const Eigen::Vector3d n = (proxy.vertices[f[1]] - proxy.vertices[f[0]])
-                                  .cross(proxy.vertices[f[2]] - proxy.vertices[f[0]]);
-    if (n.norm() == 0) continue;
-    const bool ground = is_ground(f);
+  for (size_t i = 0; i < proxy.faces.size(); ++i) {
+    const auto& f = proxy.faces[i];
+    if (kind[i] == 0) continue;
+    const bool ground = kind[i] == 2;
     if (!ground && walls_behind < 0) continue;
     out.faces.push_back({vertex(f[0], ground), vertex(f[1], ground), vertex(f[2], ground)});
     ++(ground ? r.ground_faces : r.wall_faces);
