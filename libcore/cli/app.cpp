@@ -36,6 +36,8 @@ int RunMain(CLI::App& app, const std::string& tool, int argc, char** argv,
     } catch (const CLI::CallForVersion&) {
       std::cout << app.version() << "\n";
       return 0;
+    } catch (const CLI::Success&) {
+      return 0;  // a flag that printed what was asked (--options-json)
     } catch (const CLI::ParseError& e) {
       std::cerr << tool << ": error: " << e.what() << " (try --help)\n";
       return 2;

@@ -1,6 +1,38 @@
 #include "cli/options.h"
 
+#include <iostream>
+
 namespace mvtm {
+
+void AddOptionTable(CLI::App& app, OptionTable& table) {
+  for (const OptionSpec& s : table.options()) {
+    if (s.hidden) continue;
+    CLI::Option* o = nullptr;
+    if (s.is_flag) {
+      o = app.add_flag_function(
+          s.names, [set = s.set](int64_t n) { set(n > 0 ? "1" : "0"); }, s.help);
+      continue;
+    }
+    o = app.add_option_function<std::string>(
+        s.names, [set = s.set](const std::string& v) { set(v); }, s.help);
+    o->type_name(s.type);
+    if (!s.positional && !s.default_text.empty()) o->default_str(s.default_text);
+    if (!s.choices.empty()) o->check(CLI::IsMember(s.choices));
+    if (s.required) o->required();
+  }
+  for (const OptionSpec& s : table.options())
+    for (const std::string& other : s.excludes) {
+      CLI::Option* a = app.get_option_no_throw(s.flag);
+      CLI::Option* b = app.get_option_no_throw(other);
+      if (a && b) a->excludes(b);
+    }
+  app.add_flag_callback("--options-json",
+                        [&table] {
+                          std::cout << table.Describe().dump(1) << "\n";
+                          throw CLI::Success();
+                        })
+      ->group("");
+}
 
 void AddWorkOptions(CLI::App& app, WorkOptions& work, const std::string& items,
                     const std::string& order, const std::string& force_help) {

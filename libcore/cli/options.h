@@ -7,8 +7,14 @@
 #include <vector>
 
 #include "cli/work.h"
+#include "run/option_table.h"
 
 namespace mvtm {
+
+// Puts a declared option table into a CLI11 app: every option, its type, default and choices,
+// its exclusions; and the hidden flag --options-json, which prints OptionTable::Describe() (the
+// option-walking test reads it) and exits 0. `table` must outlive the parse.
+void AddOptionTable(CLI::App& app, OptionTable& table);
 
 // --frames A:B and --shard I/N (mutually exclusive), --force, -q/--quiet.
 //   items:      what is selected, plural ("poses", "images", "label frames")

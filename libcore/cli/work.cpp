@@ -25,6 +25,21 @@ std::string WorkOptions::ProvenanceName(const std::string& tool) const {
   return tool + "-shard-" + std::to_string(Selection::Shard(shard).shard_index);
 }
 
+void DeclareWorkOptions(OptionTable& table, WorkOptions& work, const std::string& items,
+                        const std::string& order, const std::string& force_help) {
+  table.Text("--frames", &work.frames, "Only " + items + " A:B (half-open, " + order + ")")
+      .Cosmetic()
+      .Excludes("--shard")
+      .Check([&work] { work.CheckWork(); });
+  table.Text("--shard", &work.shard, "Only " + items + " i with i % N == I (I/N)").Cosmetic();
+  table.Flag("--force", &work.force, force_help).Cosmetic();
+  DeclareQuietOption(table, work.quiet);
+}
+
+void DeclareQuietOption(OptionTable& table, bool& quiet) {
+  table.Flag("-q,--quiet", &quiet, "No progress bar or summary").Cosmetic();
+}
+
 void CheckRange(double v, double lo, double hi, bool lo_open, const std::string& option) {
   if (std::isfinite(v) && v <= hi && v >= lo && !(lo_open && v == lo)) return;
   char range[64];

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "cli/selection.h"
+#include "run/option_table.h"
 
 namespace mvtm {
 
@@ -28,6 +29,16 @@ struct WorkOptions {
   // job array records its own run, so shards never overwrite each other's record).
   std::string ProvenanceName(const std::string& tool) const;
 };
+
+// Declares --frames, --shard (mutually exclusive), --force and -q/--quiet in a tool's table; none
+// of them changes an output (--force redoes it as it would be made anyway).
+//   items:      what is selected, plural ("poses", "images", "label frames")
+//   order:      the documented order of the items ("in pose order", "by name order")
+//   force_help: what --force redoes for this tool
+void DeclareWorkOptions(OptionTable& table, WorkOptions& work, const std::string& items,
+                        const std::string& order, const std::string& force_help);
+// -q/--quiet alone, for tools without a work list.
+void DeclareQuietOption(OptionTable& table, bool& quiet);
 
 // The largest image side a tool accepts (the OpenGL texture limit of Mesa's llvmpipe).
 inline constexpr int64_t kMaxImageSide = 16384;

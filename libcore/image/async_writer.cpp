@@ -8,14 +8,15 @@ AsyncImageWriter::AsyncImageWriter() : thread_([this] { Loop(); }) {}
 
 AsyncImageWriter::~AsyncImageWriter() { Stop(); }
 
-void AsyncImageWriter::Push(std::string path, Image img, PngCompression png) {
+void AsyncImageWriter::Push(std::string path, Image img, PngCompression png,
+                            std::function<void(const std::string&)> done) {
   std::unique_lock<std::mutex> l(mu_);
   cv_.wait(l, [&] { return queue_.size() < 4 || !error_.empty(); });
   if (!error_.empty()) {
     reported_ = true;
     throw Error(error_);
   }
-  queue_.push_back(Job{std::move(path), std::move(img), png});
+  queue_.push_back(Job{std::move(path), std::move(img), png, std::move(done)});
   cv_.notify_all();
 }
 
@@ -49,6 +50,7 @@ void AsyncImageWriter::Loop() {
     }
     try {
       WriteImage(job.path, job.image, job.png);
+      if (job.done) job.done(job.path);
     } catch (const std::exception& e) {
       std::lock_guard<std::mutex> l(mu_);
       error_ = e.what();

@@ -9,6 +9,7 @@
 
 #include <condition_variable>
 #include <deque>
+#include <functional>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -25,7 +26,9 @@ class AsyncImageWriter {
   AsyncImageWriter(const AsyncImageWriter&) = delete;
   AsyncImageWriter& operator=(const AsyncImageWriter&) = delete;
 
-  void Push(std::string path, Image img, PngCompression png = PngCompression::kDefault);
+  // `done` (optional) runs on the writer thread once the file is in place (e.g. to record it).
+  void Push(std::string path, Image img, PngCompression png = PngCompression::kDefault,
+            std::function<void(const std::string&)> done = {});
   void Finish();
 
  private:
@@ -38,6 +41,7 @@ class AsyncImageWriter {
     std::string path;
     Image image;
     PngCompression png;
+    std::function<void(const std::string&)> done;
   };
   std::deque<Job> queue_;
   bool done_ = false, reported_ = false;

@@ -15,6 +15,12 @@ const std::vector<std::string>& GlBackendNames() {
   return names;
 }
 
+const std::vector<std::pair<GlBackend, std::string>>& GlBackendTable() {
+  static const std::vector<std::pair<GlBackend, std::string>> table = {
+      {GlBackend::kAuto, "auto"}, {GlBackend::kEgl, "egl"}, {GlBackend::kOsMesa, "osmesa"}};
+  return table;
+}
+
 GlBackend ParseGlBackend(const std::string& s) {
   const auto& names = GlBackendNames();
   for (size_t i = 0; i < names.size(); ++i)

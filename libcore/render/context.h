@@ -14,6 +14,7 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace mvtm {
@@ -22,6 +23,8 @@ enum class GlBackend { kAuto, kEgl, kOsMesa };
 
 // The backends' names in the order of the enum: "auto", "egl", "osmesa" (--gl's choices).
 const std::vector<std::string>& GlBackendNames();
+// The backends and their names, for a declared choice option (run/option_table.h).
+const std::vector<std::pair<GlBackend, std::string>>& GlBackendTable();
 // Parses one of GlBackendNames(); throws UsageError naming --gl and the choices.
 GlBackend ParseGlBackend(const std::string& s);
 

@@ -122,23 +122,6 @@ void Workspace::Require(const std::string& tool, const std::vector<WsItem>& need
   throw Error(root_.string(), 0, "not ready for " + tool + ": missing " + list);
 }
 
-std::string FileChecksum(const fs::path& path) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw Error(path.string(), 0, "cannot open");
-  uint64_t h = 1469598103934665603ULL;
-  char buf[1 << 16];
-  while (f) {
-    f.read(buf, sizeof buf);
-    for (std::streamsize i = 0; i < f.gcount(); ++i) {
-      h ^= static_cast<unsigned char>(buf[i]);
-      h *= 1099511628211ULL;
-    }
-  }
-  char hex[17];
-  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
-  return hex;
-}
-
 fs::path Workspace::MetricRecord() const {
   const fs::path dir = root_ / "provenance";
   std::error_code ec;

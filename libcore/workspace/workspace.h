@@ -25,6 +25,8 @@
 #include <string>
 #include <vector>
 
+#include "base/file_stamp.h"
+
 namespace mvtm {
 
 namespace fs = std::filesystem;
@@ -98,8 +100,5 @@ class Workspace {
  private:
   fs::path root_;
 };
-
-// 64-bit FNV-1a of a file's bytes, as 16 hex digits. Throws Error when unreadable.
-std::string FileChecksum(const fs::path& path);
 
 }  // namespace mvtm

@@ -11,14 +11,25 @@
 #include "io/mesh_io.h"
 #include "render/context.h"
 #include "render/renderer.h"
+#include "run/ledger.h"
 #include "workspace/workspace.h"
 
 namespace mvtm {
 
+OptionTable DeclareOptions(BakeDepthOptions& o) {
+  OptionTable t("bakedepth");
+  t.Positional("WS", &o.workspace, "Workspace folder (sparse/, mesh.ply)").Dir();
+  t.Real("--scale", &o.scale, "Depth map size relative to the image (0 < F <= 4)")
+      .Range(0, 4, true)
+      .Alternative("0.5");
+  DeclareWorkOptions(t, o, "images", "in name order", "Rebake maps even when they are up to date");
+  t.Choice("--gl", &o.gl, GlBackendTable(), "OpenGL backend");
+  return t;
+}
+
 void BakeDepthOptions::Check() const {
-  if (!(scale > 0 && scale <= 4)) throw UsageError("--scale: must be in (0, 4]");
-  CheckWork();
-  ParseGlBackend(gl);
+  BakeDepthOptions copy = *this;
+  DeclareOptions(copy).Check();
 }
 
 BakeDepthReport RunBakeDepth(const BakeDepthOptions& o) {
@@ -34,19 +45,23 @@ BakeDepthReport RunBakeDepth(const BakeDepthOptions& o) {
   const fs::path mesh_path = ws.MeshPath();
   std::vector<fs::path> inputs = ws.SparseModelFiles();
   inputs.push_back(mesh_path);
+  BakeDepthOptions resolved = o;
+  const OptionTable table = DeclareOptions(resolved);
+  Ledger ledger(ws.root(), o.ProvenanceName("bakedepth"), table, inputs, ws.root());
   std::vector<const ImageRecord*> todo;
   for (size_t i : chosen) {
-    if (!o.force && IsUpToDate(ws.DepthPath(images[i]->name), inputs)) {
+    if (ledger.Stale(ws.DepthPath(images[i]->name), {}, o.force).empty()) {
       ++rep.skipped;
       continue;
     }
     todo.push_back(images[i]);
   }
+  rep.why = ledger.Summary();
   RemoveStaleTemporaries(ws.DepthDir());  // a killed run's leftovers, even when all is up to date
   if (!todo.empty()) {
     Mesh mesh = ReadMesh(mesh_path.string());
     if (mesh.faces.empty()) throw Error(mesh_path.string(), 0, "the mesh has no triangles");
-    auto ctx = GlContext::Create(ParseGlBackend(o.gl));
+    auto ctx = GlContext::Create(o.gl);
     rep.gl = ctx->Describe();
     Renderer renderer(mesh);
     Progress bar("bakedepth", todo.size(), o.quiet);
@@ -62,16 +77,15 @@ BakeDepthReport RunBakeDepth(const BakeDepthOptions& o) {
       Image depth = renderer.RenderDepth(v);
       auto t1 = std::chrono::steady_clock::now();
       WriteImage(ws.DepthPath(im->name).string(), depth);
+      ledger.Done(ws.DepthPath(im->name));
       auto t2 = std::chrono::steady_clock::now();
       rep.render_ms += std::chrono::duration<double, std::milli>(t1 - t0).count();
       rep.write_ms += std::chrono::duration<double, std::milli>(t2 - t1).count();
       ++rep.written;
       bar.Step();
     }
-    nlohmann::json opts = {
-        {"scale", o.scale}, {"frames", o.frames}, {"shard", o.shard}, {"gl", rep.gl}};
     // Provenance is per run; with shards, each shard writes its own record.
-    ws.WriteProvenance(o.ProvenanceName("bakedepth"), opts, inputs);
+    ledger.Write({{"gl_used", rep.gl}});
   }
   return rep;
 }

@@ -20,26 +20,68 @@
 #include "io/trajectory.h"
 #include "render/context.h"
 #include "render/effects_plan.h"
+#include "run/ledger.h"
 #include "workspace/projector_sources.h"
 #include "workspace/workspace.h"
 
 namespace mvtm {
 
+OptionTable DeclareOptions(PtmRenderOptions& o) {
+  OptionTable t("ptmrender");
+  t.Positional("WS", &o.workspace,
+               "Workspace folder (sparse/, images/, mesh.ply; depth/, masks/, textures/ used "
+               "when present)")
+      .Dir();
+  t.Positional("OUTDIR", &o.outdir, "Folder for the frames (NAME.png)").Dir();
+  t.Text("--poses", &o.poses, "Render poses: COLMAP images.txt, TUM or KITTI trajectory")
+      .File()
+      .Excludes("--at-images");
+  t.Flag("--at-images", &o.at_images, "Render at the workspace's own image poses (the default)");
+  t.Flag("--exclude-self", &o.exclude_self,
+         "With --at-images: never use an image as a projector for its own pose");
+  t.Real("--lateral", &o.lateral,
+         "Move each pose sideways, metres to the left (+) or right (-): a lane change")
+      .Alternative("0.5");
+  t.Real("--yaw", &o.yaw,
+         "Turn each pose, degrees to the left (+) or right (-), about the camera's up axis")
+      .Alternative("3");
+  t.Choice("--mode", &o.mode, kPtmModes, "ptm: project photographs; vertex: vertex colours only");
+  t.Integer("--projectors", &o.projectors, "K: projectors tried per pixel, best first")
+      .Range(1, 16);
+  t.Real("--bias", &o.bias, "Occlusion bias, relative: occluded when z > depth*(1+B)")
+      .Range(0, 1, false, true);
+  t.Real("--max-heading", &o.selection.max_heading_deg, "Heading gate for projectors, degrees")
+      .Range(0, 180, true);
+  t.Real("--ahead-weight", &o.selection.ahead_weight,
+         "Extra cost per metre a projector is ahead of the pose (0 = nearest pose)")
+      .AtLeast(0);
+  t.Flag("--no-occlusion", &o.no_occlusion, "Never test projector depth (off even when needed)");
+  t.Flag("--no-skybox", &o.no_skybox, "Constant background instead of projected sky");
+  t.Flag("--no-masks", &o.no_masks, "Ignore masks/ (vehicles are projected too)");
+  t.Flag("--no-exposure", &o.no_exposure,
+         "Ignore exposure.tsv (each projector at its own exposure)");
+  t.Text("--size", &o.size, "Render size WxH (default: the camera's)")
+      .Alternative("40x12")
+      .Check([&o] {
+        if (!o.size.empty()) ParseImageSize(o.size);
+      });
+  t.Flag("--explain", &o.explain,
+         "Print the effects plan as JSON (with the reason for each effect) and render nothing")
+      .Cosmetic();
+  t.Flag("--provenance", &o.provenance,
+         "Also write OUTDIR/provenance/NAME.png: which projector coloured each pixel (254 "
+         "vertex colour, 255 background)");
+  t.Flag("--exr", &o.exr, "Write float EXR frames (0..1) instead of 8-bit PNG");
+  t.Choice("--gl", &o.gl, GlBackendTable(), "OpenGL backend");
+  DeclareWorkOptions(t, o, "render poses", "in pose order", "Re-render frames that already exist");
+  return t;
+}
+
 void PtmRenderOptions::Check() const {
+  PtmRenderOptions copy = *this;
+  DeclareOptions(copy).Check();
   if (!poses.empty() && at_images) throw UsageError("give --poses FILE or --at-images, not both");
   if (exclude_self && !at_images) throw UsageError("--exclude-self needs --at-images");
-  CheckChoice(mode, kPtmModes, "--mode");
-  if (projectors < 1 || projectors > 16) throw UsageError("--projectors: must be 1..16");
-  if (!(bias >= 0 && bias < 1)) throw UsageError("--bias: must be in [0, 1)");
-  if (!std::isfinite(lateral)) throw UsageError("--lateral: must be finite");
-  if (!std::isfinite(yaw)) throw UsageError("--yaw: must be finite");
-  if (!size.empty()) ParseImageSize(size);
-  CheckWork();
-  if (!(selection.ahead_weight >= 0 && std::isfinite(selection.ahead_weight)))
-    throw UsageError("--ahead-weight: must be a finite number >= 0");
-  if (!(selection.max_heading_deg > 0 && selection.max_heading_deg <= 180))
-    throw UsageError("--max-heading: must be in (0, 180]");
-  ParseGlBackend(gl);
 }
 
 namespace {
@@ -76,6 +118,13 @@ std::string FrameName(const std::string& name, bool exr) {
   fs::path p(name);
   p.replace_extension(exr ? ".exr" : ".png");
   return p.string();
+}
+
+// OUTDIR/provenance/NAME.png: which projector coloured each pixel (--provenance).
+fs::path ProvenanceMapPath(const PtmRenderOptions& o, const RenderPose& pose) {
+  fs::path pp = fs::path(o.outdir) / "provenance" / pose.name;
+  pp.replace_extension(".png");
+  return pp;
 }
 
 // Lane change and turn, about the camera's own axes: left = −x, up = −y (level cameras: world up).
@@ -135,7 +184,7 @@ ProjectorPicks PickProjectors(const PtmRenderOptions& o, const Scene& scene,
                               const std::vector<RenderPose>& poses) {
   ProjectorPicks picks;
   picks.per_pose.resize(poses.size());
-  if (o.mode != "ptm") return picks;
+  if (o.mode != PtmMode::kPtm) return picks;
   ViewSelectionOptions so = o.selection;
   so.k = static_cast<size_t>(o.projectors);
   for (size_t i = 0; i < poses.size(); ++i) {
@@ -176,7 +225,7 @@ std::string FindExposedProjector(const Workspace& ws, const Scene& scene,
 SceneSurvey StartSurvey(const PtmRenderOptions& o, const Workspace& ws, const Scene& scene,
                         const ProjectorPicks& picks) {
   SceneSurvey s;
-  s.ptm = o.mode == "ptm";
+  s.ptm = o.mode == PtmMode::kPtm;
   s.projectors_requested = o.projectors;
   s.bias = o.bias;
   s.no_occlusion = o.no_occlusion;
@@ -216,16 +265,34 @@ bool GreySources(const Workspace& ws, const Scene& scene, const std::set<size_t>
   return grey;
 }
 
-std::vector<size_t> FramesToRender(const PtmRenderOptions& o, const std::vector<RenderPose>& poses,
-                                   const std::vector<size_t>& chosen,
-                                   const std::vector<fs::path>& inputs, PtmRenderReport& rep) {
+// The files frame i is made from beyond the run's inputs: its projectors' images, masks and depth
+// maps (absent ones count: a mask that appears makes the frame stale).
+std::vector<fs::path> FrameInputs(const PtmRenderOptions& o, const Workspace& ws,
+                                  const Scene& scene, const ProjectorPicks& picks, size_t i) {
+  std::vector<fs::path> in;
+  for (const auto& c : picks.per_pose[i]) {
+    const std::string& name = scene.images[c.index]->name;
+    in.push_back(ws.SourceImagePath(name));
+    if (!o.no_masks) in.push_back(ws.MaskPath(name));
+    if (!o.no_occlusion || !o.no_skybox) in.push_back(ws.DepthPath(name));
+  }
+  return in;
+}
+
+std::vector<size_t> FramesToRender(const PtmRenderOptions& o, const Workspace& ws,
+                                   const Scene& scene, const std::vector<RenderPose>& poses,
+                                   const ProjectorPicks& picks, const std::vector<size_t>& chosen,
+                                   Ledger& ledger, PtmRenderReport& rep) {
   std::vector<size_t> todo;
   for (size_t i : chosen) {
-    if (!o.explain && !o.force && IsUpToDate(fs::path(o.outdir) / poses[i].name, inputs)) {
+    const std::vector<fs::path> in = FrameInputs(o, ws, scene, picks, i);
+    bool stale = !ledger.Stale(fs::path(o.outdir) / poses[i].name, in, o.force).empty();
+    if (o.provenance)
+      stale = !ledger.Stale(ProvenanceMapPath(o, poses[i]), in, o.force).empty() || stale;
+    if (stale)
+      todo.push_back(i);
+    else
       ++rep.skipped;
-      continue;
-    }
-    todo.push_back(i);
   }
   return todo;
 }
@@ -250,6 +317,7 @@ struct FrameJob {
   const Camera& cam;
   const std::vector<RenderPose>& poses;
   const ProjectorPicks& picks;
+  Ledger& ledger;
 };
 
 std::vector<Projector> FrameProjectors(const FrameJob& job, const EffectsPlan& plan, size_t i,
@@ -322,12 +390,13 @@ void RenderFrames(const FrameJob& job, Renderer& renderer, const std::vector<siz
     auto t3 = Clock::now();
     // Frames are photo-like: the fast PNG settings encode them 3x faster than the default
     // (the writer thread was the frame loop's limit) and smaller; provenance maps are flat.
-    writer.Push((outdir / job.poses[i].name).string(), std::move(colour), PngCompression::kFast);
-    if (job.o.provenance) {
-      fs::path pp = outdir / "provenance" / job.poses[i].name;
-      pp.replace_extension(".png");
-      writer.Push(pp.string(), std::move(f.source), PngCompression::kFastFlat);
-    }
+    const std::vector<fs::path> in = FrameInputs(job.o, job.ws, job.scene, job.picks, i);
+    writer.Push((outdir / job.poses[i].name).string(), std::move(colour), PngCompression::kFast,
+                [&ledger = job.ledger, in](const std::string& p) { ledger.Done(p, in); });
+    if (job.o.provenance)
+      writer.Push(ProvenanceMapPath(job.o, job.poses[i]).string(), std::move(f.source),
+                  PngCompression::kFastFlat,
+                  [&ledger = job.ledger, in](const std::string& p) { ledger.Done(p, in); });
     rep.write_ms += Ms(t3, Clock::now());
     ++rep.rendered;
     bar.Step();
@@ -346,24 +415,6 @@ nlohmann::json PlanJson(const Camera& cam, size_t frames, const std::string& gl,
   j["effects"] = ExplainEffects(survey, plan);
   j["shader_defines"] = plan.Defines();
   return j;
-}
-
-void WriteRunProvenance(const PtmRenderOptions& o, const Workspace& ws,
-                        const nlohmann::json& plan_json, const std::string& gl,
-                        const std::vector<fs::path>& inputs) {
-  nlohmann::json opts = {{"poses", o.poses.empty() ? "workspace images" : o.poses},
-                         {"exclude_self", o.exclude_self},
-                         {"lateral", o.lateral},
-                         {"yaw", o.yaw},
-                         {"mode", o.mode},
-                         {"projectors", o.projectors},
-                         {"bias", o.bias},
-                         {"frames", o.frames},
-                         {"shard", o.shard},
-                         {"outdir", o.outdir},
-                         {"plan", plan_json["effects"]},
-                         {"gl", gl}};
-  ws.WriteProvenance(o.ProvenanceName("ptmrender"), opts, inputs);
 }
 
 Mesh LoadMesh(const Workspace& ws, bool ptm) {
@@ -389,9 +440,16 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
 
   PtmRenderReport rep;
   rep.frames = chosen.size();
-  std::vector<fs::path> inputs = {ws.MeshPath()};
-  if (!o.no_exposure && fs::exists(ws.ExposurePath())) inputs.push_back(ws.ExposurePath());
-  const std::vector<size_t> todo = FramesToRender(o, poses, chosen, inputs, rep);
+  std::vector<fs::path> inputs = ws.SparseModelFiles();
+  inputs.push_back(ws.MeshPath());
+  if (!o.poses.empty()) inputs.push_back(o.poses);
+  if (!o.no_exposure) inputs.push_back(ws.ExposurePath());
+  PtmRenderOptions resolved = o;
+  const OptionTable table = DeclareOptions(resolved);
+  Ledger ledger(o.outdir, o.ProvenanceName("ptmrender"), table, inputs, ws.root());
+  const std::vector<size_t> todo =
+      o.explain ? chosen : FramesToRender(o, ws, scene, poses, picks, chosen, ledger, rep);
+  rep.why = ledger.Summary();
   if (!o.explain) {  // a killed run's leftovers go, even when every frame is up to date
     RemoveStaleTemporaries(o.outdir);
     if (o.provenance) RemoveStaleTemporaries(fs::path(o.outdir) / "provenance");
@@ -399,7 +457,7 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
   if (todo.empty() && !o.explain) return rep;
 
   const Mesh mesh = LoadMesh(ws, survey.ptm);
-  auto ctx = GlContext::Create(ParseGlBackend(o.gl));
+  auto ctx = GlContext::Create(o.gl);
   rep.gl = ctx->Describe();
   Renderer renderer(mesh);
   auto t_plan = Clock::now();
@@ -409,11 +467,12 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
     return rep;
   }
   EffectsPlan plan = PlanEffects(survey);
-  RenderFrames(FrameJob{o, ws, scene, cam, poses, picks}, renderer, todo, survey, plan, rep);
+  RenderFrames(FrameJob{o, ws, scene, cam, poses, picks, ledger}, renderer, todo, survey, plan,
+               rep);
   rep.depth_ms += rep.survey_ms;
   rep.frames_ms = Ms(t_plan, Clock::now());
   const nlohmann::json plan_json = PlanJson(cam, chosen.size(), rep.gl, survey, plan);
-  WriteRunProvenance(o, ws, plan_json, rep.gl, inputs);
+  ledger.Write({{"plan", plan_json["effects"]}, {"gl_used", rep.gl}});
   return rep;
 }
 

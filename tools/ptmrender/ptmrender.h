@@ -3,16 +3,21 @@
 
 #include <iosfwd>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "cli/work.h"
 #include "index/view_selection.h"
+#include "render/context.h"
 #include "render/renderer.h"
+#include "run/option_table.h"
 
 namespace mvtm {
 
-// --mode choices.
-inline const std::vector<std::string> kPtmModes = {"ptm", "vertex"};
+// --mode: project photographs, or vertex colours only.
+enum class PtmMode { kPtm, kVertex };
+inline const std::vector<std::pair<PtmMode, std::string>> kPtmModes = {
+    {PtmMode::kPtm, "ptm"}, {PtmMode::kVertex, "vertex"}};
 
 // Work items: the render poses in order (--frames/--shard select among them).
 struct PtmRenderOptions : WorkOptions {
@@ -22,9 +27,9 @@ struct PtmRenderOptions : WorkOptions {
   bool exclude_self = false;  // never project an image onto its own pose
   double lateral = 0;         // metres to the camera's left (+) or right (−): a lane change
   double yaw = 0;             // degrees, turn left (+) or right (−) about the camera's up axis
-  std::string mode = "ptm";   // one of kPtmModes
-  int projectors = 4;         // K: projectors tried per pixel, nearest first
-  double bias = 0.005;        // relative occlusion bias
+  PtmMode mode = PtmMode::kPtm;
+  int projectors = 4;   // K: projectors tried per pixel, nearest first
+  double bias = 0.005;  // relative occlusion bias
   bool no_occlusion = false, no_skybox = false, no_masks = false;
   bool no_exposure = false;  // ignore exposure.tsv (projectors at their own exposures)
   std::string size;          // WxH render size (default: the camera's)
@@ -32,10 +37,14 @@ struct PtmRenderOptions : WorkOptions {
   bool provenance = false;   // also write OUTDIR/provenance/NAME.png (source of each pixel)
   bool exr = false;          // write float EXR instead of PNG
   ViewSelectionOptions selection;
-  std::string gl = "auto";  // one of GlBackendNames()
+  GlBackend gl = GlBackend::kAuto;
 
   void Check() const;
 };
+
+// The option table (run/option_table.h), bound to `o`: --help, checks, provenance and the
+// staleness key of the frames all come from it.
+OptionTable DeclareOptions(PtmRenderOptions& o);
 
 // Times are totals over the run's frames, in milliseconds.
 struct PtmRenderReport {
@@ -50,6 +59,7 @@ struct PtmRenderReport {
   double write_ms = 0;     // waiting for the writer thread (encoding overlaps rendering)
   double frames_ms = 0;    // wall time from the plan's survey to the last frame written
   std::string gl;
+  std::string why;  // why frames were (re)made: "2 new, 6 redone: --lateral changed"
 };
 
 // Renders (or with explain, prints the plan to `out`). Throws Error / UsageError.

@@ -145,7 +145,7 @@ TEST_F(PtmTruth, SelfProjectionReproducesTheRecordedImage) {
 }
 
 TEST_F(PtmTruth, HeldOutPosesPtmBeatsVertexColoursOnEveryFrame) {
-  Render("local", "heldout_vertex", [](PtmRenderOptions& o) { o.mode = "vertex"; });
+  Render("local", "heldout_vertex", [](PtmRenderOptions& o) { o.mode = PtmMode::kVertex; });
   Render("local", "heldout_ptm", [](PtmRenderOptions& o) { o.at_images = o.exclude_self = true; });
   auto v = Score("heldout_vertex", Root() / "local/truth/background");
   auto p = Score("heldout_ptm", Root() / "local/truth/background");
@@ -167,7 +167,7 @@ TEST_F(PtmTruth, OffPathConfigurationsTable) {
     std::function<void(PtmRenderOptions&)> set;
   };
   std::vector<Config> configs = {
-      {"vertex", [](PtmRenderOptions& o) { o.mode = "vertex"; }},
+      {"vertex", [](PtmRenderOptions& o) { o.mode = PtmMode::kVertex; }},
       {"ptm",
        [](PtmRenderOptions& o) { o.projectors = 1, o.no_occlusion = true, o.no_skybox = true; }},
       {"+occlusion", [](PtmRenderOptions& o) { o.projectors = 1, o.no_skybox = true; }},

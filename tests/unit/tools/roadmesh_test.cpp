@@ -298,7 +298,7 @@ TEST_F(RoadMesh, KittiGroundAndVertexColoursVersusPtm) {
     p.at_images = true;
     p.exclude_self = true;
     p.shard = "0/5";
-    p.mode = mode;
+    p.mode = std::string(mode) == "ptm" ? PtmMode::kPtm : PtmMode::kVertex;
     p.quiet = true;
     p.force = true;
     if (std::string(mode) == "ptm") p.projectors = 2;

@@ -1,0 +1,143 @@
+// Outputs that know what made them: each case changes one thing a real rerun could change and
+// checks the ledger's verdict against what was changed (the reason is the claim).
+#include "run/ledger.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <fstream>
+
+#include "base/error.h"
+
+namespace mvtm {
+namespace {
+
+struct Opts {
+  double lateral = 0;
+  int threads = 1;
+};
+
+OptionTable Declare(Opts& o) {
+  OptionTable t("demo");
+  t.Real("--lateral", &o.lateral, "Lateral");
+  t.Integer("--threads", &o.threads, "Threads").Cosmetic();
+  return t;
+}
+
+void Put(const fs::path& p, const std::string& text) {
+  fs::create_directories(p.parent_path());
+  std::ofstream(p) << text;
+}
+
+void SetTime(const fs::path& p, int64_t seconds) {
+  fs::last_write_time(p, fs::file_time_type(std::chrono::seconds(seconds)));
+}
+
+class LedgerTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("ledger_test_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    Put(dir_ / "ws/mesh.ply", "mesh v1");
+    Put(dir_ / "ws/images/a.png", "image a");
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  // One run: checks `outputs`, makes the stale ones, writes the record; returns the reasons.
+  std::vector<std::string> Run(Opts o, const std::vector<std::string>& outputs,
+                               const std::string& record = "demo") {
+    OptionTable t = Declare(o);
+    Ledger ledger(dir_ / "out", record, t, {dir_ / "ws/mesh.ply"}, dir_ / "ws");
+    std::vector<std::string> why;
+    for (const std::string& name : outputs) {
+      const fs::path out = dir_ / "out" / name;
+      why.push_back(ledger.Stale(out, {dir_ / "ws/images/a.png"}));
+      if (why.back().empty()) continue;
+      Put(out, "frame " + name + " lateral " + std::to_string(o.lateral));
+      ledger.Done(out, {dir_ / "ws/images/a.png"});
+    }
+    ledger.Write();
+    summary_ = ledger.Summary();
+    return why;
+  }
+
+  fs::path dir_;
+  std::string summary_;
+};
+
+using V = std::vector<std::string>;
+
+TEST_F(LedgerTest, NewThenUpToDate) {
+  EXPECT_EQ(Run({}, {"f0.png", "f1.png"}), (V{"new", "new"}));
+  EXPECT_EQ(summary_, "");
+  EXPECT_EQ(Run({}, {"f0.png", "f1.png"}), (V{"", ""}));
+}
+
+TEST_F(LedgerTest, AnOptionThatChangesOutputRedoesAndIsNamed) {
+  Run({}, {"f0.png", "f1.png"});
+  EXPECT_EQ(Run({0.5, 1}, {"f0.png", "f1.png"}), (V{"--lateral changed", "--lateral changed"}));
+  EXPECT_EQ(summary_, "2 redone: --lateral changed");
+  EXPECT_EQ(Run({0.5, 1}, {"f0.png", "f1.png"}), (V{"", ""}));
+}
+
+TEST_F(LedgerTest, ACosmeticOptionRedoesNothing) {
+  Run({}, {"f0.png"});
+  EXPECT_EQ(Run({0, 8}, {"f0.png"}), (V{""}));
+}
+
+TEST_F(LedgerTest, AnInputRewrittenRedoesATouchedOneDoesNot) {
+  Run({}, {"f0.png"});
+  SetTime(dir_ / "ws/mesh.ply", 2000000000);  // same bytes, another time: a copy, a touch
+  EXPECT_EQ(Run({}, {"f0.png"}), (V{""}));
+  Put(dir_ / "ws/mesh.ply", "mesh v2");  // same size, other bytes
+  SetTime(dir_ / "ws/mesh.ply", 2000000100);
+  EXPECT_EQ(Run({}, {"f0.png"}), (V{"input changed: mesh.ply"}));
+  Put(dir_ / "ws/images/a.png", "image A");
+  EXPECT_EQ(Run({}, {"f0.png"}), (V{"input changed: images/a.png"}));
+}
+
+TEST_F(LedgerTest, AnOutputEditedOrMadeElsewhereHasNoRecord) {
+  Run({}, {"f0.png"});
+  Put(dir_ / "out/f0.png", "edited by hand");
+  EXPECT_EQ(Run({}, {"f0.png"}), (V{"no record"}));
+  fs::remove_all(dir_ / "out/provenance");
+  EXPECT_EQ(Run({}, {"f0.png"}), (V{"no record"}));
+}
+
+TEST_F(LedgerTest, APartialRunKeepsTheOtherOutputsHistory) {
+  Run({}, {"f0.png", "f1.png", "f2.png"});
+  EXPECT_EQ(Run({0.5, 1}, {"f0.png"}), (V{"--lateral changed"}));  // like --frames 0:1
+  // f1, f2 were made at lateral 0 and say so; f0 at 0.5.
+  EXPECT_EQ(Run({}, {"f0.png", "f1.png", "f2.png"}), (V{"--lateral changed", "", ""}));
+}
+
+TEST_F(LedgerTest, ShardsKeepTheirOwnRecordsAndTheFileDecidesWhichMadeIt) {
+  Run({}, {"f0.png", "f1.png"});
+  Run({0.5, 1}, {"f1.png"}, "demo-shard-1");  // a shard rewrote f1 with other options
+  EXPECT_EQ(Run({}, {"f0.png", "f1.png"}), (V{"", "--lateral changed"}));
+  EXPECT_EQ(Run({}, {"f0.png", "f1.png"}), (V{"", ""}));
+}
+
+TEST_F(LedgerTest, ARecordOfAnotherFormatVouchesForNothing) {
+  Run({}, {"f0.png"});
+  Put(dir_ / "out/provenance/demo.json", "{\"tool\": \"demo\", \"options\": {}}");
+  EXPECT_EQ(Run({}, {"f0.png"}), (V{"no record"}));
+  Put(dir_ / "out/provenance/demo.json", "not json");
+  EXPECT_EQ(Run({}, {"f0.png"}), (V{"no record"}));
+}
+
+TEST_F(LedgerTest, TheRecordIsTheProvenance) {
+  Run({0.25, 3}, {"f0.png"});
+  std::ifstream in(dir_ / "out/provenance/demo.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["tool"], "demo");
+  EXPECT_EQ(j["options"]["lateral"], 0.25);
+  EXPECT_EQ(j["options"]["threads"], 3);
+  ASSERT_EQ(j["inputs"].size(), 1u);
+  EXPECT_EQ(j["inputs"][0]["path"], "mesh.ply");
+  EXPECT_EQ(j["inputs"][0]["bytes"], 7);
+  EXPECT_EQ(j["outputs"]["f0.png"]["in"].begin().key(), "images/a.png");
+}
+
+}  // namespace
+}  // namespace mvtm
