@@ -116,8 +116,7 @@ const FileStamp& Ledger::Current(const std::string& name, const fs::path& path, 
   return it->second;
 }
 
-bool Ledger::Unchanged(const std::string& name, const fs::path& path,
-                       const nlohmann::json& stamp) {
+bool Ledger::Unchanged(const std::string& name, const fs::path& path, const nlohmann::json& stamp) {
   if (!stamp.is_object()) return false;
   const FileStamp& s = Current(name, path, false);
   if (!s.exists || s.bytes != stamp.value("bytes", uint64_t(0))) return false;
@@ -144,8 +143,7 @@ nlohmann::json Ledger::StampJson(const std::string& name, const fs::path& path) 
 
 // "" when a recorded run had this run's options and inputs; else what differs.
 std::string Ledger::CompareRun(const nlohmann::json& run) {
-  if (!run.is_object() || !run.contains("options") || !run.contains("inputs"))
-    return "no record";
+  if (!run.is_object() || !run.contains("options") || !run.contains("inputs")) return "no record";
   const nlohmann::json& opts = run["options"];
   std::string changed;
   std::set<std::string> keys;
@@ -174,9 +172,10 @@ std::string Ledger::Stale(const fs::path& output, const std::vector<fs::path>& i
                           bool force) {
   std::lock_guard<std::recursive_mutex> lock(mutex_);
   const FileStamp now = StatFile(output);
-  const std::string why = force         ? "--force"
-                          : !now.exists ? "new"
-                                        : StaleExisting(Name(output, root_), output, now, item_inputs);
+  const std::string why = force ? "--force"
+                          : !now.exists
+                              ? "new"
+                              : StaleExisting(Name(output, root_), output, now, item_inputs);
   if (!why.empty()) ++reasons_[why];
   return why;
 }
@@ -203,8 +202,7 @@ std::string Ledger::StaleExisting(const std::string& rel, const fs::path& output
   auto v = run_verdicts_.find(run);
   if (v == run_verdicts_.end()) {
     auto rit = maker->runs.find(run);
-    v = run_verdicts_
-            .emplace(run, CompareRun(rit == maker->runs.end() ? nlohmann::json() : *rit))
+    v = run_verdicts_.emplace(run, CompareRun(rit == maker->runs.end() ? nlohmann::json() : *rit))
             .first;
   }
   if (!v->second.empty()) return v->second;
@@ -259,9 +257,8 @@ void Ledger::Write(const nlohmann::json& extra) {
   nlohmann::json list = nlohmann::json::array();
   for (const auto& [name, path] : inputs_) {
     run["inputs"][name] = StampJson(name, path);
-    list.push_back({{"path", name},
-                    {"bytes", stamps_[name].bytes},
-                    {"fnv1a64", stamps_[name].fnv1a64}});
+    list.push_back(
+        {{"path", name}, {"bytes", stamps_[name].bytes}, {"fnv1a64", stamps_[name].fnv1a64}});
   }
   // This record's earlier entries are carried forward; this run's checks and outputs override.
   nlohmann::json outputs = nlohmann::json::object(), runs = nlohmann::json::object();

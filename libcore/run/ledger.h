@@ -10,7 +10,8 @@
 //
 //   { "tool", "version", "time", "options": {...all...}, "inputs": [{path, bytes, fnv1a64}],
 //     "runs": { "ID": { "options": {...changing output...}, "inputs": { PATH: STAMP } } },
-//     "outputs": { "REL/PATH": { "run": "ID", "bytes", "mtime_ns", "fnv1a64", "in": {PATH: STAMP}} } }
+//     "outputs": { "REL/PATH": { "run": "ID", "bytes", "mtime_ns", "fnv1a64", "in": {PATH: STAMP}}
+//     } }
 //
 // Staleness. Every record of the tool in ROOT/provenance is read; the one whose entry matches the
 // output file as it is now (size and modification time, else size and content checksum) made it.
@@ -93,10 +94,10 @@ class Ledger {
   const OptionTable& table_;
   nlohmann::json options_key_;
   std::vector<std::pair<std::string, fs::path>> inputs_;
-  std::vector<Record> records_;  // this tool's records in ROOT/provenance
+  std::vector<Record> records_;                      // this tool's records in ROOT/provenance
   std::map<std::string, std::string> run_verdicts_;  // record run id → "" or a reason
   std::map<std::string, FileStamp> stamps_;          // this run's view of files, by name
-  nlohmann::json kept_;     // entries carried into this run's record: rel path → entry
+  nlohmann::json kept_;       // entries carried into this run's record: rel path → entry
   nlohmann::json kept_runs_;  // the runs those entries refer to
   std::string run_id_;
   std::map<std::string, size_t> reasons_;

@@ -181,8 +181,7 @@ OptionRef OptionTable::Real(const std::string& names, double* field, const std::
   return Finish(s);
 }
 
-OptionRef OptionTable::Text(const std::string& names, std::string* field,
-                            const std::string& help) {
+OptionRef OptionTable::Text(const std::string& names, std::string* field, const std::string& help) {
   OptionSpec& s = Add(names, help, "TEXT");
   s.set = [field](const std::string& v) { *field = v; };
   s.text = [field] { return *field; };
@@ -236,16 +235,16 @@ nlohmann::json OptionTable::Describe() const {
   nlohmann::json all = nlohmann::json::array();
   for (const OptionSpec& s : options_) {
     if (s.hidden) continue;
-    nlohmann::json j = {{"names", s.names},
-                        {"flag", s.flag},
-                        {"key", s.key},
-                        {"type", s.type},
-                        {"default", s.default_text},
-                        {"positional", s.positional},
-                        {"required", s.required},
-                        {"changes_output", s.changes_output},
-                        {"alternative", s.alternative.empty() ? DerivedAlternative(s)
-                                                              : s.alternative}};
+    nlohmann::json j = {
+        {"names", s.names},
+        {"flag", s.flag},
+        {"key", s.key},
+        {"type", s.type},
+        {"default", s.default_text},
+        {"positional", s.positional},
+        {"required", s.required},
+        {"changes_output", s.changes_output},
+        {"alternative", s.alternative.empty() ? DerivedAlternative(s) : s.alternative}};
     if (s.has_range) j["range"] = RangeText(s);
     if (!s.choices.empty()) j["choices"] = s.choices;
     all.push_back(j);

@@ -32,12 +32,12 @@ namespace mvtm {
 class OptionTable;
 
 struct OptionSpec {
-  std::string names;        // "--lateral", "-q,--quiet", or a positional's name ("WS")
-  std::string flag;         // the long name ("--lateral") or the positional's name
-  std::string key;          // provenance key: "lateral", "quiet", "ws"
+  std::string names;  // "--lateral", "-q,--quiet", or a positional's name ("WS")
+  std::string flag;   // the long name ("--lateral") or the positional's name
+  std::string key;    // provenance key: "lateral", "quiet", "ws"
   std::string help;
-  std::string type;         // FLAG, INT, FLOAT, TEXT, FILE, DIR, or the choice list "a|b"
-  std::string default_text; // the value when declared ("" for an empty text)
+  std::string type;          // FLAG, INT, FLOAT, TEXT, FILE, DIR, or the choice list "a|b"
+  std::string default_text;  // the value when declared ("" for an empty text)
   bool positional = false;
   bool required = false;
   bool changes_output = true;  // false: cosmetic (progress, threads, which items are selected)
@@ -106,8 +106,9 @@ class OptionTable {
     static_assert(std::is_integral_v<T>, "Integer options bind integer fields");
     OptionSpec& s = Add(names, help, "INT");
     s.set = [field, flag = s.flag](const std::string& v) {
-      *field = static_cast<T>(ParseIntegerOption(v, flag, std::numeric_limits<T>::min(),
-                                                 static_cast<double>(std::numeric_limits<T>::max())));
+      *field =
+          static_cast<T>(ParseIntegerOption(v, flag, std::numeric_limits<T>::min(),
+                                            static_cast<double>(std::numeric_limits<T>::max())));
     };
     s.text = [field] { return std::to_string(*field); };
     s.json = [field] { return nlohmann::json(*field); };
