@@ -113,6 +113,7 @@ def run_benches(args, csv_path):
         [os.path.join(bench, "bench_segtrack")] + short,
         [os.path.join(bench, "bench_render")] + (short if args.short else ["--frames", "10"]),
         [os.path.join(bench, "bench_planesweep")] + short,
+        [os.path.join(bench, "bench_ledger")] + short,
     ]
     for cmd in commands:
         print("+", " ".join(cmd), flush=True)

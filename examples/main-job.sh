@@ -79,11 +79,8 @@ put steer-controls.awk "$out/drive/controls.tsv"
 # drive A's 20 photographs (4.2 m apart) taken as 2 a second (8.4 m/s): 3.5 m right from 2 s in 4 s
 "$bin/drive" --metric --pass A_ --frame-rate 2 --rate 5 --lane-change 2:4:-3.5 \
   "$ws" "$out/drive/lane_change.txt"
-# ptmrender keeps the frames that exist: render all again (--force) when the poses changed
-if [ "$out/drive/steered.txt" -nt "$out/steered/.done" ]; then
-  "$bin/ptmrender" --force --poses "$out/drive/steered.txt" "$ws" "$out/steered"
-  touch "$out/steered/.done"
-fi
+# frames are redone only when the poses file's content (or an option, or an input) changed
+"$bin/ptmrender" --poses "$out/drive/steered.txt" "$ws" "$out/steered"
 # the frames shown 6x (1920x576) on a 531 mm wide screen, the eye 65 cm in front of it
 put gaze-trace.awk "$out/drive/gaze.tsv"
 "$bin/gazemap" --screen 1920x576 --screen-mm 531x159 --distance 650 \

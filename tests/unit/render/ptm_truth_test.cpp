@@ -61,7 +61,11 @@ class PtmTruth : public ::testing::Test {
     o.force = true;
     set(o);
     std::ostringstream sink;
-    return RunPtmRender(o, sink);
+    PtmRenderReport rep = RunPtmRender(o, sink);
+    // Every score below is over the frames on disk: none rendered must fail, not pass vacuously.
+    EXPECT_GT(rep.frames, 0u) << out;
+    EXPECT_EQ(rep.rendered, rep.frames) << out;
+    return rep;
   }
 
   // SSIM of every frame in renders/OUT against TRUTH_DIR (same names).
@@ -72,6 +76,7 @@ class PtmTruth : public ::testing::Test {
     for (const auto& e : fs::directory_iterator(Root() / "renders" / out))
       if (e.is_regular_file()) files.push_back(e.path());
     std::sort(files.begin(), files.end());
+    EXPECT_FALSE(files.empty()) << "no frame rendered into renders/" << out;
     SsimOptions so;
     for (const auto& f : files)
       r.emplace_back(f.filename().string(),
