@@ -3,22 +3,9 @@
 #include <algorithm>
 
 #include "base/error.h"
-#include "image/mask.h"
 #include "io/exposure_tsv.h"
 
 namespace mvtm {
-
-Image ResizeNearest(const Image& d, int w, int h) {
-  if (d.width == w && d.height == h) return d;
-  Image r(w, h, d.channels, d.bits);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      int sx = std::min(d.width - 1, int((x + 0.5) * d.width / w));
-      int sy = std::min(d.height - 1, int((y + 0.5) * d.height / h));
-      for (int c = 0; c < d.channels; ++c) r.at(x, y, c) = d.at(sx, sy, c);
-    }
-  return r;
-}
 
 ProjectorSources::ProjectorSources(const Workspace& ws, const Reconstruction& rec,
                                    std::vector<const ImageRecord*> images, Renderer* renderer,
@@ -56,28 +43,16 @@ View ProjectorSources::ViewOf(size_t k) const {
 }
 
 Image ProjectorSources::ReadColour(size_t k) const {
-  const std::string& name = images_[k]->name;
-  fs::path p = prefer_textures_ ? ws_.SourceImagePath(name) : ws_.ImagePath(name);
-  Image img = ReadImage(p.string());
-  const Camera& cam = rec_.cameras.at(images_[k]->camera_id);
-  RequireImageSize(img, p.string(), cam.width, cam.height);
-  return img;
+  return ReadSourceImage(ws_, images_[k]->name, rec_.cameras.at(images_[k]->camera_id),
+                         prefer_textures_);
 }
 
 Image ProjectorSources::ReadDepthFile(size_t k) const {
-  fs::path dp = ws_.DepthPath(images_[k]->name);
-  if (!fs::exists(dp)) return Image();
-  const Camera& cam = rec_.cameras.at(images_[k]->camera_id);
-  return ResizeNearest(ReadFloatMap(dp.string()), int(cam.width), int(cam.height));
+  return ReadDepthAtCamera(ws_, images_[k]->name, rec_.cameras.at(images_[k]->camera_id));
 }
 
 Image ProjectorSources::ReadMaskFile(size_t k) const {
-  fs::path mp = ws_.MaskPath(images_[k]->name);
-  if (!fs::exists(mp)) return Image();
-  Image m = ReadMask(mp.string());
-  const Camera& cam = rec_.cameras.at(images_[k]->camera_id);
-  RequireImageSize(m, mp.string(), cam.width, cam.height);
-  return m;
+  return ReadMaskAtCamera(ws_, images_[k]->name, rec_.cameras.at(images_[k]->camera_id));
 }
 
 void ProjectorSources::TakePrefetched() {

@@ -23,6 +23,7 @@
 #include "io/exposure_tsv.h"
 #include "render/renderer.h"
 #include "scene/reconstruction.h"
+#include "workspace/assets.h"
 #include "workspace/workspace.h"
 
 namespace mvtm {
@@ -90,8 +91,5 @@ class ProjectorSources {
   std::map<std::string, ExposureRow> exposure_;  // exposure.tsv, read on first use
   bool exposure_read_ = false;
 };
-
-// Nearest-neighbour resize (for depth maps baked at another scale).
-Image ResizeNearest(const Image& d, int w, int h);
 
 }  // namespace mvtm

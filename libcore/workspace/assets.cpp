@@ -1,0 +1,61 @@
+#include "workspace/assets.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "base/error.h"
+#include "image/mask.h"
+
+namespace mvtm {
+
+Image ResizeNearest(const Image& d, int w, int h) {
+  if (d.width == w && d.height == h) return d;
+  Image r(w, h, d.channels, d.bits);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      int sx = std::min(d.width - 1, int((x + 0.5) * d.width / w));
+      int sy = std::min(d.height - 1, int((y + 0.5) * d.height / h));
+      for (int c = 0; c < d.channels; ++c) r.at(x, y, c) = d.at(sx, sy, c);
+    }
+  return r;
+}
+
+Image ReadSourceImage(const Workspace& ws, const std::string& name, const Camera& cam,
+                      bool prefer_textures) {
+  const fs::path p = prefer_textures ? ws.SourceImagePath(name) : ws.ImagePath(name);
+  Image img = ReadImage(p.string());
+  RequireImageSize(img, p.string(), cam.width, cam.height);
+  return img;
+}
+
+Image ReadDepthAtCamera(const Workspace& ws, const std::string& name, const Camera& cam) {
+  const fs::path p = ws.DepthPath(name);
+  if (!fs::exists(p)) return Image();
+  Image d = ReadFloatMap(p.string());
+  // bakedepth --scale S writes round(W*S) x round(H*S): the same aspect within a pixel.
+  const double s = double(d.width) / double(cam.width);
+  if (d.width < 1 || std::fabs(double(d.height) - double(cam.height) * s) > 1.0)
+    throw Error(p.string(), 0,
+                "depth map is " + std::to_string(d.width) + "x" + std::to_string(d.height) +
+                    ", not the camera's " + std::to_string(cam.width) + "x" +
+                    std::to_string(cam.height) + " at any scale (rebake with bakedepth)");
+  return ResizeNearest(d, int(cam.width), int(cam.height));
+}
+
+Image ReadMaskAtCamera(const Workspace& ws, const std::string& name, const Camera& cam) {
+  const fs::path p = ws.MaskPath(name);
+  if (!fs::exists(p)) return Image();
+  Image m = ReadMask(p.string());
+  RequireImageSize(m, p.string(), cam.width, cam.height);
+  return m;
+}
+
+Image ReadLabelsAtCamera(const Workspace& ws, const std::string& name, const Camera& cam) {
+  const fs::path p = ws.LabelPath(name);
+  if (!fs::exists(p)) return Image();
+  Image l = ReadImage(p.string());
+  RequireImageSize(l, p.string(), cam.width, cam.height);
+  return l;
+}
+
+}  // namespace mvtm
