@@ -43,8 +43,7 @@ Eigen::Vector3d RoadFrame::Direction(double heading) const {
 }
 
 Eigen::Vector3d RecordedUp(const std::vector<Rigid3d>& w2c) {
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  for (const Rigid3d& p : w2c) sum -= p.q.normalized().toRotationMatrix().row(1).transpose();
+  const Eigen::Vector3d sum = UpSum(w2c);
   if (w2c.empty() || sum.norm() < 1e-6 * static_cast<double>(w2c.size()))
     throw Error("the recorded cameras give no up direction");
   return sum.normalized();

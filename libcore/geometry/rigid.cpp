@@ -31,6 +31,14 @@ Eigen::Vector3d Rigid3d::Centre() const { return -(q.conjugate() * t); }
 
 Eigen::Vector3d Rigid3d::ViewDirection() const { return q.conjugate() * Eigen::Vector3d::UnitZ(); }
 
+Eigen::Vector3d Rigid3d::Up() const { return -(q.conjugate() * Eigen::Vector3d::UnitY()); }
+
+Eigen::Vector3d UpSum(const std::vector<Rigid3d>& world_to_camera) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (const Rigid3d& p : world_to_camera) sum += Rigid3d(p.q.normalized(), p.t).Up();
+  return sum;
+}
+
 Rigid3d Rigid3d::FromMatrix(const Eigen::Matrix<double, 3, 4>& m) {
   Eigen::Matrix3d r = m.leftCols<3>();
   Eigen::JacobiSVD<Eigen::Matrix3d> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);

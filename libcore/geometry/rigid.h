@@ -13,6 +13,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <vector>
 
 namespace mvtm {
 
@@ -35,10 +36,18 @@ struct Rigid3d {
   Eigen::Vector3d Centre() const;
   // For a world-to-camera pose: the viewing direction (camera +z) in world coordinates.
   Eigen::Vector3d ViewDirection() const;
+  // For a world-to-camera pose: the camera's up axis (camera −y) in world coordinates. mvtm's one
+  // definition of "up": a dashcam is level to within a few degrees, so the recorded cameras' up
+  // axes, summed (UpSum), give the road's up; every module that needs up derives it here.
+  Eigen::Vector3d Up() const;
 
   // Builds from a 3×4 [R|t] whose R is re-orthonormalised (nearest rotation, via SVD).
   static Rigid3d FromMatrix(const Eigen::Matrix<double, 3, 4>& m);
 };
+
+// Σ Up() over world-to-camera poses, unnormalised: its length against the count says how well the
+// cameras agree (n when all are parallel, near 0 when they cancel out).
+Eigen::Vector3d UpSum(const std::vector<Rigid3d>& world_to_camera);
 
 // Normalises q to unit length and to the canonical hemisphere w >= 0. Throws Error when the norm
 // is zero or not finite.

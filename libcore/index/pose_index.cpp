@@ -203,7 +203,7 @@ PoseIndex::PoseIndex(const std::vector<Rigid3d>& cands, const ViewSelectionOptio
     for (int d = 0; d < 3; ++d) m.flat[3 * i + static_cast<size_t>(d)] = m.centre[i][d];
     lo = lo.cwiseMin(m.centre[i]);
     hi = hi.cwiseMax(m.centre[i]);
-    m.up_sum -= cands[i].q.conjugate() * Eigen::Vector3d::UnitY();
+    m.up_sum += cands[i].Up();
   }
   m.extent = n ? (hi - lo).norm() : 0;
   if (n == 0) return;

@@ -419,7 +419,7 @@ Corridor BuildCorridor(const Reconstruction& rec, const CorridorOptions& o) {
   for (const ImageRecord* im : images) {
     const Rigid3d p(NormalizedQuaternion(im->world_to_camera.q), im->world_to_camera.t);
     centres.push_back(p.Centre());
-    ups.push_back(-p.R().row(1).transpose());  // −y camera axis in the world
+    ups.push_back(p.Up());
     views.push_back(p.ViewDirection());
   }
   Corridor c;

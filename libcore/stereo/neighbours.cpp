@@ -105,8 +105,7 @@ std::vector<size_t> SelectStereoNeighbours(const std::vector<Rigid3d>& w2c,
 }
 
 void DriveAxes(const std::vector<Rigid3d>& w2c, Eigen::Vector3d& down, Eigen::Vector3d& side) {
-  down.setZero();
-  for (const auto& p : w2c) down += p.R().row(1).transpose();  // camera y axis in world
+  down = -UpSum(w2c);
   down = down.norm() > 0 ? down.normalized() : Eigen::Vector3d::UnitY();
   Eigen::Vector3d travel = Eigen::Vector3d::Zero();
   if (w2c.size() > 1) travel = w2c.back().Centre() - w2c.front().Centre();

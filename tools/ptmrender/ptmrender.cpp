@@ -132,7 +132,7 @@ Rigid3d Offset(const Rigid3d& w2c, double lateral_left, double yaw_left_deg) {
   Rigid3d c2w = w2c.Inverse();
   Eigen::Matrix3d R = c2w.R();
   c2w.t -= lateral_left * R.col(0);
-  Eigen::Vector3d up = -R.col(1);
+  const Eigen::Vector3d up = w2c.Up();
   c2w.q = Eigen::Quaterniond(Eigen::AngleAxisd(yaw_left_deg * M_PI / 180.0, up)) * c2w.q;
   c2w.q.normalize();
   return c2w.Inverse();

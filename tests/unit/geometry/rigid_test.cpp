@@ -117,3 +117,32 @@ TEST(Align, RecoversAKnownSimilarity) {
 
 }  // namespace
 }  // namespace mvtm
+
+namespace mvtm {
+namespace {
+
+// A camera level on a road whose up is world +Z, looking along +X: its x axis (right) is world −Y,
+// y (down) world −Z, z (forward) world +X; so R's rows are those axes and Up() must be +Z.
+TEST(Rigid3d, UpIsTheCamerasMinusYInTheWorld) {
+  Eigen::Matrix3d R;
+  R.row(0) = Eigen::Vector3d(0, -1, 0).transpose();
+  R.row(1) = Eigen::Vector3d(0, 0, -1).transpose();
+  R.row(2) = Eigen::Vector3d(1, 0, 0).transpose();
+  const Rigid3d level(Eigen::Quaterniond(R), Eigen::Vector3d(5e6, -3, 2));
+  EXPECT_LT((level.Up() - Eigen::Vector3d::UnitZ()).norm(), 1e-15);
+  // Rolled 90° to the right about its view: up becomes the world's left (+Y).
+  const Rigid3d rolled(
+      Eigen::Quaterniond(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ())) * level.q, level.t);
+  EXPECT_LT((rolled.Up() - Eigen::Vector3d::UnitY()).norm(), 1e-12);
+  // UpSum: n parallel cameras give n times up (a non-unit quaternion counts as its rotation);
+  // opposite ones cancel.
+  Rigid3d scaled = level;
+  scaled.q.coeffs() *= 3.0;
+  EXPECT_LT((UpSum({level, level, scaled}) - 3 * Eigen::Vector3d::UnitZ()).norm(), 1e-12);
+  const Rigid3d upside_down(
+      Eigen::Quaterniond(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ())) * level.q, level.t);
+  EXPECT_LT(UpSum({level, upside_down}).norm(), 1e-12);
+}
+
+}  // namespace
+}  // namespace mvtm
