@@ -29,6 +29,21 @@ class UsageError : public Error {
   using Error::Error;
 };
 
+// A bad value of an option field of a library's options struct, tagged by the field's name
+// ("window", "max_jump"), never by a command-line flag: libcore does not know the command line.
+// what() reads "FIELD: problem"; a tool's main() names the flag instead ("--window: problem")
+// through its option table (cli/app.h).
+class FieldError : public UsageError {
+ public:
+  FieldError(std::string field, const std::string& problem)
+      : UsageError(field + ": " + problem), field_(std::move(field)), problem_(problem) {}
+  const std::string& field() const { return field_; }
+  const std::string& problem() const { return problem_; }
+
+ private:
+  std::string field_, problem_;
+};
+
 // Formats "FILE:LINE: what" (or "FILE: what" when line == 0, "what" when file is empty).
 std::string Located(const std::string& file, long line, const std::string& what);
 

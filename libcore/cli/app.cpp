@@ -8,6 +8,7 @@
 
 #include "base/error.h"
 #include "base/version.h"
+#include "cli/options.h"
 
 namespace mvtm {
 
@@ -43,6 +44,13 @@ int RunMain(CLI::App& app, const std::string& tool, int argc, char** argv,
       return 2;
     }
     return run();
+  } catch (const FieldError& e) {
+    // A library names its options struct's field; the user knows the flag that set it.
+    const OptionTable* t = CommandLineTable();
+    const std::string flag = t ? t->FlagOfField(e.field()) : "";
+    std::cerr << tool << ": error: " << (flag.empty() ? e.field() : flag) << ": " << e.problem()
+              << "\n";
+    return 2;
   } catch (const UsageError& e) {
     std::cerr << tool << ": error: " << e.what() << "\n";
     return 2;

@@ -4,7 +4,14 @@
 
 namespace mvtm {
 
+namespace {
+const OptionTable* g_table = nullptr;  // the table of this process's command line
+}  // namespace
+
+const OptionTable* CommandLineTable() { return g_table; }
+
 void AddOptionTable(CLI::App& app, OptionTable& table) {
+  g_table = &table;
   for (const OptionSpec& s : table.options()) {
     if (s.hidden) continue;
     CLI::Option* o = nullptr;

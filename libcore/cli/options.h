@@ -16,6 +16,10 @@ namespace mvtm {
 // option-walking test reads it) and exits 0. `table` must outlive the parse.
 void AddOptionTable(CLI::App& app, OptionTable& table);
 
+// The table AddOptionTable() put into this process's command line (nullptr before): RunMain names
+// a library's FieldError by its flag through it.
+const OptionTable* CommandLineTable();
+
 // --frames A:B and --shard I/N (mutually exclusive), --force, -q/--quiet.
 //   items:      what is selected, plural ("poses", "images", "label frames")
 //   order:      the documented order of the items ("in pose order", "by name order")

@@ -11,14 +11,17 @@ namespace mvtm {
 LaneChange LaneChange::Parse(const std::string& text) {
   const auto f = SplitChar(text, ':');
   if (f.size() != 3)
-    throw UsageError(
-        "--lane-change: expected T0:DURATION:OFFSET (seconds, seconds, metres), got '" + text +
-        "'");
+    throw FieldError("lane_change",
+                     "expected T0:DURATION:OFFSET (seconds, seconds, metres), got '" + text + "'");
   LaneChange lc;
-  lc.start = ParseDoubleArg(f[0], "--lane-change T0");
-  lc.duration = ParseDoubleArg(f[1], "--lane-change DURATION");
-  lc.offset = ParseDoubleArg(f[2], "--lane-change OFFSET");
-  if (!(lc.duration > 0)) throw UsageError("--lane-change: DURATION must be > 0 seconds");
+  try {
+    lc.start = ParseDoubleArg(f[0], "T0");
+    lc.duration = ParseDoubleArg(f[1], "DURATION");
+    lc.offset = ParseDoubleArg(f[2], "OFFSET");
+  } catch (const UsageError& e) {
+    throw FieldError("lane_change", e.what());
+  }
+  if (!(lc.duration > 0)) throw FieldError("lane_change", "DURATION must be > 0 seconds");
   return lc;
 }
 

@@ -654,36 +654,20 @@ Similarity CompareImpl(const Image& a, const Image& b, const SsimOptions& option
 }  // namespace
 
 void SsimOptions::Check() const {
-  auto bad = [](const std::string& what) { throw UsageError(what); };
-  std::ostringstream s;
-  if (!(sigma > 0) || !std::isfinite(sigma)) {
-    s << "--sigma: must be > 0, got " << sigma;
-    bad(s.str());
-  }
-  if (!(k1 >= 0) || !std::isfinite(k1)) {
-    s << "--k1: must be >= 0, got " << k1;
-    bad(s.str());
-  }
-  if (!(k2 >= 0) || !std::isfinite(k2)) {
-    s << "--k2: must be >= 0, got " << k2;
-    bad(s.str());
-  }
-  if (!(data_range >= 0) || !std::isfinite(data_range)) {
-    s << "--data-range: must be > 0 (or 0 for the bit depth), got " << data_range;
-    bad(s.str());
-  }
-  if (!(truncate > 0) || !std::isfinite(truncate)) {
-    s << "--truncate: must be > 0, got " << truncate;
-    bad(s.str());
-  }
-  if (truncate * sigma > 1000) {
-    s << "window radius truncate*sigma must be <= 1000, got " << truncate * sigma;
-    bad(s.str());
-  }
-  if (threads < 0) {
-    s << "--threads: must be >= 0, got " << threads;
-    bad(s.str());
-  }
+  auto bad = [](const char* field, const std::string& problem, double got) {
+    std::ostringstream s;
+    s << problem << ", got " << got;
+    throw FieldError(field, s.str());
+  };
+  if (!(sigma > 0) || !std::isfinite(sigma)) bad("sigma", "must be > 0", sigma);
+  if (!(k1 >= 0) || !std::isfinite(k1)) bad("k1", "must be >= 0", k1);
+  if (!(k2 >= 0) || !std::isfinite(k2)) bad("k2", "must be >= 0", k2);
+  if (!(data_range >= 0) || !std::isfinite(data_range))
+    bad("data_range", "must be > 0 (or 0 for the bit depth)", data_range);
+  if (!(truncate > 0) || !std::isfinite(truncate)) bad("truncate", "must be > 0", truncate);
+  if (truncate * sigma > 1000)
+    bad("sigma", "the window radius truncate*sigma must be <= 1000", truncate * sigma);
+  if (threads < 0) bad("threads", "must be >= 0", threads);
 }
 
 int SsimOptions::Radius() const { return static_cast<int>(truncate * sigma + 0.5); }

@@ -1,5 +1,6 @@
 #include "run/option_table.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -104,6 +105,11 @@ OptionRef& OptionRef::Alternative(std::string value) {
 
 OptionRef& OptionRef::Check(std::function<void()> check) {
   s_->check = std::move(check);
+  return *this;
+}
+
+OptionRef& OptionRef::Field(const std::string& field) {
+  s_->fields.push_back(field);
   return *this;
 }
 
@@ -223,6 +229,13 @@ std::string OptionTable::FlagOf(const std::string& key) const {
   for (const OptionSpec& s : options_)
     if (s.key == key) return s.flag;
   return key;
+}
+
+std::string OptionTable::FlagOfField(const std::string& field) const {
+  for (const OptionSpec& s : options_)
+    if (s.key == field || std::find(s.fields.begin(), s.fields.end(), field) != s.fields.end())
+      return s.flag;
+  return "";
 }
 
 const OptionSpec* OptionTable::Find(const std::string& flag) const {

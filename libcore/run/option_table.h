@@ -49,6 +49,7 @@ struct OptionSpec {
   bool lo_open = false, hi_open = false;
   std::vector<std::string> choices;   // allowed texts of a choice option
   std::vector<std::string> excludes;  // flags that may not be given together with this one
+  std::vector<std::string> fields;    // library field names it sets besides its key
   std::string alternative;            // another valid value, for the option-walking test
   std::function<void(const std::string&)> set;  // parses and stores a value (flags: "1"/"0")
   std::function<std::string()> text;            // the current value as text
@@ -77,6 +78,9 @@ class OptionRef {
   // A further check of the value; throws UsageError naming the flag.
   OptionRef& Check(std::function<void()> check);
   OptionRef& Excludes(const std::string& flag);
+  // The library field this option sets, when its name differs from the option's key
+  // (--neighbours sets NeighbourOptions::count): a FieldError("count", ...) names --neighbours.
+  OptionRef& Field(const std::string& field);
   const OptionSpec& spec() const { return *s_; }
 
  private:
@@ -147,6 +151,9 @@ class OptionTable {
   nlohmann::json OutputJson() const;
   // The long flag of a provenance key ("lateral" → "--lateral"); the key itself when unknown.
   std::string FlagOf(const std::string& key) const;
+  // The flag that sets a library field (FieldError::field(): a key, or a declared Field()); ""
+  // when no option does.
+  std::string FlagOfField(const std::string& field) const;
   // The table as JSON for tests: one object per option (names, key, type, default, range,
   // choices, changes_output, alternative).
   nlohmann::json Describe() const;

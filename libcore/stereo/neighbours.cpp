@@ -10,13 +10,13 @@
 namespace mvtm {
 
 void NeighbourOptions::Check() const {
-  if (count < 1 || count > 16) throw UsageError("--neighbours: must be 1..16");
+  if (count < 1 || count > 16) throw FieldError("count", "must be 1..16");
   if (!(min_baseline >= 0 && min_baseline < 10))
-    throw UsageError("--min-baseline: must be in [0, 10)");
+    throw FieldError("min_baseline", "must be in [0, 10)");
   if (!(max_angle_deg > 0 && max_angle_deg <= 90))
-    throw UsageError("--max-angle: must be in (0, 90]");
+    throw FieldError("max_angle_deg", "must be in (0, 90]");
   if (!(min_coverage >= 0 && min_coverage <= 1))
-    throw UsageError("--min-coverage: must be in [0, 1]");
+    throw FieldError("min_coverage", "must be in [0, 1]");
 }
 
 double MedianSpacing(const std::vector<Rigid3d>& w2c) {

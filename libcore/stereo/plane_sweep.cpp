@@ -341,13 +341,13 @@ void RefineWinners(const StereoView& ref, const std::vector<StereoView>& nbs,
 
 void PlaneSweepOptions::Check() const {
   if (window < 3 || window > 31 || window % 2 == 0)
-    throw UsageError("--window: must be odd, 3..31");
-  if (best_k < 1) throw UsageError("--best-k: must be >= 1");
-  if (!(min_score >= -1 && min_score <= 1)) throw UsageError("--min-score: must be in [-1, 1]");
+    throw FieldError("window", "must be odd, 3..31");
+  if (best_k < 1) throw FieldError("best_k", "must be >= 1");
+  if (!(min_score >= -1 && min_score <= 1)) throw FieldError("min_score", "must be in [-1, 1]");
   if (!(min_texture >= 0 && std::isfinite(min_texture)))
-    throw UsageError("--min-texture: must be >= 0");
-  if (!(min_margin >= 0 && min_margin <= 2)) throw UsageError("--min-margin: must be in [0, 2]");
-  if (refine < 0 || refine > 64) throw UsageError("--refine: must be 0..64");
+    throw FieldError("min_texture", "must be >= 0");
+  if (!(min_margin >= 0 && min_margin <= 2)) throw FieldError("min_margin", "must be in [0, 2]");
+  if (refine < 0 || refine > 64) throw FieldError("refine", "must be 0..64");
 }
 
 SweepFamily MakeFrontoSweep(double near_z, double far_z, int planes) {

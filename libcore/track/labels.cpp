@@ -9,13 +9,13 @@
 namespace mvtm {
 
 LabelDecoder LabelDecoder::ClassIds(const std::vector<int>& classes) {
-  if (classes.empty()) throw UsageError("classes: at least one vehicle class id is needed");
+  if (classes.empty()) throw FieldError("classes", "at least one vehicle class id is needed");
   LabelDecoder d;
   d.kind_ = Kind::kClassIds;
   d.lut_.assign(65536, 0);
   for (int c : classes) {
     if (c < 0 || c > 65535)
-      throw UsageError("classes: id " + std::to_string(c) + " is outside 0..65535");
+      throw FieldError("classes", "id " + std::to_string(c) + " is outside 0..65535");
     if (!d.lut_[static_cast<size_t>(c)]) d.ids_.push_back(static_cast<float>(c));
     d.lut_[static_cast<size_t>(c)] = 1;
   }
@@ -24,7 +24,7 @@ LabelDecoder LabelDecoder::ClassIds(const std::vector<int>& classes) {
 
 LabelDecoder LabelDecoder::Palette(const Image& palette, const std::string& palette_name,
                                    const std::vector<int>& classes) {
-  if (classes.empty()) throw UsageError("classes: at least one vehicle class id is needed");
+  if (classes.empty()) throw FieldError("classes", "at least one vehicle class id is needed");
   if (palette.channels < 3)
     throw Error(palette_name + ": a palette needs 3 or 4 channels (RGB), it has " +
                 std::to_string(palette.channels));
@@ -61,12 +61,12 @@ std::vector<int> LabelDecoder::ParseClasses(const std::string& text) {
       used = 0;
     }
     if (item.empty() || used != item.size() || v < 0 || v > 65535)
-      throw UsageError("--classes: '" + item +
-                       "' is not a class id 0..65535 (want e.g. 8 or 8,10)");
+      throw FieldError("classes",
+                       "'" + item + "' is not a class id 0..65535 (want e.g. 8 or 8,10)");
     out.push_back(static_cast<int>(v));
   }
   if (out.empty() || (!text.empty() && text.back() == ','))
-    throw UsageError("--classes: '" + text + "' is not a list of class ids (want e.g. 8 or 8,10)");
+    throw FieldError("classes", "'" + text + "' is not a list of class ids (want e.g. 8 or 8,10)");
   return out;
 }
 

@@ -48,19 +48,19 @@ struct Smoother {
 
 void TrackOptions::Check() const {
   if (!(max_jump > 0) || !std::isfinite(max_jump))
-    throw UsageError("--max-jump: must be > 0 pixels, got " + Num(max_jump));
+    throw FieldError("max_jump", "must be > 0 pixels, got " + Num(max_jump));
   if (max_missed < 1)
-    throw UsageError("--max-missed: must be >= 1 frame, got " + std::to_string(max_missed));
+    throw FieldError("max_missed", "must be >= 1 frame, got " + std::to_string(max_missed));
   if (max_gap < 0)
-    throw UsageError("--max-gap: must be >= 0 frames, got " + std::to_string(max_gap));
+    throw FieldError("max_gap", "must be >= 0 frames, got " + std::to_string(max_gap));
   if (!(smooth >= 0) || !std::isfinite(smooth))
-    throw UsageError("--smooth: must be >= 0 frames, got " + Num(smooth));
+    throw FieldError("smooth", "must be >= 0 frames, got " + Num(smooth));
   if (min_life < 1)
-    throw UsageError("--min-life: must be >= 1 frame, got " + std::to_string(min_life));
+    throw FieldError("min_life", "must be >= 1 frame, got " + std::to_string(min_life));
   if (!(min_ratio >= 0 && min_ratio <= 1))
-    throw UsageError("--min-ratio: must be in 0..1, got " + Num(min_ratio));
+    throw FieldError("min_ratio", "must be in 0..1, got " + Num(min_ratio));
   if (dilate < 0 || dilate > 1000)
-    throw UsageError("--dilate: must be in 0..1000 pixels, got " + std::to_string(dilate));
+    throw FieldError("dilate", "must be in 0..1000 pixels, got " + std::to_string(dilate));
 }
 
 std::pair<size_t, size_t> TrackResult::FrameRows(int frame) const {

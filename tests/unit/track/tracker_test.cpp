@@ -236,7 +236,8 @@ TEST(TrackOptions, CheckNamesTheBadValue) {
   try {
     o.Check();
     FAIL();
-  } catch (const UsageError& e) {
-    EXPECT_STREQ(e.what(), "--min-ratio: must be in 0..1, got 1.5");
+  } catch (const FieldError& e) {  // named by its field; the tool's table names the flag
+    EXPECT_EQ(e.field(), "min_ratio");
+    EXPECT_STREQ(e.what(), "min_ratio: must be in 0..1, got 1.5");
   }
 }
