@@ -27,10 +27,14 @@ std::string KeyOf(const std::string& flag) {
   return k;
 }
 
+// "in [0, 1)", or "> 0" / ">= 0" for a range without an upper bound.
 std::string RangeText(const OptionSpec& s) {
   char buf[96];
-  std::snprintf(buf, sizeof buf, "%s%g, %g%s", s.lo_open ? "(" : "[", s.lo, s.hi,
-                s.hi_open ? ")" : "]");
+  if (std::isinf(s.hi))
+    std::snprintf(buf, sizeof buf, "%s %g", s.lo_open ? ">" : ">=", s.lo);
+  else
+    std::snprintf(buf, sizeof buf, "in %s%g, %g%s", s.lo_open ? "(" : "[", s.lo, s.hi,
+                  s.hi_open ? ")" : "]");
   return buf;
 }
 
@@ -203,7 +207,7 @@ void OptionTable::Check() const {
       const bool ok = std::isfinite(v) ? v >= s.lo && v <= s.hi && !(s.lo_open && v == s.lo) &&
                                              !(s.hi_open && v == s.hi)
                                        : false;
-      if (!ok) throw UsageError(s.flag + ": must be in " + RangeText(s));
+      if (!ok) throw UsageError(s.flag + ": must be " + RangeText(s));
     } else if (s.type == "FLOAT" && !std::isfinite(s.json().get<double>())) {
       throw UsageError(s.flag + ": must be finite");
     }

@@ -58,6 +58,11 @@ struct Reconstruction {
   const ImageRecord* FindImage(const std::string& name) const;
   // Images sorted by name (the order in which tools process frames).
   std::vector<const ImageRecord*> ImagesByName() const;
+  // The camera every render of the model is made with (ptmrender's frames; gazemap maps gaze
+  // through the same): the model's first camera (lowest id), which must be undistorted, scaled to
+  // width x height when both are given (0: its own size). Throws Error when there is no camera
+  // or it is distorted (see Camera::RequireUndistorted).
+  Camera RenderCamera(uint64_t width = 0, uint64_t height = 0) const;
 };
 
 }  // namespace mvtm

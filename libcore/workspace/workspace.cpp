@@ -122,7 +122,7 @@ void Workspace::Require(const std::string& tool, const std::vector<WsItem>& need
   throw Error(root_.string(), 0, "not ready for " + tool + ": missing " + list);
 }
 
-fs::path Workspace::MetricRecord() const {
+fs::path Workspace::MetricRecord(const std::string& except_tool) const {
   const fs::path dir = root_ / "provenance";
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) return {};
@@ -131,6 +131,10 @@ fs::path Workspace::MetricRecord() const {
     if (e.path().extension() == ".json") files.push_back(e.path());
   std::sort(files.begin(), files.end());
   for (const fs::path& p : files) {
+    const std::string stem = p.stem().string();
+    if (!except_tool.empty() &&
+        (stem == except_tool || stem.rfind(except_tool + "-shard-", 0) == 0))
+      continue;
     std::ifstream in(p);
     const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
     if (j.is_discarded() || !j.is_object() || !j.contains("options")) continue;

@@ -84,8 +84,10 @@ class Workspace {
   fs::path ProvenancePath(const std::string& tool) const;
   // The provenance record that says the model is metric — a tool's last run with the option
   // "metric": true (roadmesh --metric) — as the record's path; empty when none does.
-  // A record that cannot be read or parsed says nothing.
-  fs::path MetricRecord() const;
+  // A record that cannot be read or parsed says nothing; `except_tool`'s own records
+  // (TOOL.json, TOOL-shard-I.json) are passed over (drive's "metric" is its own --metric: its
+  // record must not become an input of itself).
+  fs::path MetricRecord(const std::string& except_tool = "") const;
 
   // What `tool` needs that is missing, one human-readable item each (empty: ready).
   std::vector<std::string> Missing(const std::vector<WsItem>& needs) const;

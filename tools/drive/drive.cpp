@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -19,6 +20,7 @@
 #include "io/mesh_io.h"
 #include "io/trajectory.h"
 #include "raycast/mesh_raycaster.h"
+#include "run/ledger.h"
 #include "workspace/workspace.h"
 
 namespace mvtm {
@@ -74,7 +76,7 @@ double ResolveScale(const DriveOptions& o, const Workspace& ws, const std::vecto
     source = "--scale";
     return o.scale;
   }
-  const fs::path record = ws.MetricRecord();
+  const fs::path record = ws.MetricRecord("drive");
   if (o.metric || !record.empty()) {
     source = o.metric ? "--metric" : record.string();
     return 1.0;
@@ -162,8 +164,8 @@ std::vector<StampedPose> Place(const MeshRaycaster& mesh, const RoadFrame& frame
 
 // OUT as TUM, KITTI, or a COLMAP text model (the workspace's camera, images 000000.png, ...).
 void WriteOutput(const DriveOptions& o, const Recorded& r, const std::vector<StampedPose>& poses) {
-  if (o.format == "tum") return WriteTum(o.out, poses);
-  if (o.format == "kitti") return WriteKittiPoses(o.out, poses);
+  if (o.format == DriveFormat::kTum) return WriteTum(o.out, poses);
+  if (o.format == DriveFormat::kKitti) return WriteKittiPoses(o.out, poses);
   Reconstruction model;
   const Camera& cam = r.rec.cameras.at(r.images[r.start]->camera_id);
   model.cameras[cam.id] = cam;
@@ -180,75 +182,40 @@ void WriteOutput(const DriveOptions& o, const Recorded& r, const std::vector<Sta
   WriteColmapText(model, o.out);
 }
 
-std::string OutputFile(const DriveOptions& o) {
-  return o.format == "colmap" ? (fs::path(o.out) / "images.txt").string() : o.out;
+// The files OUT is: the trajectory file, or the COLMAP model's three.
+std::vector<fs::path> OutputFiles(const DriveOptions& o) {
+  if (o.format != DriveFormat::kColmap) return {o.out};
+  const fs::path d(o.out);
+  return {d / "cameras.txt", d / "images.txt", d / "points3D.txt"};
 }
 
-void WriteDriveProvenance(const Workspace& ws, const DriveOptions& o, const CarGeometry& car,
-                          const DriveReport& rep, const std::vector<fs::path>& inputs) {
-  nlohmann::json opts = {
-      {"controls", o.controls},
-      {"out", o.out},
-      {"lane_change", o.lane_change},
-      {"scale", rep.scale},
-      {"scale_source", rep.scale_source},
-      {"wheelbase", o.wheelbase},
-      {"steering_ratio", o.steering_ratio},
-      {"max_steer", o.max_steer},
-      {"track", o.track},
-      {"camera_offset", {car.camera_offset.x(), car.camera_offset.y(), car.camera_offset.z()}},
-      {"start", o.start},
-      {"pass", o.pass},
-      {"frame_rate", o.frame_rate},
-      {"rate", o.rate},
-      {"format", o.format},
-      {"poses", rep.poses}};
-  ws.WriteProvenance("drive", opts, inputs);
+// Where drive's record goes: the workspace when OUT is inside it (WS/provenance/drive.json), else
+// the folder OUT's files are in (OUT itself for a COLMAP model).
+fs::path RecordRoot(const DriveOptions& o, const Workspace& ws) {
+  fs::path dir = o.format == DriveFormat::kColmap ? fs::path(o.out) : fs::path(o.out).parent_path();
+  if (dir.empty()) dir = ".";
+  const fs::path rel =
+      fs::weakly_canonical(dir).lexically_relative(fs::weakly_canonical(ws.root()));
+  const bool inside = !rel.empty() && rel.begin()->string() != "..";
+  return inside ? ws.root() : dir;
 }
 
-}  // namespace
-
-void DriveOptions::Check() const {
-  if (lane_change.empty() && controls.empty())
-    throw UsageError("give CONTROLS, or --lane-change T0:DURATION:OFFSET");
-  if (!lane_change.empty() && !controls.empty())
-    throw UsageError("--lane-change drives the recorded path: give WS OUT, no CONTROLS");
-  if (out.empty()) throw UsageError("OUT is required");
-  if (!lane_change.empty()) LaneChange::Parse(lane_change);
-  if (scale != 0) CheckRange(scale, 0, 1e12, true, "--scale");
-  if (scale != 0 && metric) throw UsageError("give --scale or --metric, not both");
-  CheckRange(wheelbase, 0.5, 20, false, "--wheelbase (metres)");
-  CheckRange(steering_ratio, 1, 100, false, "--steering-ratio");
-  CheckRange(max_steer, 0, 89, true, "--max-steer (degrees)");
-  CheckRange(track, 0.2, 5, false, "--track (metres)");
-  if (!camera_offset.empty()) ParseOffset(camera_offset);
-  CheckRange(frame_rate, 0, 1000, true, "--frame-rate (Hz)");
-  CheckRange(rate, 0, 1000, true, "--rate (Hz)");
-  CheckChoice(format, kDriveFormats, "--format");
-}
-
-DriveReport RunDrive(const DriveOptions& o) {
-  o.Check();
-  DriveReport rep;
-  ControlsLog log;
-  if (o.lane_change.empty()) log = ReadControlsTsv(o.controls);  // a bad log fails first, fast
-  rep.ignored_columns = log.ignored;
-  const Workspace ws(o.workspace);
-  ws.Require("drive", {WsItem::kSparse, WsItem::kMesh});
+// Every file OUT depends on: the sparse model, the mesh, CONTROLS, and the metric record when
+// the scale comes from it.
+std::vector<fs::path> DriveInputs(const DriveOptions& o, const Workspace& ws) {
   std::vector<fs::path> inputs = ws.SparseModelFiles();
   inputs.push_back(ws.MeshPath());
   if (!o.controls.empty()) inputs.emplace_back(o.controls);
-  rep.output = OutputFile(o);
-  if (!o.force && IsUpToDate(rep.output, inputs)) {
-    rep.up_to_date = true;
-    return rep;
+  if (o.scale == 0 && !o.metric) {
+    const fs::path record = ws.MetricRecord("drive");
+    if (!record.empty()) inputs.push_back(record);
   }
-  const Recorded r = LoadRecorded(ws, o);
-  const MeshRaycaster mesh(ReadMesh(ws.MeshPath().string()));
-  const Eigen::Vector3d up = RecordedUp(r.w2c);
-  const std::vector<double> heights = CameraHeights(mesh, r.w2c, up);
-  rep.height_cameras = heights.size();
-  rep.scale = ResolveScale(o, ws, heights, rep.scale_source);
+  return inputs;
+}
+
+// The car's geometry: the camera offset given, or the recorded cameras' median height.
+CarGeometry MakeCar(const DriveOptions& o, const Workspace& ws, const std::vector<double>& heights,
+                    DriveReport& rep) {
   CarGeometry car{o.wheelbase, o.track, Eigen::Vector3d::Zero()};
   if (!o.camera_offset.empty()) {
     car.camera_offset = ParseOffset(o.camera_offset);
@@ -260,6 +227,19 @@ DriveReport RunDrive(const DriveOptions& o) {
     rep.height_from_workspace = true;
   }
   rep.camera_height = car.camera_offset.z();
+  return car;
+}
+
+// Drives the car and writes OUT.
+void MakeDrive(const DriveOptions& o, const Workspace& ws, const ControlsLog& log,
+               DriveReport& rep) {
+  const Recorded r = LoadRecorded(ws, o);
+  const MeshRaycaster mesh(ReadMesh(ws.MeshPath().string()));
+  const Eigen::Vector3d up = RecordedUp(r.w2c);
+  const std::vector<double> heights = CameraHeights(mesh, r.w2c, up);
+  rep.height_cameras = heights.size();
+  rep.scale = ResolveScale(o, ws, heights, rep.scale_source);
+  const CarGeometry car = MakeCar(o, ws, heights, rep);
   const RoadFrame frame = FrameAtCamera(r.w2c[r.start], up, rep.scale);
   const CarPath path = o.lane_change.empty()
                            ? SteeredCarPath(log, o, car, PlanarCamera(frame, r.w2c[r.start]), rep)
@@ -268,7 +248,98 @@ DriveReport RunDrive(const DriveOptions& o) {
   rep.poses = poses.size();
   rep.duration = path.times.back() - path.times.front();
   WriteOutput(o, r, poses);
-  WriteDriveProvenance(ws, o, car, rep, inputs);
+}
+
+}  // namespace
+
+OptionTable DeclareOptions(DriveOptions& o) {
+  OptionTable t("drive");
+  t.Positional("WS", &o.workspace, "Workspace folder (sparse/, mesh.ply)").Dir();
+  t.OptionalPositional("CONTROLS", &o.controls,
+                       "Controls log: a header naming 'time steer speed' (s, steering-wheel "
+                       "degrees, m/s), then one row per sample; omitted with --lane-change")
+      .File();
+  t.OptionalPositional("OUT", &o.out, "Output trajectory file (tum, kitti) or folder (colmap)");
+  t.Text("--lane-change", &o.lane_change,
+         "T0:DURATION:OFFSET: drive the recorded path instead of CONTROLS, moving OFFSET metres "
+         "to the left (+) or right (-) from T0 seconds for DURATION seconds")
+      .Check([&o] {
+        if (!o.lane_change.empty()) LaneChange::Parse(o.lane_change);
+      });
+  t.Real("--scale", &o.scale, "Model units per metre (1 for a metric workspace)").Check([&o] {
+    if (o.scale != 0) CheckRange(o.scale, 0, 1e12, true, "--scale");  // 0: not given
+  });
+  t.Flag("--metric", &o.metric, "The workspace is in metres (--scale 1)");
+  t.Real("--wheelbase", &o.wheelbase, "Rear to front axle, metres").Range(0.5, 20);
+  t.Real("--steering-ratio", &o.steering_ratio, "Steering-wheel angle per road-wheel angle")
+      .Range(1, 100);
+  t.Real("--max-steer", &o.max_steer,
+         "Largest road-wheel angle, degrees; larger ones are clamped (and counted)")
+      .Range(0, 89, true);
+  t.Real("--track", &o.track, "Left to right wheel, metres (where the ground is probed)")
+      .Range(0.2, 5);
+  t.Text("--camera-offset", &o.camera_offset,
+         "X,Y,Z: the camera in metres forward, left and up of the ground under the rear axle "
+         "centre (default 0,0,H: H the recorded cameras' median height above the mesh)")
+      .Alternative("0,0,1.5")
+      .Check([&o] {
+        if (!o.camera_offset.empty()) ParseOffset(o.camera_offset);
+      });
+  t.Text("--start", &o.start,
+         "Start at this workspace image's pose (default: the first, in name order)");
+  t.Text("--pass", &o.pass,
+         "The recorded images are those whose names start with this (one drive of the road; "
+         "default: all)");
+  t.Real("--frame-rate", &o.frame_rate,
+         "--lane-change: recorded images per second (image k is at k/HZ seconds)")
+      .Range(0, 1000, true);
+  t.Real("--rate", &o.rate, "Output poses per second").Range(0, 1000, true);
+  t.Choice("--format", &o.format, kDriveFormats,
+           "tum: TUM file; kitti: KITTI poses file; colmap: a COLMAP text model folder "
+           "(OUT/images.txt)")
+      .Alternative("kitti");  // colmap: OUT is a folder, not the base run's file
+  t.Flag("--force", &o.force, "Rewrite OUT even when it is up to date").Cosmetic();
+  DeclareQuietOption(t, o.quiet);
+  return t;
+}
+
+void DriveOptions::Check() const {
+  DriveOptions copy = *this;
+  DeclareOptions(copy).Check();
+  if (lane_change.empty() && controls.empty())
+    throw UsageError("give CONTROLS, or --lane-change T0:DURATION:OFFSET");
+  if (!lane_change.empty() && !controls.empty())
+    throw UsageError("--lane-change drives the recorded path: give WS OUT, no CONTROLS");
+  if (out.empty()) throw UsageError("OUT is required");
+  if (scale != 0 && metric) throw UsageError("give --scale or --metric, not both");
+}
+
+DriveReport RunDrive(const DriveOptions& o) {
+  o.Check();
+  DriveReport rep;
+  ControlsLog log;
+  if (o.lane_change.empty()) log = ReadControlsTsv(o.controls);  // a bad log fails first, fast
+  rep.ignored_columns = log.ignored;
+  const Workspace ws(o.workspace);
+  ws.Require("drive", {WsItem::kSparse, WsItem::kMesh});
+  const std::vector<fs::path> outputs = OutputFiles(o);
+  rep.output = outputs.size() == 1 ? outputs[0].string() : outputs[1].string();
+  DriveOptions resolved = o;
+  const OptionTable table = DeclareOptions(resolved);
+  Ledger ledger(RecordRoot(o, ws), "drive", table, DriveInputs(o, ws), ws.root());
+  bool stale = false;
+  for (const fs::path& p : outputs) stale = !ledger.Stale(p, {}, o.force).empty() || stale;
+  rep.why = ledger.Summary();
+  if (!stale) {
+    rep.up_to_date = true;
+    return rep;
+  }
+  MakeDrive(o, ws, log, rep);
+  for (const fs::path& p : outputs) ledger.Done(p);
+  ledger.Write({{"scale_used", rep.scale},
+                {"scale_source", rep.scale_source},
+                {"camera_height", rep.camera_height},
+                {"poses", rep.poses}});
   return rep;
 }
 

@@ -10,15 +10,25 @@
 // Time: the controls' own times; with --lane-change, t = 0 at the start image and recorded image
 // k (of the pass, from the start image) at k / frame_rate.
 // Conventions: poses of record are COLMAP's; double precision throughout (UTM coordinates).
+// Up to date: OUT's files (the trajectory file, or the model's cameras.txt, images.txt and
+// points3D.txt) are remade unless the record beside them says they were made with these options
+// from unchanged inputs (the sparse model, the mesh, CONTROLS, and the metric record when the
+// scale comes from it). The record (run/ledger.h) is WS/provenance/drive.json when OUT is inside
+// the workspace, else provenance/drive.json in the folder OUT's files are in.
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
+
+#include "run/option_table.h"
 
 namespace mvtm {
 
-// --format choices.
-inline const std::vector<std::string> kDriveFormats = {"tum", "colmap", "kitti"};
+// --format: a TUM file, a COLMAP text model folder, a KITTI poses file.
+enum class DriveFormat { kTum, kColmap, kKitti };
+inline const std::vector<std::pair<DriveFormat, std::string>> kDriveFormats = {
+    {DriveFormat::kTum, "tum"}, {DriveFormat::kColmap, "colmap"}, {DriveFormat::kKitti, "kitti"}};
 
 struct DriveOptions {
   std::string workspace;
@@ -37,16 +47,21 @@ struct DriveOptions {
   std::string pass;            // the recorded images: names starting with this; empty: all
   double frame_rate = 10;      // --lane-change: recorded images per second, (0, 1000]
   double rate = 10;            // output poses per second, (0, 1000]
-  std::string format = "tum";  // one of kDriveFormats
-  bool force = false;          // rewrite OUT when it is newer than its inputs
+  DriveFormat format = DriveFormat::kTum;
+  bool force = false;  // rewrite OUT even when it is up to date
   bool quiet = false;
 
   // Throws UsageError naming the bad value and the allowed range.
   void Check() const;
 };
 
+// The option table (run/option_table.h) bound to `o`: --help, checks, provenance and the
+// staleness key of OUT all come from it.
+OptionTable DeclareOptions(DriveOptions& o);
+
 struct DriveReport {
   bool up_to_date = false;
+  std::string why;  // why OUT was remade ("1 redone: --rate changed"), "" when it was new
   size_t poses = 0;
   double duration = 0;                       // seconds
   double length = 0;                         // metres along the rear axle's path (steered), else 0

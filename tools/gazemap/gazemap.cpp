@@ -1,18 +1,19 @@
 #include "gazemap.h"
 
-#include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <iostream>
 #include <map>
 #include <memory>
-#include <nlohmann/json.hpp>
-#include <sstream>
+#include <set>
 
 #include "base/atomic_file.h"
 #include "base/error.h"
 #include "base/text.h"
 #include "cli/work.h"
 #include "drive/ground.h"
+#include "gaze/fixation_map.h"
 #include "gaze/gaze_tsv.h"
 #include "gaze/ivt.h"
 #include "gaze/mapping.h"
@@ -20,6 +21,8 @@
 #include "io/colmap_model.h"
 #include "io/mesh_io.h"
 #include "io/trajectory.h"
+#include "run/ledger.h"
+#include "workspace/assets.h"
 #include "workspace/workspace.h"
 
 namespace mvtm {
@@ -106,174 +109,206 @@ std::vector<SourceView> LoadViews(const Reconstruction& rec) {
   return views;
 }
 
-// Depth maps and label images read on first use.
+// Depth maps and label images read on first use, at their camera's size (workspace/assets.h:
+// depth baked at any --scale reads as ptmrender reads it).
 class MapCache {
  public:
   MapCache(const Workspace& ws, const std::vector<SourceView>& views) : ws_(ws), views_(views) {}
-  const Image* Depth(size_t i) { return Get(depth_, i, ws_.DepthPath(views_[i].name), true); }
-  const Image* Labels(size_t i) { return Get(labels_, i, ws_.LabelPath(views_[i].name), false); }
+  const Image* Depth(size_t i) { return Get(depth_, i, ReadDepthAtCamera); }
+  const Image* Labels(size_t i) { return Get(labels_, i, ReadLabelsAtCamera); }
 
  private:
-  const Image* Get(std::map<size_t, std::unique_ptr<Image>>& m, size_t i, const fs::path& p,
-                   bool depth) {
+  using Reader = Image (*)(const Workspace&, const std::string&, const Camera&);
+  const Image* Get(std::map<size_t, std::unique_ptr<Image>>& m, size_t i, Reader read) {
     auto it = m.find(i);
     if (it != m.end()) return it->second.get();
-    std::unique_ptr<Image> img;
-    if (fs::exists(p)) {
-      img = std::make_unique<Image>(depth ? ReadFloatMap(p.string()) : ReadImage(p.string()));
-      RequireImageSize(*img, p.string(), views_[i].camera.width, views_[i].camera.height);
-    }
-    return m.emplace(i, std::move(img)).first->second.get();
+    Image img = read(ws_, views_[i].name, views_[i].camera);
+    std::unique_ptr<Image> p = img.empty() ? nullptr : std::make_unique<Image>(std::move(img));
+    return m.emplace(i, std::move(p)).first->second.get();
   }
   const Workspace& ws_;
   const std::vector<SourceView>& views_;
   std::map<size_t, std::unique_ptr<Image>> depth_, labels_;
 };
 
-struct Mapped {
-  Fixation f;
-  size_t frame = 0;
-  bool hit = false;
-  Eigen::Vector3d X = Eigen::Vector3d::Constant(NAN);
-  double distance = NAN;
-  std::vector<SourceHit> sources;
-  std::string aoi;
+// Each output this run may write → whether it must be (re)made: the ledger is asked once per
+// output, so its reasons are counted once.
+struct OutputPlan {
+  Ledger& ledger;
+  bool force = false;
+  std::map<fs::path, bool> stale;
+  std::set<std::string> pictured;  // the photos the last sources.tsv names (its pictures)
+
+  bool Need(const fs::path& p, const std::vector<fs::path>& item_inputs = {}) {
+    auto it = stale.find(p);
+    if (it == stale.end())
+      it = stale.emplace(p, !ledger.Stale(p, item_inputs, force).empty()).first;
+    return it->second;
+  }
 };
 
-std::vector<Mapped> MapFixations(const IvtResult& ivt, const Frames& frames, const Camera& render,
-                                 const ScreenGeometry& screen, const MeshRaycaster& mesh,
-                                 const std::vector<SourceView>& views, MapCache& cache,
-                                 const GazemapOptions& o) {
-  std::vector<Mapped> out;
-  const VisibilityOptions vo{o.depth_tolerance, 1e-3};
-  const DepthLookup depth = [&](size_t i) {
-    return o.visibility == "depth" ? cache.Depth(i) : nullptr;
-  };
-  for (const Fixation& f : ivt.fixations) {
-    Mapped m;
-    m.f = f;
-    m.frame = *frames.clock->FrameAt(0.5 * (f.start + f.end));
-    const Rigid3d& pose = frames.w2c[m.frame];
-    const WorldRay ray = ScreenRay(render, pose, screen.width_px, screen.height_px, f.x, f.y);
-    if (const auto hit = mesh.Closest(ray.origin, ray.direction)) {
-      m.hit = true;
-      m.X = hit->point;
-      m.distance = (hit->point - ray.origin).norm();
-      m.sources = SourcesOf(m.X, hit->normal, ray.origin, views, mesh, depth, vo);
-    }
-    out.push_back(std::move(m));
-  }
-  return out;
+fs::path PicturePath(const fs::path& out, const std::string& image) {
+  fs::path name(image);
+  name.replace_extension(".png");
+  return out / "fixations" / name;
 }
 
-// The AOI of each fixation: its box, or the label at its pixel in the nearest source photo that
-// has a label image.
-std::string AssignAois(std::vector<Mapped>& mapped, const std::vector<AoiBox>& boxes,
-                       MapCache& cache, const Workspace& ws, const GazemapOptions& o) {
-  const bool labels = boxes.empty() && fs::is_directory(ws.LabelsDir());
-  for (Mapped& m : mapped) {
-    if (!m.hit) {
-      m.aoi = "no-surface";
-      continue;
-    }
-    if (!boxes.empty()) {
-      m.aoi = BoxContaining(boxes, m.X);
-      if (m.aoi.empty()) m.aoi = "outside";
-      continue;
-    }
-    m.aoi = labels ? "unknown" : "surface";
-    if (!labels) continue;
-    std::vector<const SourceHit*> by_depth;
-    for (const SourceHit& s : m.sources) by_depth.push_back(&s);
-    std::stable_sort(by_depth.begin(), by_depth.end(),
-                     [](const SourceHit* a, const SourceHit* b) { return a->depth < b->depth; });
-    for (const SourceHit* s : by_depth)
-      if (const Image* l = cache.Labels(s->view)) {
-        m.aoi = CamVidClassName(static_cast<int>(
-            l->at(static_cast<int>(std::floor(s->u)), static_cast<int>(std::floor(s->v)))));
-        break;
-      }
+// The photos a sources.tsv names (its image column): the run that wrote it drew on those.
+std::set<std::string> PicturedImages(const fs::path& sources) {
+  std::set<std::string> names;
+  std::ifstream in(sources);
+  std::string line;
+  std::getline(in, line);  // the header
+  while (std::getline(in, line)) {
+    const auto f = SplitChar(line, '\t');
+    if (f.size() >= 2) names.insert(std::string(f[1]));
   }
-  return !boxes.empty() ? "boxes " + o.aoi_boxes : labels ? "labels" : "none";
+  return names;
 }
 
-void WriteTables(const fs::path& out, const std::vector<Mapped>& mapped,
-                 const std::vector<SourceView>& views, const std::vector<DwellRow>& aoi) {
-  WriteTextAtomic(out / "sources.tsv", [&](std::ostream& s) {
+// Asks about every output known before the fixations are mapped: the tables, the heat map and,
+// when sources.tsv is up to date (so made from these inputs), the pictures of the photos it
+// names. True when any must be made.
+bool PlanOutputs(const GazemapOptions& o, const Workspace& ws, OutputPlan& plan) {
+  const fs::path out(o.out);
+  bool any = false;
+  for (const char* table : {"sources.tsv", "aoi.tsv", "fixations.tsv"})
+    any = plan.Need(out / table) || any;
+  if (o.no_pictures) return any;
+  any = plan.Need(out / "heatmap.png") || any;
+  plan.pictured = PicturedImages(out / "sources.tsv");
+  if (plan.Need(out / "sources.tsv")) return true;
+  for (const std::string& image : plan.pictured)
+    any = plan.Need(PicturePath(out, image), {ws.SourceImagePath(image)}) || any;
+  return any;
+}
+
+// Writes `path` atomically when the plan says it must be made, and records it.
+void WriteTable(OutputPlan& plan, const fs::path& path,
+                const std::function<void(std::ostream&)>& write) {
+  if (!plan.Need(path)) return;
+  WriteTextAtomic(path, write);
+  plan.ledger.Done(path);
+}
+
+void WriteTables(const fs::path& out, const std::vector<MappedFixation>& mapped,
+                 const std::vector<SourceView>& views, const std::vector<DwellRow>& aoi,
+                 OutputPlan& plan) {
+  WriteTable(plan, out / "sources.tsv", [&](std::ostream& s) {
     s << "fixation\timage\tu\tv\tdepth\n";
     for (size_t i = 0; i < mapped.size(); ++i)
       for (const SourceHit& h : mapped[i].sources)
         s << i + 1 << '\t' << views[h.view].name << '\t' << Fmt("%.3f", h.u) << '\t'
           << Fmt("%.3f", h.v) << '\t' << Fmt("%.9g", h.depth) << '\n';
   });
-  WriteTextAtomic(out / "aoi.tsv", [&](std::ostream& s) { s << FormatDwellTable(aoi); });
-  WriteTextAtomic(out / "fixations.tsv", [&](std::ostream& s) {
+  WriteTable(plan, out / "aoi.tsv", [&](std::ostream& s) { s << FormatDwellTable(aoi); });
+  WriteTable(plan, out / "fixations.tsv", [&](std::ostream& s) {
     s << "fixation\tstart\tend\tduration\tx\ty\tframe\tX\tY\tZ\tdistance\taoi\tsources\n";
     for (size_t i = 0; i < mapped.size(); ++i) {
-      const Mapped& m = mapped[i];
-      s << i + 1 << '\t' << Fmt("%.6f", m.f.start) << '\t' << Fmt("%.6f", m.f.end) << '\t'
-        << Fmt("%.6f", m.f.duration()) << '\t' << Fmt("%.3f", m.f.x) << '\t' << Fmt("%.3f", m.f.y)
-        << '\t' << m.frame << '\t' << FormatDouble(m.X.x()) << '\t' << FormatDouble(m.X.y()) << '\t'
+      const MappedFixation& m = mapped[i];
+      const Fixation& f = m.fixation;
+      s << i + 1 << '\t' << Fmt("%.6f", f.start) << '\t' << Fmt("%.6f", f.end) << '\t'
+        << Fmt("%.6f", f.duration()) << '\t' << Fmt("%.3f", f.x) << '\t' << Fmt("%.3f", f.y) << '\t'
+        << m.frame << '\t' << FormatDouble(m.X.x()) << '\t' << FormatDouble(m.X.y()) << '\t'
         << FormatDouble(m.X.z()) << '\t' << FormatDouble(m.distance) << '\t' << m.aoi << '\t'
         << m.sources.size() << '\n';
     }
   });
 }
 
-size_t WritePictures(const fs::path& out, const std::vector<Mapped>& mapped,
-                     const std::vector<SourceView>& views, const Workspace& ws,
-                     const Mesh& mesh_data, const MeshRaycaster& mesh, const Frames& frames,
-                     const GazemapOptions& o) {
+// What the fixations were mapped with, for the pictures.
+struct MappedScene {
+  const Workspace& ws;
+  const std::vector<SourceView>& views;
+  const Mesh& mesh_data;
+  const MeshRaycaster& mesh;
+  const Frames& frames;
+};
+
+size_t WritePictures(const fs::path& out, const std::vector<MappedFixation>& mapped,
+                     const MappedScene& scene, const GazemapOptions& o, OutputPlan& plan) {
   std::map<size_t, std::vector<FixationMark>> marks;
   std::vector<HeatPoint> heat;
   for (size_t i = 0; i < mapped.size(); ++i) {
     for (const SourceHit& h : mapped[i].sources)
       marks[h.view].push_back({h.u, h.v, std::to_string(i + 1)});
-    if (mapped[i].hit) heat.push_back({mapped[i].X, mapped[i].f.duration()});
+    if (mapped[i].hit) heat.push_back({mapped[i].X, mapped[i].fixation.duration()});
   }
   size_t written = 0;
+  std::set<std::string> drawn;
   for (const auto& [view, list] : marks) {
-    Image img = ReadImage(ws.SourceImagePath(views[view].name).string());
+    const fs::path photo = scene.ws.SourceImagePath(scene.views[view].name);
+    const fs::path picture = PicturePath(out, scene.views[view].name);
+    drawn.insert(scene.views[view].name);
+    if (!plan.Need(picture, {photo})) continue;
+    Image img = ReadImage(photo.string());
     DrawFixations(img, list);
-    fs::path name(views[view].name);
-    name.replace_extension(".png");
-    WriteImage((out / "fixations" / name).string(), img);
+    WriteImage(picture.string(), img);
+    plan.ledger.Done(picture, {photo});
     ++written;
   }
+  // The last run's pictures of photos this run draws on no more go: OUT/fixations is this run's.
+  std::error_code ec;
+  for (const std::string& image : plan.pictured)
+    if (!drawn.count(image)) fs::remove(PicturePath(out, image), ec);
+  const fs::path heatmap = out / "heatmap.png";
+  if (!plan.Need(heatmap)) return written;
   std::vector<Eigen::Vector3d> path;
   std::vector<Rigid3d> w2c;
-  for (const Rigid3d& p : frames.w2c) path.push_back(p.Centre());
-  for (const SourceView& v : views) w2c.push_back(v.w2c);
-  const Image map = RenderHeatmap(mesh_data, mesh, RecordedUp(w2c), path, heat,
+  for (const Rigid3d& p : scene.frames.w2c) path.push_back(p.Centre());
+  for (const SourceView& v : scene.views) w2c.push_back(v.w2c);
+  const Image map = RenderHeatmap(scene.mesh_data, scene.mesh, RecordedUp(w2c), path, heat,
                                   {o.heatmap_size, o.heatmap_sigma});
-  WriteImage((out / "heatmap.png").string(), map);
+  WriteImage(heatmap.string(), map);
+  plan.ledger.Done(heatmap);
   return written + 1;
 }
 
-void WriteGazeProvenance(const Workspace& ws, const GazemapOptions& o,
-                         const std::vector<fs::path>& inputs) {
-  const nlohmann::json opts = {{"frames", o.frames},
-                               {"gaze", o.gaze},
-                               {"out", o.out},
-                               {"frame_rate", o.frame_rate},
-                               {"screen", o.screen},
-                               {"screen_mm", o.screen_mm},
-                               {"distance", o.distance},
-                               {"px_per_degree", o.px_per_degree},
-                               {"max_gap", o.max_gap},
-                               {"noise_median", o.noise_median},
-                               {"velocity_window", o.velocity_window},
-                               {"threshold", o.threshold},
-                               {"merge_time", o.merge_time},
-                               {"merge_angle", o.merge_angle},
-                               {"min_duration", o.min_duration},
-                               {"visibility", o.visibility},
-                               {"depth_tolerance", o.depth_tolerance},
-                               {"aoi_boxes", o.aoi_boxes},
-                               {"heatmap_size", o.heatmap_size},
-                               {"heatmap_sigma", o.heatmap_sigma},
-                               {"no_pictures", o.no_pictures}};
-  ws.WriteProvenance("gazemap", opts, inputs);
+// Where gazemap's record goes: the workspace when OUT is inside it, else OUT.
+fs::path RecordRoot(const GazemapOptions& o, const Workspace& ws) {
+  const fs::path rel =
+      fs::weakly_canonical(o.out).lexically_relative(fs::weakly_canonical(ws.root()));
+  const bool inside = !rel.empty() && rel.begin()->string() != "..";
+  return inside ? ws.root() : fs::path(o.out);
+}
+
+// Every file all outputs depend on: the sparse model, the mesh, FRAMES, GAZE, the boxes, the
+// depth maps (--visibility depth) and the label images (without boxes) of the model's images.
+std::vector<fs::path> GazeInputs(const GazemapOptions& o, const Workspace& ws,
+                                 const Reconstruction& rec) {
+  std::vector<fs::path> inputs = ws.SparseModelFiles();
+  for (const std::string& p : {ws.MeshPath().string(), o.frames, o.gaze, o.aoi_boxes})
+    if (!p.empty()) inputs.emplace_back(p);
+  for (const ImageRecord* im : rec.ImagesByName()) {
+    if (o.visibility == GazeVisibility::kDepth) inputs.push_back(ws.DepthPath(im->name));
+    if (o.aoi_boxes.empty()) inputs.push_back(ws.LabelPath(im->name));
+  }
+  return inputs;
+}
+
+// The I-VT filter's options (Tobii's defaults).
+void DeclareIvtOptions(OptionTable& t, GazemapOptions& o) {
+  t.Real("--max-gap", &o.max_gap, "I-VT gap fill-in: fill gaps up to this, ms (0: off)")
+      .Range(0, 1000);
+  t.Integer("--noise-median", &o.noise_median,
+            "I-VT noise reduction: moving-median window in samples, odd (0: off)")
+      .Range(0, 99)
+      .Alternative("3")
+      .Check([&o] {
+        if (o.noise_median != 0 && (o.noise_median < 3 || o.noise_median % 2 == 0))
+          throw UsageError("--noise-median: must be 0 (off) or odd in [3, 99]");
+      });
+  t.Real("--velocity-window", &o.velocity_window, "I-VT velocity window, ms (at least 3 samples)")
+      .Range(0, 1000, true);
+  t.Real("--threshold", &o.threshold, "I-VT velocity threshold, degrees per second")
+      .Range(0, 10000, true);
+  t.Real("--merge-time", &o.merge_time,
+         "Merge adjacent fixations less than this apart, ms (0: off)")
+      .Range(0, 1000);
+  t.Real("--merge-angle", &o.merge_angle, "... and less than this apart in visual angle, degrees")
+      .Range(0, 180);
+  t.Real("--min-duration", &o.min_duration, "Discard fixations shorter than this, ms (0: keep all)")
+      .Range(0, 10000);
 }
 
 IvtOptions ToIvt(const GazemapOptions& o) {
@@ -288,6 +323,64 @@ IvtOptions ToIvt(const GazemapOptions& o) {
   return v;
 }
 
+// The fixations mapped onto the mesh and the photos, with their AOIs; the counts into `rep`.
+std::vector<MappedFixation> MapAndAssign(const IvtResult& ivt, const ShownFrames& shown,
+                                         const MeshRaycaster& mesh,
+                                         const std::vector<SourceView>& views,
+                                         const std::vector<AoiBox>& boxes, const Workspace& ws,
+                                         const GazemapOptions& o, GazemapReport& rep) {
+  MapCache cache(ws, views);
+  const DepthLookup depth = [&](size_t i) {
+    return o.visibility == GazeVisibility::kDepth ? cache.Depth(i) : nullptr;
+  };
+  std::vector<MappedFixation> mapped =
+      MapFixations(ivt.fixations, shown, mesh, views, depth, {o.depth_tolerance, 1e-3});
+  const bool labels = boxes.empty() && fs::is_directory(ws.LabelsDir());
+  LabelLookup label_lookup;
+  if (labels) label_lookup = [&](size_t i) { return cache.Labels(i); };
+  AssignAois(mapped, boxes, label_lookup);
+  rep.aoi_from = !boxes.empty() ? "boxes " + o.aoi_boxes : labels ? "labels" : "none";
+  std::vector<std::string> names;
+  std::vector<double> durations;
+  for (const MappedFixation& m : mapped) {
+    rep.on_mesh += m.hit;
+    rep.with_source += !m.sources.empty();
+    rep.source_rows += m.sources.size();
+    names.push_back(m.aoi);
+    durations.push_back(m.fixation.duration());
+  }
+  rep.aoi = DwellTable(names, durations);
+  return mapped;
+}
+
+// Maps the gaze and writes the outputs the plan says must be made.
+void MakeOutputs(const GazeTrace& gaze, const Reconstruction& rec, const std::vector<AoiBox>& boxes,
+                 const Workspace& ws, const GazemapOptions& o, OutputPlan& plan,
+                 GazemapReport& rep) {
+  const Frames frames = LoadFrames(o);
+  CheckGazeTimes(gaze, *frames.clock, o);
+  if (rec.cameras.empty()) throw Error(ws.SparseDir().string(), 0, "the model has no cameras");
+  const Camera render = rec.RenderCamera();
+  const ScreenGeometry screen = MakeScreen(o, render);
+  const IvtResult ivt = RunIvt(gaze.samples, screen, ToIvt(o));
+  rep.gaps_filled = ivt.gaps_filled;
+  rep.samples_filled = ivt.samples_filled;
+  rep.merged = ivt.merged;
+  rep.discarded = ivt.discarded;
+  rep.fixations = ivt.fixations.size();
+  const Mesh mesh_data = ReadMesh(ws.MeshPath().string());
+  const MeshRaycaster mesh(mesh_data);
+  const std::vector<SourceView> views = LoadViews(rec);
+  const std::vector<MappedFixation> mapped = MapAndAssign(
+      ivt, ShownFrames{*frames.clock, frames.w2c, render, screen}, mesh, views, boxes, ws, o, rep);
+  const fs::path out(o.out);
+  CreateFolder(out);
+  if (!o.no_pictures)
+    rep.pictures =
+        WritePictures(out, mapped, MappedScene{ws, views, mesh_data, mesh, frames}, o, plan);
+  WriteTables(out, mapped, views, rep.aoi, plan);
+}
+
 }  // namespace
 
 std::string FormatDwellTable(const std::vector<DwellRow>& rows) {
@@ -298,37 +391,72 @@ std::string FormatDwellTable(const std::vector<DwellRow>& rows) {
   return s;
 }
 
+OptionTable DeclareOptions(GazemapOptions& o) {
+  OptionTable t("gazemap");
+  t.Positional("WS", &o.workspace, "Workspace folder (sparse/, mesh.ply; depth/, labels/ used)")
+      .Dir();
+  t.Positional("FRAMES", &o.frames,
+               "The poses the frames were rendered at (ptmrender --poses: TUM, whose timestamps "
+               "are the display times, KITTI or COLMAP images.txt with --frame-rate)")
+      .File();
+  t.Positional("GAZE", &o.gaze,
+               "Gaze trace: a header naming 'time x y [valid]' (seconds, screen pixels, 0/1), "
+               "then one row per sample")
+      .File();
+  t.Positional("OUT", &o.out, "Output folder (fixations.tsv, sources.tsv, aoi.tsv, pictures)")
+      .Dir();
+  t.Real("--frame-rate", &o.frame_rate,
+         "Frames per second: frame i is shown at i/HZ seconds (instead of FRAMES' times)")
+      .Range(0, 10000);  // 0: FRAMES' times
+  t.Text("--screen", &o.screen,
+         "WxH: the screen in pixels, the render shown full screen (default: the render camera's "
+         "size)")
+      .Alternative("1920x1080")
+      .Check([&o] {
+        if (!o.screen.empty()) ParseWH(o.screen, "--screen");
+      });
+  t.Text("--screen-mm", &o.screen_mm, "WxH: the screen's physical size in millimetres")
+      .Alternative("531x299")
+      .Check([&o] {
+        if (!o.screen_mm.empty()) ParseWH(o.screen_mm, "--screen-mm");
+      });
+  t.Real("--distance", &o.distance, "Eye to screen centre, millimetres (with --screen-mm)")
+      .Range(0, 1e5);  // 0: not given
+  t.Real("--px-per-degree", &o.px_per_degree,
+         "Screen pixels per degree of visual angle (instead of --screen-mm, --distance)")
+      .Range(0, 1e5);  // 0: not given
+  DeclareIvtOptions(t, o);
+  t.Choice("--visibility", &o.visibility, kGazeVisibility,
+           "depth: a photo's baked depth map (WS/depth) decides if it sees the point, a ray where "
+           "it has none; ray: always a ray against the mesh");
+  t.Real("--depth-tolerance", &o.depth_tolerance, "Relative depth tolerance of the depth-map test")
+      .Range(0, 1);
+  t.Text("--aoi-boxes", &o.aoi_boxes,
+         "Areas of interest from 3-D boxes: lines 'name xmin ymin zmin xmax ymax zmax' (default: "
+         "classes of the label images WS/labels)")
+      .File();
+  t.Integer("--heatmap-size", &o.heatmap_size, "Heat map's larger side, pixels").Range(16, 16384);
+  t.Real("--heatmap-sigma", &o.heatmap_sigma, "Heat map Gaussian, model units (0: 1% of the map)")
+      .Range(0, 1e12);
+  // Which outputs are written, not what any of them holds.
+  t.Flag("--no-pictures", &o.no_pictures, "Write the tables only (no PNGs)").Cosmetic();
+  t.Flag("--force", &o.force, "Rewrite OUT's files even when they are up to date").Cosmetic();
+  DeclareQuietOption(t, o.quiet);
+  return t;
+}
+
 void GazemapOptions::Check() const {
-  if (out.empty()) throw UsageError("OUT is required");
-  if (frame_rate != 0) CheckRange(frame_rate, 0, 10000, true, "--frame-rate (Hz)");
-  if (!screen.empty()) ParseWH(screen, "--screen");
+  GazemapOptions copy = *this;
+  DeclareOptions(copy).Check();
   const bool physical = !screen_mm.empty() || distance != 0;
   if (physical && px_per_degree != 0)
     throw UsageError("give --screen-mm and --distance, or --px-per-degree, not both");
-  if (physical) {
-    if (screen_mm.empty() || distance == 0)
-      throw UsageError("--screen-mm and --distance go together");
-    ParseWH(screen_mm, "--screen-mm");
-    CheckRange(distance, 0, 1e5, true, "--distance (mm)");
-  } else if (px_per_degree == 0) {
+  if (physical && (screen_mm.empty() || distance == 0))
+    throw UsageError("--screen-mm and --distance go together");
+  if (!physical && px_per_degree == 0)
     throw UsageError(
         "the eye-to-screen geometry is needed for angles: give --screen-mm WxH and --distance "
         "MM, or --px-per-degree P");
-  } else {
-    CheckRange(px_per_degree, 0, 1e5, true, "--px-per-degree");
-  }
-  CheckRange(max_gap, 0, 1000, false, "--max-gap (ms)");
-  if (noise_median != 0 && (noise_median < 3 || noise_median > 99 || noise_median % 2 == 0))
-    throw UsageError("--noise-median: must be 0 (off) or odd in [3, 99]");
-  CheckRange(velocity_window, 0, 1000, true, "--velocity-window (ms)");
-  CheckRange(threshold, 0, 10000, true, "--threshold (deg/s)");
-  CheckRange(merge_time, 0, 1000, false, "--merge-time (ms)");
-  CheckRange(merge_angle, 0, 180, false, "--merge-angle (deg)");
-  CheckRange(min_duration, 0, 10000, false, "--min-duration (ms)");
-  CheckChoice(visibility, kGazeVisibility, "--visibility");
-  CheckRange(depth_tolerance, 0, 1, false, "--depth-tolerance");
-  CheckRange(heatmap_size, 16, 16384, false, "--heatmap-size (px)");
-  CheckRange(heatmap_sigma, 0, 1e12, false, "--heatmap-sigma");
 }
 
 GazemapReport RunGazemap(const GazemapOptions& o) {
@@ -343,53 +471,47 @@ GazemapReport RunGazemap(const GazemapOptions& o) {
       o.aoi_boxes.empty() ? std::vector<AoiBox>{} : ReadAoiBoxes(o.aoi_boxes);
   const Workspace ws(o.workspace);
   ws.Require("gazemap", {WsItem::kSparse, WsItem::kMesh});
-  std::vector<fs::path> inputs = ws.SparseModelFiles();
-  for (const std::string& p : {ws.MeshPath().string(), o.frames, o.gaze, o.aoi_boxes})
-    if (!p.empty()) inputs.emplace_back(p);
-  // Baked depth and labels decide sources and AOIs; their folders change with every atomic
-  // rename of a file in them (a rerun of bakedepth or segtrack).
-  inputs.push_back(ws.DepthDir());
-  inputs.push_back(ws.LabelsDir());
-  const fs::path out(o.out);
-  if (!o.force && IsUpToDate(out / "fixations.tsv", inputs)) {
+  const Reconstruction rec = ReadColmapModel(ws.SparseDir().string());
+  GazemapOptions resolved = o;
+  const OptionTable table = DeclareOptions(resolved);
+  Ledger ledger(RecordRoot(o, ws), "gazemap", table, GazeInputs(o, ws, rec), ws.root());
+  OutputPlan plan{ledger, o.force, {}, {}};
+  if (!PlanOutputs(o, ws, plan)) {
     rep.up_to_date = true;
     return rep;
   }
-  const Frames frames = LoadFrames(o);
-  CheckGazeTimes(gaze, *frames.clock, o);
-  const Reconstruction rec = ReadColmapModel(ws.SparseDir().string());
-  if (rec.cameras.empty()) throw Error(ws.SparseDir().string(), 0, "the model has no cameras");
-  const Camera render = rec.cameras.begin()->second;
-  render.RequireUndistorted();
-  const ScreenGeometry screen = MakeScreen(o, render);
-  const IvtResult ivt = RunIvt(gaze.samples, screen, ToIvt(o));
-  rep.gaps_filled = ivt.gaps_filled;
-  rep.samples_filled = ivt.samples_filled;
-  rep.merged = ivt.merged;
-  rep.discarded = ivt.discarded;
-  rep.fixations = ivt.fixations.size();
-  const Mesh mesh_data = ReadMesh(ws.MeshPath().string());
-  const MeshRaycaster mesh(mesh_data);
-  const std::vector<SourceView> views = LoadViews(rec);
-  MapCache cache(ws, views);
-  std::vector<Mapped> mapped = MapFixations(ivt, frames, render, screen, mesh, views, cache, o);
-  rep.aoi_from = AssignAois(mapped, boxes, cache, ws, o);
-  std::vector<std::string> names;
-  std::vector<double> durations;
-  for (const Mapped& m : mapped) {
-    rep.on_mesh += m.hit;
-    rep.with_source += !m.sources.empty();
-    rep.source_rows += m.sources.size();
-    names.push_back(m.aoi);
-    durations.push_back(m.f.duration());
-  }
-  rep.aoi = DwellTable(names, durations);
-  CreateFolder(out);
-  if (!o.no_pictures)
-    rep.pictures = WritePictures(out, mapped, views, ws, mesh_data, mesh, frames, o);
-  WriteTables(out, mapped, views, rep.aoi);  // fixations.tsv last: it marks the run complete
-  WriteGazeProvenance(ws, o, inputs);
+  MakeOutputs(gaze, rec, boxes, ws, o, plan, rep);
+  ledger.Write();
+  rep.why = ledger.Summary();
   return rep;
+}
+
+void PrintGazemapReport(const GazemapOptions& o, const GazemapReport& r) {
+  if (!o.quiet && !r.ignored_columns.empty()) {
+    std::string cols;
+    for (const auto& c : r.ignored_columns) cols += (cols.empty() ? "" : " ") + c;
+    std::fprintf(stderr, "gazemap: note: %s: columns not used: %s\n", o.gaze.c_str(), cols.c_str());
+  }
+  if (r.up_to_date) {
+    // The table of the run that wrote OUT, as a fresh run prints it.
+    std::ifstream table(fs::path(o.out) / "aoi.tsv");
+    std::cout << table.rdbuf() << std::flush;
+    if (!o.quiet)
+      std::fprintf(stderr, "gazemap: %s is up to date (--force rewrites)\n", o.out.c_str());
+    return;
+  }
+  std::fputs(FormatDwellTable(r.aoi).c_str(), stdout);
+  if (o.quiet) return;
+  std::fprintf(stderr,
+               "gazemap: %zu samples (%zu invalid: %zu flagged, %zu not finite; %zu filled in "
+               "%zu gaps); %zu fixations (%zu merges, %zu discarded as short); %zu on the "
+               "mesh, %zu seen by a photo (%zu sources); AOIs: %s; %zu pictures",
+               r.samples, r.invalid_flagged + r.invalid_nonfinite, r.invalid_flagged,
+               r.invalid_nonfinite, r.samples_filled, r.gaps_filled, r.fixations, r.merged,
+               r.discarded, r.on_mesh, r.with_source, r.source_rows, r.aoi_from.c_str(),
+               r.pictures);
+  if (!r.why.empty()) std::fprintf(stderr, " [%s]", r.why.c_str());
+  std::fprintf(stderr, "\n");
 }
 
 }  // namespace mvtm

@@ -13,17 +13,61 @@
 #include "image/image.h"
 #include "io/colmap_database.h"
 #include "io/colmap_model.h"
+#include "run/ledger.h"
 
 namespace mvtm {
 
 namespace fs = std::filesystem;
 
+OptionTable DeclareOptions(Orb2ColmapOptions& o) {
+  OptionTable t("orb2colmap");
+  t.Positional("TRAJECTORY", &o.trajectory,
+               "Poses: ORB-SLAM2 KeyFrameTrajectory/CameraTrajectory or TUM (t tx ty tz qx qy qz "
+               "qw), or KITTI 3x4 rows")
+      .File();
+  t.Positional("OUTDIR", &o.outdir, "Folder for cameras, images, points3D (.txt or .bin)").Dir();
+  t.Choice("--input-format", &o.input_format, kOrbInputFormats, "Trajectory format");
+  t.Text("--trajectory-times", &o.trajectory_times,
+         "KITTI: times.txt with the timestamp of each pose line (default: line index)")
+      .File();
+  t.Text("--frames", &o.frames,
+         "Frame timestamps: KITTI times.txt, TUM rgb.txt, or 'timestamp name' lines (default: "
+         "the trajectory's own poses)")
+      .File();
+  t.Text("--images", &o.images, "Folder of frame images; sorted file names name the frames").Dir();
+  t.Text("--camera", &o.camera,
+         "Intrinsics as 'MODEL W H PARAMS...' (COLMAP model, e.g. 'PINHOLE 1241 376 718.856 "
+         "718.856 607.19 185.22')")
+      .Excludes("--orb-settings")
+      .Excludes("--kitti-calib");
+  t.Text("--orb-settings", &o.orb_settings,
+         "Intrinsics from an ORB-SLAM2 settings YAML (Camera.fx ...)")
+      .File()
+      .Excludes("--kitti-calib");
+  t.Text("--kitti-calib", &o.kitti_calib, "Intrinsics from a KITTI calib.txt").File();
+  t.Integer("--kitti-cam", &o.kitti_cam, "Which projection matrix Pn of --kitti-calib").Range(0, 3);
+  t.Text("--size", &o.size,
+         "Image size WxH when the intrinsics source has none (else read from --images)")
+      .Alternative("40x12")
+      .Check([&o] {
+        if (!o.size.empty()) ParseImageSize(o.size);
+      });
+  t.Flag("--binary", &o.binary, "Write cameras.bin, images.bin, points3D.bin");
+  t.Text("--database", &o.database,
+         "Create or fill a COLMAP database.db: cameras, images with pose priors")
+      .File();
+  t.Choice("--outside", &o.outside, kOrbOutside, "Frames outside the keyframe time span");
+  t.Flag("--force", &o.force, "Rewrite the model (and database) even when they are up to date")
+      .Cosmetic();
+  DeclareQuietOption(t, o.quiet);
+  return t;
+}
+
 void Orb2ColmapOptions::Check() const {
+  Orb2ColmapOptions copy = *this;
+  DeclareOptions(copy).Check();
   int sources = !camera.empty() + !orb_settings.empty() + !kitti_calib.empty();
   if (sources != 1) throw UsageError("give exactly one of --camera, --orb-settings, --kitti-calib");
-  CheckChoice(outside, kOrbOutside, "--outside");
-  CheckChoice(input_format, kOrbInputFormats, "--input-format");
-  if (kitti_cam < 0 || kitti_cam > 3) throw UsageError("--kitti-cam: must be 0..3");
   if (!images.empty() && !fs::is_directory(images))
     throw UsageError("--images: '" + images + "' is not a folder");
 }
@@ -56,23 +100,31 @@ Camera ResolveCamera(const Orb2ColmapOptions& o, const std::vector<std::string>&
 
 std::string Basename(const std::string& p) { return fs::path(p).filename().string(); }
 
-// True when all three model files exist and are newer than every input.
-bool ModelIsUpToDate(const Orb2ColmapOptions& o) {
+// Every file the model depends on: the trajectory and the other files named by options, and the
+// image files of --images (their sorted names name the frames; the first gives the size).
+std::vector<fs::path> Inputs(const Orb2ColmapOptions& o,
+                             const std::vector<std::string>& image_files) {
   std::vector<fs::path> inputs;
   for (const std::string& in :
-       {o.trajectory, o.trajectory_times, o.frames, o.orb_settings, o.kitti_calib, o.images})
+       {o.trajectory, o.trajectory_times, o.frames, o.orb_settings, o.kitti_calib})
     if (!in.empty()) inputs.emplace_back(in);
-  bool fresh = true;
-  for (const auto& f : ColmapModelFileNames(o.binary))
-    fresh = fresh && IsUpToDate(fs::path(o.outdir) / f, inputs);
-  return fresh;
+  for (const std::string& f : image_files) inputs.push_back(fs::path(o.images) / f);
+  return inputs;
+}
+
+// The files written: the three model files, and the database with --database.
+std::vector<fs::path> Outputs(const Orb2ColmapOptions& o) {
+  std::vector<fs::path> out;
+  for (const auto& f : ColmapModelFileNames(o.binary)) out.push_back(fs::path(o.outdir) / f);
+  if (!o.database.empty()) out.emplace_back(o.database);
+  return out;
 }
 
 // The poses of --input-format (TUM or KITTI; a COLMAP model is refused), camera-to-world.
 Trajectory ReadInputTrajectory(const Orb2ColmapOptions& o, TrajectoryFormat* fmt) {
-  *fmt = o.input_format == "tum"     ? TrajectoryFormat::kTum
-         : o.input_format == "kitti" ? TrajectoryFormat::kKitti
-                                     : DetectTrajectoryFormat(o.trajectory);
+  *fmt = o.input_format == OrbInputFormat::kTum     ? TrajectoryFormat::kTum
+         : o.input_format == OrbInputFormat::kKitti ? TrajectoryFormat::kKitti
+                                                    : DetectTrajectoryFormat(o.trajectory);
   if (*fmt == TrajectoryFormat::kKitti) return ReadKittiPoses(o.trajectory, o.trajectory_times);
   if (*fmt == TrajectoryFormat::kTum) return ReadTum(o.trajectory);
   throw Error(o.trajectory, 0, "a COLMAP model is already a COLMAP model: nothing to convert");
@@ -136,7 +188,7 @@ struct Posed {
 // dropped or clamped as --outside says. Throws when no frame is left.
 std::vector<Posed> PoseFrames(const Orb2ColmapOptions& o, const std::vector<StampedPose>& keys,
                               const std::vector<TimedName>& frames, Orb2ColmapReport& rep) {
-  const Outside outside = o.outside == "clamp" ? Outside::kClamp : Outside::kDrop;
+  const Outside outside = o.outside;
   std::vector<Posed> posed;
   for (const auto& f : frames) {
     bool inside = f.time >= keys.front().time && f.time <= keys.back().time;
@@ -206,7 +258,20 @@ Reconstruction BuildModel(const Orb2ColmapOptions& o, Camera cam, const std::vec
 Orb2ColmapReport RunOrb2Colmap(const Orb2ColmapOptions& o) {
   o.Check();
   Orb2ColmapReport rep;
-  if (!o.force && o.database.empty() && ModelIsUpToDate(o)) {
+  const std::vector<std::string> image_files =
+      o.images.empty() ? std::vector<std::string>() : ListImageFiles(o.images);
+  Orb2ColmapOptions resolved = o;
+  const OptionTable table = DeclareOptions(resolved);
+  Ledger ledger(o.outdir, "orb2colmap", table, Inputs(o, image_files), fs::path());
+  // The model files and the database are made together (the model takes the database's image
+  // ids): one stale output remakes them all. A database another program changed since (COLMAP's
+  // feature extraction) is stale too ("no record"), as it always was rewritten before.
+  const std::vector<fs::path> outputs = Outputs(o);
+  bool stale = false;
+  for (const fs::path& p : outputs) stale = !ledger.Stale(p, {}, o.force).empty() || stale;
+  rep.why = ledger.Summary();
+  RemoveStaleTemporaries(o.outdir);  // a killed run's leftovers, even when all is up to date
+  if (!stale) {
     rep.up_to_date = true;
     return rep;
   }
@@ -215,8 +280,6 @@ Orb2ColmapReport RunOrb2Colmap(const Orb2ColmapOptions& o) {
   rep.reordered = SortKeyframes(keys, o.trajectory);
   rep.keyframes = keys.size();
 
-  const std::vector<std::string> image_files =
-      o.images.empty() ? std::vector<std::string>() : ListImageFiles(o.images);
   const std::vector<TimedName> frames = ReadFrames(o, keys, image_files, fmt);
   rep.frames = frames.size();
   const Camera cam = ResolveCamera(o, image_files);
@@ -227,6 +290,8 @@ Orb2ColmapReport RunOrb2Colmap(const Orb2ColmapOptions& o) {
     WriteColmapBinary(model, o.outdir);
   else
     WriteColmapText(model, o.outdir);
+  for (const fs::path& p : outputs) ledger.Done(p);
+  ledger.Write();
   rep.written = model.images.size();
   return rep;
 }

@@ -11,38 +11,67 @@
 #include <iterator>
 #include <map>
 #include <memory>
-#include <nlohmann/json.hpp>
 #include <optional>
 
 #include "base/error.h"
 #include "base/text.h"
+#include "cli/work.h"
 #include "image/mask.h"
 #include "index/pose_index.h"
 #include "io/colmap_model.h"
 #include "io/partners.h"
 #include "io/trajectory.h"
 #include "queries.h"
+#include "run/ledger.h"
 #include "workspace/workspace.h"
 
 namespace mvtm {
 
+OptionTable DeclareOptions(PickViewOptions& o) {
+  OptionTable t("pickview");
+  t.Positional("WS", &o.workspace, "Workspace folder (sparse/; masks/ with --prefer-unmasked)")
+      .Dir();
+  t.OptionalPositional("QUERIES", &o.queries,
+                       "Query poses: COLMAP images.txt, TUM or KITTI trajectory; - for stdin "
+                       "(default: the workspace's own images)")
+      .File();
+  t.Integer("--k", &o.k, "Images per query").AtLeast(1);
+  t.Real("--max-heading", &o.max_heading_deg,
+         "Heading gate, degrees: images looking further away are never picked")
+      .Range(0, 180, true);
+  t.Real("--heading-weight", &o.heading_weight, "Metres of cost per radian of heading difference")
+      .AtLeast(0);
+  t.Real("--ahead-weight", &o.ahead_weight,
+         "Metres of cost per metre an image is ahead of the query (ptmrender uses 1; 0 = "
+         "nearest pose)")
+      .AtLeast(0);
+  t.Choice("--method", &o.method, kSearchMethods,
+           "Search: kdtree and brute are exact; flann (randomised trees) and grid9 (the thesis's "
+           "grid) approximate");
+  t.Integer("--checks", &o.checks, "flann: leaves visited per query (more: slower, fewer misses)")
+      .AtLeast(1);
+  t.Flag("--exclude-self", &o.exclude_self,
+         "With the workspace's own images as queries: never pick the image itself");
+  t.Flag("--partners", &o.partners,
+         "Partners mode: for every image, the nearest images of the other passes (name prefix "
+         "before '_'); also writes WS/partners.tsv");
+  t.Text("--other", &o.other, "Partners: the other pass is this workspace").Dir();
+  t.Flag("--prefer-unmasked", &o.prefer_unmasked,
+         "Partners: near-ties go to images with fewer mask pixels where the image's own mask is "
+         "set");
+  t.Real("--tie-margin", &o.tie_margin,
+         "Partners with --prefer-unmasked: metres of cost within which candidates are near-ties")
+      .AtLeast(0);
+  t.Flag("--force", &o.force, "Partners: rewrite WS/partners.tsv even when it is up to date")
+      .Cosmetic();
+  t.Flag("-q,--quiet", &o.quiet, "No summary on stderr (and no comparison with the exact search)")
+      .Cosmetic();
+  return t;
+}
+
 void PickViewOptions::Check() const {
-  if (workspace.empty()) throw UsageError("WS: no workspace given");
-  if (k < 1) throw UsageError("--k: " + std::to_string(k) + " is out of range (1 or more)");
-  if (!(max_heading_deg > 0 && max_heading_deg <= 180))
-    throw UsageError("--max-heading: " + FormatDouble(max_heading_deg) +
-                     " is out of range (0, 180]");
-  if (!(heading_weight >= 0 && std::isfinite(heading_weight)))
-    throw UsageError("--heading-weight: " + FormatDouble(heading_weight) +
-                     " must be finite and 0 or more");
-  if (!(ahead_weight >= 0 && std::isfinite(ahead_weight)))
-    throw UsageError("--ahead-weight: " + FormatDouble(ahead_weight) +
-                     " must be finite and 0 or more");
-  if (!(tie_margin >= 0 && std::isfinite(tie_margin)))
-    throw UsageError("--tie-margin: " + FormatDouble(tie_margin) + " must be finite and 0 or more");
-  ParseSearchMethod(method);
-  if (checks < 1)
-    throw UsageError("--checks: " + std::to_string(checks) + " is out of range (1 or more)");
+  PickViewOptions copy = *this;
+  DeclareOptions(copy).Check();
   if (!partners && !other.empty()) throw UsageError("--other needs --partners");
   if (!partners && prefer_unmasked) throw UsageError("--prefer-unmasked needs --partners");
   if (partners && !queries.empty())
@@ -306,34 +335,41 @@ class Selector {
   SearchMethod method_;
 };
 
-// Partners mode: WS/partners.tsv and the provenance record of the run.
-void WritePartnersAndProvenance(const PickViewOptions& o, const Workspace& ws,
-                                const Workspace* other_ws, const std::vector<PartnerRow>& rows) {
-  WritePartners(ws.PartnersPath().string(), rows);
-  nlohmann::json opts = {{"k", o.k},
-                         {"max_heading_deg", o.max_heading_deg},
-                         {"heading_weight", o.heading_weight},
-                         {"ahead_weight", o.ahead_weight},
-                         {"method", o.method},
-                         {"checks", o.checks},
-                         {"other", o.other},
-                         {"prefer_unmasked", o.prefer_unmasked},
-                         {"tie_margin", o.tie_margin}};
+// Partners mode: WS/partners.tsv unless it is up to date, and its record. Its inputs: the
+// models of WS (and of --other), and with --prefer-unmasked the masks of both (an absent mask
+// that appears makes it stale).
+void WritePartnersIfStale(const PickViewOptions& o, const Workspace& ws, const Workspace* other_ws,
+                          const Model& model, const Model& cands,
+                          const std::vector<PartnerRow>& rows, PickViewReport& rep) {
   std::vector<fs::path> inputs = ws.SparseModelFiles();
   if (other_ws)
     for (const auto& f : other_ws->SparseModelFiles()) inputs.push_back(f);
-  ws.WriteProvenance("pickview", opts, inputs);
+  if (o.prefer_unmasked) {
+    for (const std::string& n : model.names) inputs.push_back(ws.MaskPath(n));
+    for (const std::string& n : cands.names)
+      inputs.push_back((other_ws ? *other_ws : ws).MaskPath(n));
+  }
+  PickViewOptions resolved = o;
+  const OptionTable table = DeclareOptions(resolved);
+  Ledger ledger(ws.root(), "pickview", table, inputs, ws.root());
+  rep.partners_path = ws.PartnersPath().string();
+  rep.partners_written = !ledger.Stale(ws.PartnersPath(), {}, o.force).empty();
+  rep.why = ledger.Summary();
+  if (!rep.partners_written) return;
+  WritePartners(rep.partners_path, rows);
+  ledger.Done(ws.PartnersPath());
+  ledger.Write();
 }
 
 }  // namespace
 
 PickViewReport RunPickView(const PickViewOptions& o, std::ostream& out, std::istream& in) {
   o.Check();
-  const SearchMethod method = ParseSearchMethod(o.method);
+  const SearchMethod method = o.method;
   Workspace ws(o.workspace);
   Model model = LoadModel(ws);
   PickViewReport rep;
-  rep.method = o.method;
+  rep.method = SearchMethodName(method);
 
   std::vector<Query> queries;
   std::vector<std::string> query_pass;
@@ -397,10 +433,8 @@ PickViewReport RunPickView(const PickViewOptions& o, std::ostream& out, std::ist
   }
 
   std::vector<PartnerRow> rows = Rows(queries, picks, cands.names);
-  if (o.partners) {
-    WritePartnersAndProvenance(o, ws, other_ws ? &*other_ws : nullptr, rows);
-    rep.partners_path = ws.PartnersPath().string();
-  }
+  if (o.partners)
+    WritePartnersIfStale(o, ws, other_ws ? &*other_ws : nullptr, model, cands, rows, rep);
   WritePartners(out, rows);
   out.flush();
   if (!out) throw Error("-", 0, "cannot write the output");

@@ -168,15 +168,11 @@ std::vector<RenderPose> LoadRenderPoses(const PtmRenderOptions& o, const Scene& 
   return poses;
 }
 
-// The render camera: the workspace's (first) camera, at --size if given.
-Camera RenderCamera(const PtmRenderOptions& o, const Scene& scene) {
-  Camera cam = scene.rec.cameras.begin()->second;
-  cam.RequireUndistorted();
-  if (!o.size.empty()) {
-    const ImageSize size = ParseImageSize(o.size);
-    cam = cam.Scaled(size.width, size.height);
-  }
-  return cam;
+// The render camera (Reconstruction::RenderCamera), at --size if given.
+Camera RenderCameraOf(const PtmRenderOptions& o, const Scene& scene) {
+  if (o.size.empty()) return scene.rec.RenderCamera();
+  const ImageSize size = ParseImageSize(o.size);
+  return scene.rec.RenderCamera(size.width, size.height);
 }
 
 // Projectors for every pose (all poses: the plan must not depend on how the work is split).
@@ -434,7 +430,7 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
   const Scene scene = LoadScene(ws);
   const std::vector<RenderPose> poses = LoadRenderPoses(o, scene);
   const std::vector<size_t> chosen = o.Select().Apply(poses.size());
-  const Camera cam = RenderCamera(o, scene);
+  const Camera cam = RenderCameraOf(o, scene);
   const ProjectorPicks picks = PickProjectors(o, scene, poses);
   SceneSurvey survey = StartSurvey(o, ws, scene, picks);
 

@@ -3,15 +3,18 @@
 #include <algorithm>
 #include <atomic>
 #include <exception>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <utility>
 
 #include "base/atomic_file.h"
 #include "base/error.h"
 #include "cli/progress.h"
+#include "cli/work.h"
 #include "image/folder.h"
 #include "image/image.h"
 #include "io/tracks.h"
+#include "run/ledger.h"
 #include "track/labels.h"
 #include "workspace/workspace.h"
 
@@ -88,27 +91,30 @@ void ForEachLabel(const std::vector<fs::path>& files, const LabelDecoder& decode
   }
 }
 
-// Renders and writes every frame's mask on all cores. Each write is atomic; the error of the
-// first frame (in file order) that failed is thrown, and no new write starts after a failure.
-void WriteMasks(const TrackResult& res, const std::vector<fs::path>& files, const Workspace& ws,
-                int dilate) {
-  std::vector<std::exception_ptr> errors(files.size());
+// Renders and writes the masks of the frames `todo` on all cores, each recorded in the ledger
+// when it is in place. Each write is atomic; the error of the first frame (in file order) that
+// failed is thrown, and no new write starts after a failure.
+void WriteMasks(const TrackResult& res, const std::vector<fs::path>& files,
+                const std::vector<size_t>& todo, const Workspace& ws, int dilate, Ledger& ledger) {
+  std::vector<std::exception_ptr> errors(todo.size());
   std::atomic<bool> failed{false};
   cv::parallel_for_(
-      cv::Range(0, static_cast<int>(files.size())),
+      cv::Range(0, static_cast<int>(todo.size())),
       [&](const cv::Range& range) {
         std::vector<uint8_t> mask;
         Image out(res.width, res.height, 1, 8);
-        for (int i = range.start; i < range.end && !failed; ++i) {
+        for (int k = range.start; k < range.end && !failed; ++k) {
+          const size_t i = todo[static_cast<size_t>(k)];
           try {
-            res.RenderMask(i, dilate, mask);
+            res.RenderMask(static_cast<int>(i), dilate, mask);
             std::copy(mask.begin(), mask.end(), out.data.begin());
             // Masks are long runs of 0 and 255: the fast PNG settings encode them 4-5x faster
             // at about the same size (same pixels).
-            WriteImage(ws.MaskPath(files[static_cast<size_t>(i)].filename().string()).string(), out,
-                       PngCompression::kFast);
+            const fs::path path = ws.MaskPath(files[i].filename().string());
+            WriteImage(path.string(), out, PngCompression::kFast);
+            ledger.Done(path);
           } catch (...) {
-            errors[static_cast<size_t>(i)] = std::current_exception();
+            errors[static_cast<size_t>(k)] = std::current_exception();
             failed = true;
           }
         }
@@ -118,9 +124,69 @@ void WriteMasks(const TrackResult& res, const std::vector<fs::path>& files, cons
     if (e) std::rethrow_exception(e);
 }
 
+// Reads, decodes and tracks every label image (the tracking couples all frames).
+TrackResult TrackLabels(const std::vector<fs::path>& files, const LabelDecoder& decoder,
+                        const SegtrackOptions& o) {
+  std::unique_ptr<Tracker> tracker;
+  {
+    Progress progress("segtrack", files.size(), o.quiet);
+    ForEachLabel(
+        files, decoder, &progress,
+        [](const std::vector<uint8_t>& vehicle, int w, int h, BlobFinder& finder) {
+          return finder.Find(vehicle.data(), w, h);
+        },
+        [&](size_t, std::vector<Blob>&& blobs, int w, int h) {
+          if (!tracker) tracker = std::make_unique<Tracker>(w, h, o.track);
+          tracker->AddBlobs(std::move(blobs));
+        });
+  }
+  return tracker->Finish();
+}
+
 }  // namespace
 
+OptionTable DeclareOptions(SegtrackOptions& o) {
+  OptionTable t("segtrack");
+  t.Text("--classes", &o.classes, "Vehicle class ids, comma-separated (class-id or palette labels)")
+      .Alternative("8,5")
+      .Check([&o] {
+        if (!o.binary) LabelDecoder::ParseClasses(o.classes);
+      });
+  t.Text("--palette", &o.palette,
+         "Labels are RGB: FILE's pixels, in row-major order, are the colours of class 0, 1, ...")
+      .File();
+  t.Flag("--binary", &o.binary, "Labels are masks: first channel non-zero = vehicle")
+      .Excludes("--classes")
+      .Excludes("--palette");
+  t.Real("--max-jump", &o.track.max_jump,
+         "Largest distance from a track's predicted centroid to its blob")
+      .Above(0)
+      .Alternative("2");
+  t.Integer("--max-missed", &o.track.max_missed,
+            "A track ends after N consecutive frames without a blob")
+      .AtLeast(1);
+  t.Integer("--max-gap", &o.track.max_gap, "Fill gaps of at most G missed frames by interpolation")
+      .AtLeast(0);
+  t.Real("--smooth", &o.track.smooth, "Gaussian sigma in frames for centroid and size (0: off)")
+      .AtLeast(0);
+  t.Integer("--min-life", &o.track.min_life, "Reject tracks spanning fewer than N frames")
+      .AtLeast(1);
+  t.Real("--min-ratio", &o.track.min_ratio,
+         "Reject tracks detected in less than this share of their span")
+      .Range(0, 1);
+  t.Integer("--dilate", &o.track.dilate, "Dilate the masks by a disk of radius PX").Range(0, 1000);
+  t.Flag("--rank", &o.rank,
+         "Print the LABELDIRs ordered by total vehicle area (fewest first) on stdout")
+      .Cosmetic();
+  t.Flag("--force", &o.force, "Rewrite masks and tracks.tsv even when they are up to date")
+      .Cosmetic();
+  DeclareQuietOption(t, o.quiet);
+  return t;
+}
+
 void SegtrackOptions::Check() const {
+  SegtrackOptions copy = *this;
+  DeclareOptions(copy).Check();
   if (rank) {
     if (paths.empty()) throw UsageError("--rank needs at least one LABELDIR");
   } else if (paths.size() != 2) {
@@ -128,8 +194,6 @@ void SegtrackOptions::Check() const {
                      (paths.size() == 1 ? "" : "s") + " (or --rank LABELDIR...)");
   }
   if (binary && !palette.empty()) throw UsageError("--binary and --palette exclude each other");
-  if (!binary) LabelDecoder::ParseClasses(classes);
-  track.Check();
 }
 
 std::vector<fs::path> ListLabelImages(const fs::path& dir) {
@@ -148,44 +212,43 @@ SegtrackReport RunSegtrack(const SegtrackOptions& o) {
   const fs::path labeldir = o.paths[0];
   const Workspace ws(o.paths[1]);
   const std::vector<fs::path> files = ListLabelImages(labeldir);
-
-  std::unique_ptr<Tracker> tracker;
-  {
-    Progress progress("segtrack", files.size(), o.quiet);
-    ForEachLabel(
-        files, decoder, &progress,
-        [](const std::vector<uint8_t>& vehicle, int w, int h, BlobFinder& finder) {
-          return finder.Find(vehicle.data(), w, h);
-        },
-        [&](size_t, std::vector<Blob>&& blobs, int w, int h) {
-          if (!tracker) tracker = std::make_unique<Tracker>(w, h, o.track);
-          tracker->AddBlobs(std::move(blobs));
-        });
-  }
-  const TrackResult res = tracker->Finish();
-  RemoveStaleTemporaries(ws.MasksDir());  // a killed run's leftovers
-  WriteMasks(res, files, ws, o.track.dilate);
-
-  std::vector<TracksTsvRow> table;
-  table.reserve(res.rows.size());
-  for (const TrackRow& r : res.rows)
-    table.push_back({files[static_cast<size_t>(r.frame)].filename().string(), r});
-  WriteTracksTsv(ws.TracksPath().string(), table);
-
-  nlohmann::json opts = {{"labeldir", labeldir.string()}, {"classes", o.binary ? "" : o.classes},
-                         {"palette", o.palette},          {"binary", o.binary},
-                         {"max_jump", o.track.max_jump},  {"max_missed", o.track.max_missed},
-                         {"max_gap", o.track.max_gap},    {"smooth", o.track.smooth},
-                         {"min_life", o.track.min_life},  {"min_ratio", o.track.min_ratio},
-                         {"dilate", o.track.dilate}};
-  std::vector<fs::path> inputs = files;
-  if (!o.palette.empty()) inputs.insert(inputs.begin(), o.palette);
-  ws.WriteProvenance("segtrack", opts, inputs);
-
   SegtrackReport rep;
-  rep.summary = res.summary;
+  rep.frames = files.size();
   rep.masks_dir = ws.MasksDir();
   rep.tracks = ws.TracksPath();
+
+  // Tracking couples the frames: every label image (and the palette) is an input of every
+  // output, so any changed label makes every mask and tracks.tsv stale.
+  std::vector<fs::path> inputs = files;
+  if (!o.palette.empty()) inputs.push_back(o.palette);
+  SegtrackOptions resolved = o;
+  const OptionTable table = DeclareOptions(resolved);
+  Ledger ledger(ws.root(), "segtrack", table, inputs, ws.root());
+  std::vector<size_t> todo;
+  for (size_t i = 0; i < files.size(); ++i)
+    if (!ledger.Stale(ws.MaskPath(files[i].filename().string()), {}, o.force).empty())
+      todo.push_back(i);
+  const bool tracks_stale = !ledger.Stale(rep.tracks, {}, o.force).empty();
+  rep.why = ledger.Summary();
+  rep.skipped = files.size() - todo.size() + (tracks_stale ? 0 : 1);
+  RemoveStaleTemporaries(ws.MasksDir());  // a killed run's leftovers, even when all is up to date
+  if (todo.empty() && !tracks_stale) return rep;
+
+  const TrackResult res = TrackLabels(files, decoder, o);
+  rep.tracked = true;
+  rep.summary = res.summary;
+  WriteMasks(res, files, todo, ws, o.track.dilate, ledger);
+  rep.written = todo.size();
+  if (tracks_stale) {
+    std::vector<TracksTsvRow> rows;
+    rows.reserve(res.rows.size());
+    for (const TrackRow& r : res.rows)
+      rows.push_back({files[static_cast<size_t>(r.frame)].filename().string(), r});
+    WriteTracksTsv(rep.tracks.string(), rows);
+    ledger.Done(rep.tracks);
+    ++rep.written;
+  }
+  ledger.Write({{"labeldir", labeldir.generic_string()}});
   return rep;
 }
 

@@ -18,6 +18,7 @@
 #include "image/folder.h"
 #include "image/image.h"
 #include "radiometry/exposure.h"
+#include "run/ledger.h"
 
 namespace mvtm {
 
@@ -28,6 +29,14 @@ namespace {
 struct PairJob {
   std::string name;  // file name of A
   fs::path a, b, mask, map;
+  bool make_map = false;  // the map is to be (re)made (else none, or up to date)
+
+  // The files its map is made from.
+  std::vector<fs::path> Inputs() const {
+    std::vector<fs::path> in = {a, b};
+    if (!mask.empty()) in.push_back(mask);
+    return in;
+  }
 };
 
 struct Row {
@@ -111,7 +120,8 @@ Image ReadFiniteImage(const fs::path& path) {
   return img;
 }
 
-Row ComparePair(const PairJob& job, const SsimToolOptions& o) {
+// Compares one pair; writes its map when it is to be made, and records it in `ledger`.
+Row ComparePair(const PairJob& job, const SsimToolOptions& o, Ledger* ledger) {
   Image a = ReadFiniteImage(job.a);
   Image b = ReadFiniteImage(job.b);
   if (o.channels == ChannelMode::kGrey) {
@@ -141,7 +151,7 @@ Row ComparePair(const PairJob& job, const SsimToolOptions& o) {
   Row row;
   row.name = job.name;
   try {
-    row.sim = Compare(a, b, o.ssim, mask ? &*mask : nullptr, job.map.empty() ? nullptr : &map);
+    row.sim = Compare(a, b, o.ssim, mask ? &*mask : nullptr, job.make_map ? &map : nullptr);
   } catch (const SizeMismatchError&) {
     throw;
   } catch (const UsageError&) {
@@ -149,12 +159,13 @@ Row ComparePair(const PairJob& job, const SsimToolOptions& o) {
   } catch (const Error& e) {
     throw Error(job.a.string(), 0, e.what());  // name the pair in data errors
   }
-  if (!job.map.empty()) {
+  if (job.make_map) {
     if (!MapIsExr(job.map)) {  // 8-bit: 255·clamp(S, 0, 1)
       map.bits = 8;
       for (float& v : map.data) v = 255.f * std::clamp(v, 0.f, 1.f);
     }
     WriteImage(job.map.string(), map);
+    ledger->Done(job.map, job.Inputs());
   }
   return row;
 }
@@ -163,13 +174,14 @@ Row ComparePair(const PairJob& job, const SsimToolOptions& o) {
 // on one thread, which keeps every core busy through decoding too and does not stall when
 // another process takes a core. Rows come back in job order; the first failing pair in that
 // order is the error reported (no new pair is started once one has failed).
-std::vector<Row> CompareAll(const std::vector<PairJob>& jobs, const SsimToolOptions& options) {
+std::vector<Row> CompareAll(const std::vector<PairJob>& jobs, const SsimToolOptions& options,
+                            Ledger* ledger) {
   std::vector<Row> rows(jobs.size());
   const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
   const size_t workers = std::min<size_t>(
       jobs.size(), options.ssim.threads > 0 ? size_t(options.ssim.threads) : cores);
   if (workers <= 1) {
-    for (size_t i = 0; i < jobs.size(); ++i) rows[i] = ComparePair(jobs[i], options);
+    for (size_t i = 0; i < jobs.size(); ++i) rows[i] = ComparePair(jobs[i], options, ledger);
     return rows;
   }
   SsimToolOptions per_pair = options;
@@ -180,7 +192,7 @@ std::vector<Row> CompareAll(const std::vector<PairJob>& jobs, const SsimToolOpti
   auto work = [&] {
     for (size_t i; !failed && (i = next.fetch_add(1)) < jobs.size();) {
       try {
-        rows[i] = ComparePair(jobs[i], per_pair);
+        rows[i] = ComparePair(jobs[i], per_pair, ledger);
       } catch (...) {
         errors[i] = std::current_exception();
         failed = true;
@@ -225,77 +237,151 @@ std::string Fixed(double v) {
 
 nlohmann::json Number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nullptr; }
 
-}  // namespace
-
-void SsimToolOptions::Check() const {
-  if (a.empty() || b.empty()) throw UsageError("two images or two folders are required");
-  ssim.Check();
+// Where the maps' record goes: the --map folder, or the folder the map file is in.
+fs::path MapRoot(const SsimToolOptions& o, bool folders) {
+  if (folders) return o.map;
+  const fs::path dir = fs::path(o.map).parent_path();
+  return dir.empty() ? fs::path(".") : dir;
 }
 
-int RunSsim(const SsimToolOptions& options, std::ostream& out) {
-  options.Check();
-  const std::vector<PairJob> jobs = PlanPairs(options);
-  const bool folders = fs::is_directory(options.a);
-  if (folders && !options.map.empty()) CreateFolder(options.map);
+std::string ChannelModeName(ChannelMode m) {
+  for (const auto& [mode, name] : kChannelModes)
+    if (mode == m) return name;
+  return "";
+}
 
-  const std::vector<Row> rows = CompareAll(jobs, options);
-
+// The summary statistics of each metric over the pairs.
+struct Summary {
+  Stats ssim, ncc, psnr;
+};
+Summary SummaryOf(const std::vector<Row>& rows) {
   std::vector<double> ssim, ncc, psnr;
   for (const Row& r : rows) {
     ssim.push_back(r.sim.ssim);
     ncc.push_back(r.sim.ncc);
     psnr.push_back(r.sim.psnr);
   }
-  const Stats s_ssim = StatsOf(ssim), s_ncc = StatsOf(ncc), s_psnr = StatsOf(psnr);
+  return {StatsOf(ssim), StatsOf(ncc), StatsOf(psnr)};
+}
 
-  if (options.json) {
-    nlohmann::json j;
-    j["a"] = options.a;
-    j["b"] = options.b;
-    if (!options.mask.empty()) j["mask"] = options.mask;
-    j["options"] = {{"sigma", options.ssim.sigma},
-                    {"k1", options.ssim.k1},
-                    {"k2", options.ssim.k2},
-                    {"truncate", options.ssim.truncate},
-                    {"window", 2 * options.ssim.Radius() + 1},
-                    {"channels", ChannelModeNames()[static_cast<size_t>(options.channels)]}};
-    nlohmann::json pairs = nlohmann::json::array();
-    for (const Row& r : rows) {
-      pairs.push_back({{"name", r.name},
-                       {"ssim", Number(r.sim.ssim)},
-                       {"ncc", Number(r.sim.ncc)},
-                       {"psnr", Number(r.sim.psnr)},
-                       {"data_range", r.sim.data_range},
-                       {"pixels", r.sim.pixels},
-                       {"ssim_pixels", r.sim.ssim_pixels}});
-    }
-    j["pairs"] = pairs;
-    if (folders) {
-      auto stat = [&](double Stats::*field) {
-        return nlohmann::json{{"ssim", Number(s_ssim.*field)},
-                              {"ncc", Number(s_ncc.*field)},
-                              {"psnr", Number(s_psnr.*field)}};
-      };
-      j["summary"] = {{"count", rows.size()},
-                      {"mean", stat(&Stats::mean)},
-                      {"std", stat(&Stats::std)},
-                      {"min", stat(&Stats::min)}};
-    }
-    out << j.dump(2) << "\n";
-  } else {
-    out << "name\tssim\tncc\tpsnr\n";
-    for (const Row& r : rows)
-      out << r.name << "\t" << Fixed(r.sim.ssim) << "\t" << Fixed(r.sim.ncc) << "\t"
-          << Fixed(r.sim.psnr) << "\n";
-    if (folders) {
-      out << "mean\t" << Fixed(s_ssim.mean) << "\t" << Fixed(s_ncc.mean) << "\t"
-          << Fixed(s_psnr.mean) << "\n";
-      out << "std\t" << Fixed(s_ssim.std) << "\t" << Fixed(s_ncc.std) << "\t" << Fixed(s_psnr.std)
-          << "\n";
-      out << "min\t" << Fixed(s_ssim.min) << "\t" << Fixed(s_ncc.min) << "\t" << Fixed(s_psnr.min)
-          << "\n";
+void PrintJson(const SsimToolOptions& options, const std::vector<Row>& rows, bool folders,
+               std::ostream& out) {
+  nlohmann::json j;
+  j["a"] = options.a;
+  j["b"] = options.b;
+  if (!options.mask.empty()) j["mask"] = options.mask;
+  j["options"] = {{"sigma", options.ssim.sigma},
+                  {"k1", options.ssim.k1},
+                  {"k2", options.ssim.k2},
+                  {"truncate", options.ssim.truncate},
+                  {"window", 2 * options.ssim.Radius() + 1},
+                  {"channels", ChannelModeName(options.channels)}};
+  nlohmann::json pairs = nlohmann::json::array();
+  for (const Row& r : rows) {
+    pairs.push_back({{"name", r.name},
+                     {"ssim", Number(r.sim.ssim)},
+                     {"ncc", Number(r.sim.ncc)},
+                     {"psnr", Number(r.sim.psnr)},
+                     {"data_range", r.sim.data_range},
+                     {"pixels", r.sim.pixels},
+                     {"ssim_pixels", r.sim.ssim_pixels}});
+  }
+  j["pairs"] = pairs;
+  if (folders) {
+    const Summary s = SummaryOf(rows);
+    auto stat = [&](double Stats::*field) {
+      return nlohmann::json{{"ssim", Number(s.ssim.*field)},
+                            {"ncc", Number(s.ncc.*field)},
+                            {"psnr", Number(s.psnr.*field)}};
+    };
+    j["summary"] = {{"count", rows.size()},
+                    {"mean", stat(&Stats::mean)},
+                    {"std", stat(&Stats::std)},
+                    {"min", stat(&Stats::min)}};
+  }
+  out << j.dump(2) << "\n";
+}
+
+void PrintTsv(const std::vector<Row>& rows, bool folders, std::ostream& out) {
+  out << "name\tssim\tncc\tpsnr\n";
+  for (const Row& r : rows)
+    out << r.name << "\t" << Fixed(r.sim.ssim) << "\t" << Fixed(r.sim.ncc) << "\t"
+        << Fixed(r.sim.psnr) << "\n";
+  if (!folders) return;
+  const Summary s = SummaryOf(rows);
+  for (auto [label, field] : {std::pair{"mean", &Stats::mean}, std::pair{"std", &Stats::std},
+                              std::pair{"min", &Stats::min}})
+    out << label << "\t" << Fixed(s.ssim.*field) << "\t" << Fixed(s.ncc.*field) << "\t"
+        << Fixed(s.psnr.*field) << "\n";
+}
+
+// The verdict on standard output: JSON or TSV.
+void PrintTable(const SsimToolOptions& options, const std::vector<Row>& rows, bool folders,
+                std::ostream& out) {
+  if (options.json)
+    PrintJson(options, rows, folders, out);
+  else
+    PrintTsv(rows, folders, out);
+}
+
+}  // namespace
+
+OptionTable DeclareOptions(SsimToolOptions& o) {
+  OptionTable t("ssim");
+  t.Positional("A", &o.a, "First image, or folder of images").File();
+  t.Positional("B", &o.b, "Second image, or folder (pairs matched by file name)").File();
+  t.Text("--mask", &o.mask,
+         "Evaluate only where this mask (image, or folder for folders) is nonzero")
+      .File();
+  // Where the maps go; what they hold does not depend on it.
+  t.Text("--map", &o.map,
+         "Write the SSIM map: .exr (float) or .png (8-bit); for folders a folder of NAME.exr")
+      .Cosmetic();
+  // The table on standard output only: recomputed on every run, no file depends on it.
+  t.Flag("--json", &o.json, "Write JSON instead of TSV").Cosmetic();
+  t.Flag("--fit-exposure", &o.fit_exposure,
+         "First bring A to the exposure of B: gain and offset fitted by least squares (inside "
+         "the mask)");
+  t.Real("--sigma", &o.ssim.sigma, "Gaussian window standard deviation in pixels").Above(0);
+  t.Real("--k1", &o.ssim.k1, "Luminance constant, C1 = (K1*R)^2").AtLeast(0);
+  t.Real("--k2", &o.ssim.k2, "Contrast constant, C2 = (K2*R)^2").AtLeast(0);
+  t.Real("--data-range", &o.ssim.data_range,
+         "Data range R (default: from the bit depth: 255, 65535, 1 for float)")
+      .AtLeast(0);  // 0: from the bit depth
+  t.Choice("--channels", &o.channels, kChannelModes,
+           "Colour: mean = per channel, averaged (scikit-image); grey = compare the grey images");
+  t.Flag("--force", &o.force, "Rewrite the maps even when they are up to date").Cosmetic();
+  return t;
+}
+
+void SsimToolOptions::Check() const {
+  SsimToolOptions copy = *this;
+  DeclareOptions(copy).Check();
+  if (a.empty() || b.empty()) throw UsageError("two images or two folders are required");
+  ssim.Check();  // the window's size (truncate * sigma)
+}
+
+int RunSsim(const SsimToolOptions& options, std::ostream& out) {
+  options.Check();
+  std::vector<PairJob> jobs = PlanPairs(options);
+  const bool folders = fs::is_directory(options.a);
+  if (folders && !options.map.empty()) CreateFolder(options.map);
+  SsimToolOptions resolved = options;
+  const OptionTable table = DeclareOptions(resolved);
+  std::optional<Ledger> ledger;
+  size_t maps = 0;
+  if (!options.map.empty()) {
+    ledger.emplace(MapRoot(options, folders), "ssim", table, std::vector<fs::path>{}, fs::path());
+    for (PairJob& job : jobs) {
+      job.make_map = !ledger->Stale(job.map, job.Inputs(), options.force).empty();
+      maps += job.make_map;
     }
   }
+
+  const std::vector<Row> rows = CompareAll(jobs, options, ledger ? &*ledger : nullptr);
+  if (maps) ledger->Write();
+
+  PrintTable(options, rows, folders, out);
   out.flush();
   if (!out) throw Error("cannot write the table to standard output");
   return 0;

@@ -3,14 +3,20 @@
 // A and B are two images or two folders; in folder mode every image file of A is paired with
 // the file of the same name in B (files only in B are ignored), in file-name order. The metric
 // conventions (window, borders, data range, colour, masks) are those of libcore image/ssim.h.
-// Output: TSV (header, one row per pair, then mean/std/min rows in folder mode) or JSON.
+// Output: TSV (header, one row per pair, then mean/std/min rows in folder mode) or JSON, on
+// stdout: the verdict, computed on every run. Files: the SSIM maps (--map) only; a map is remade
+// unless the record says it was made with these options (those that change maps: all but the
+// paths, --json and --force) from unchanged A, B and mask files. The record (run/ledger.h) is
+// provenance/ssim.json in the folder the maps are in (the --map folder, or the map file's folder).
 #pragma once
 
 #include <ostream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "image/ssim.h"
+#include "run/option_table.h"
 
 namespace mvtm {
 
@@ -24,11 +30,9 @@ enum class ChannelMode {
 // common ones (success, data error, usage error).
 constexpr int kExitSizeMismatch = 3;
 
-// --channels choices, in the order of ChannelMode.
-inline const std::vector<std::string>& ChannelModeNames() {
-  static const std::vector<std::string> names = {"mean", "grey"};
-  return names;
-}
+// --channels choices.
+inline const std::vector<std::pair<ChannelMode, std::string>> kChannelModes = {
+    {ChannelMode::kMean, "mean"}, {ChannelMode::kGrey, "grey"}};
 
 struct SsimToolOptions {
   std::string a;                              // first image or folder
@@ -38,12 +42,17 @@ struct SsimToolOptions {
   bool json = false;                          // JSON instead of TSV
   ChannelMode channels = ChannelMode::kMean;  // colour handling
   bool fit_exposure =
-      false;         // first bring A to B's exposure: gain and offset fitted (inside the mask)
-  SsimOptions ssim;  // sigma, k1, k2, data_range (0 = bit depth)
+      false;           // first bring A to B's exposure: gain and offset fitted (inside the mask)
+  SsimOptions ssim;    // sigma, k1, k2, data_range (0 = bit depth)
+  bool force = false;  // rewrite the maps even when they are up to date
 
   // Throws UsageError naming the bad value.
   void Check() const;
 };
+
+// The option table (run/option_table.h) bound to `o`: --help, checks, provenance and the
+// staleness key of the maps all come from it.
+OptionTable DeclareOptions(SsimToolOptions& o);
 
 // Compares the pairs and writes the table to `out`. Returns the exit status (0). Throws
 // UsageError (bad combination of paths), SizeMismatchError, Error.

@@ -228,7 +228,7 @@ TEST_F(GazemapTool, SourcesAreThePhotosThatSeeThePoint) {
   const GazeSetup& s = *setup_;
   const Verdicts truth = Truth(s, *model_, *scene_);
   GazemapOptions o = Options(s, "out-ray");
-  o.visibility = "ray";
+  o.visibility = GazeVisibility::kRay;
   RunGazemap(o);
   const auto got = ReadSources(Root() / "out-ray");
   size_t wrongly_hidden = 0, wrongly_seen = 0, building_attributed = 0;

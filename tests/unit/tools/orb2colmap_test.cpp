@@ -143,7 +143,7 @@ TEST(Orb2Colmap, Kitti00EveryTenthPoseInterpolated) {
 TEST(Orb2Colmap, HardCases) {
   auto d = test::FreshDir("o2c-hard");
   auto run = [&](const std::string& traj, const std::string& frames,
-                 const std::string& outside = "drop") {
+                 Outside outside = Outside::kDrop) {
     test::WriteFile(d / "kf.txt", traj);
     test::WriteFile(d / "frames.txt", frames);
     Orb2ColmapOptions o;
@@ -176,7 +176,7 @@ TEST(Orb2Colmap, HardCases) {
   // Outside the span: dropped by default, clamped on request.
   r = run("0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n", "-1 a.png\n0.5 b.png\n2 c.png\n");
   EXPECT_EQ(r.images.size(), 1u);
-  r = run("0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n", "-1 a.png\n0.5 b.png\n2 c.png\n", "clamp");
+  r = run("0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n", "-1 a.png\n0.5 b.png\n2 c.png\n", Outside::kClamp);
   EXPECT_EQ(r.images.size(), 3u);
   EXPECT_EQ(r.images.at(3).world_to_camera.Inverse().t, Eigen::Vector3d(1, 0, 0));
   // Errors naming the line.
