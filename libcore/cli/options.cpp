@@ -20,8 +20,12 @@ void AddOptionTable(CLI::App& app, OptionTable& table) {
           s.names, [set = s.set](int64_t n) { set(n > 0 ? "1" : "0"); }, s.help);
       continue;
     }
-    o = app.add_option_function<std::string>(
-        s.names, [set = s.set](const std::string& v) { set(v); }, s.help);
+    if (s.is_list)
+      o = app.add_option_function<std::vector<std::string>>(
+          s.names, [set = s.set_list](const std::vector<std::string>& v) { set(v); }, s.help);
+    else
+      o = app.add_option_function<std::string>(
+          s.names, [set = s.set](const std::string& v) { set(v); }, s.help);
     o->type_name(s.type);
     if (!s.positional && !s.default_text.empty()) o->default_str(s.default_text);
     if (!s.choices.empty()) o->check(CLI::IsMember(s.choices));

@@ -31,9 +31,9 @@ std::string KeyOf(const std::string& flag) {
 std::string RangeText(const OptionSpec& s) {
   char buf[96];
   if (std::isinf(s.hi))
-    std::snprintf(buf, sizeof buf, "%s %g", s.lo_open ? ">" : ">=", s.lo);
+    std::snprintf(buf, sizeof buf, "%s %.15g", s.lo_open ? ">" : ">=", s.lo);
   else
-    std::snprintf(buf, sizeof buf, "in %s%g, %g%s", s.lo_open ? "(" : "[", s.lo, s.hi,
+    std::snprintf(buf, sizeof buf, "in %s%.15g, %.15g%s", s.lo_open ? "(" : "[", s.lo, s.hi,
                   s.hi_open ? ")" : "]");
   return buf;
 }
@@ -161,6 +161,23 @@ OptionRef OptionTable::Positional(const std::string& name, std::string* field,
                                   const std::string& help) {
   OptionRef r = OptionalPositional(name, field, help);
   return r.Required();
+}
+
+OptionRef OptionTable::PositionalList(const std::string& name, std::vector<std::string>* field,
+                                      const std::string& help) {
+  OptionSpec& s = Add(name, help, "TEXT");
+  s.positional = true;
+  s.is_list = true;
+  s.changes_output = false;  // paths: what they name are inputs (or the outputs' place)
+  s.set = [field](const std::string& v) { field->push_back(v); };
+  s.set_list = [field](const std::vector<std::string>& v) { *field = v; };
+  s.text = [field] {
+    std::string t;
+    for (const auto& v : *field) t += (t.empty() ? "" : " ") + v;
+    return t;
+  };
+  s.json = [field] { return nlohmann::json(*field); };
+  return Finish(s).Required();
 }
 
 OptionRef OptionTable::OptionalPositional(const std::string& name, std::string* field,

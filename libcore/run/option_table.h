@@ -43,6 +43,7 @@ struct OptionSpec {
   bool changes_output = true;  // false: cosmetic (progress, threads, which items are selected)
   bool hidden = false;         // not in --help (nor in provenance)
   bool is_flag = false;
+  bool is_list = false;  // a positional taking one or more values (set_list)
   bool has_range = false;
   double lo = -std::numeric_limits<double>::infinity();
   double hi = std::numeric_limits<double>::infinity();
@@ -52,9 +53,10 @@ struct OptionSpec {
   std::vector<std::string> fields;    // library field names it sets besides its key
   std::string alternative;            // another valid value, for the option-walking test
   std::function<void(const std::string&)> set;  // parses and stores a value (flags: "1"/"0")
-  std::function<std::string()> text;            // the current value as text
-  std::function<nlohmann::json()> json;         // the current value as JSON
-  std::function<void()> check;                  // extra check of the current value (may be empty)
+  std::function<void(const std::vector<std::string>&)> set_list;  // a list positional's values
+  std::function<std::string()> text;                              // the current value as text
+  std::function<nlohmann::json()> json;                           // the current value as JSON
+  std::function<void()> check;  // extra check of the current value (may be empty)
 };
 
 // A fluent handle to one declared option.
@@ -99,6 +101,9 @@ class OptionTable {
 
   // A required positional (a workspace, an output folder, a file).
   OptionRef Positional(const std::string& name, std::string* field, const std::string& help);
+  // A required positional of one or more values ("PATHS...").
+  OptionRef PositionalList(const std::string& name, std::vector<std::string>* field,
+                           const std::string& help);
   // An optional positional.
   OptionRef OptionalPositional(const std::string& name, std::string* field,
                                const std::string& help);

@@ -21,6 +21,7 @@ files changed; "nothing redone" means no output file was touched.
 import filecmp
 import json
 import os
+import re
 import shlex
 import shutil
 import subprocess
@@ -92,6 +93,29 @@ sh(spec["cmd"], base)
 base_files = files(base)
 if not base_files:
     failures.append("the base command wrote no output file")
+
+# The record lists exactly the options --help shows (positionals by their lower-case name).
+helptext = sh(f"{tool} --help", base).stdout
+shown, section = set(), ""
+for line in helptext.splitlines():
+    if line and not line[0].isspace():
+        section = line.strip()
+        continue
+    m = re.match(r"^\s+(?:-\w,)?--([a-z0-9][a-z0-9-]*)", line)
+    if m and m.group(1) not in ("help", "version"):
+        shown.add(m.group(1).replace("-", "_"))
+    m = re.match(r"^\s+([A-Z][A-Z0-9_]*)\b", line)
+    if m and section.startswith("Positionals"):
+        shown.add(m.group(1).lower())
+records = [os.path.join(d, f) for d, _, fs in os.walk(base) for f in fs
+           if f == tool + ".json" and os.path.basename(d) == "provenance"]
+if not records:
+    failures.append(f"the base command wrote no provenance/{tool}.json")
+for r in records:
+    keys = set(json.load(open(r))["options"])
+    if keys != shown:
+        failures.append(f"{os.path.relpath(r, base)}: options {sorted(keys - shown)} are not in "
+                        f"--help, {sorted(shown - keys)} of --help are not in the record")
 
 walked = 0
 for opt in table["options"]:

@@ -9,18 +9,60 @@
 #include "cli/progress.h"
 #include "image/image.h"
 #include "io/colmap_model.h"
+#include "run/ledger.h"
 #include "workspace/workspace.h"
 
 namespace mvtm {
 
+OptionTable DeclareOptions(DensifyOptions& o) {
+  OptionTable t("densify");
+  t.Positional("WS", &o.workspace, "Workspace folder (sparse/ with points, images/)").Dir();
+  t.Real("--scale", &o.scale, "Depth map size relative to the image (0 < F <= 1)")
+      .Range(0, 1, true);
+  t.Integer("--planes", &o.planes, "Planes per sweep direction (2..512)").Range(2, 512);
+  t.Flag("--no-ground", &o.no_ground, "Leave out the ground-parallel sweep");
+  t.Flag("--no-facade", &o.no_facade, "Leave out the facade-parallel sweep");
+  t.Flag("--no-fronto", &o.no_fronto, "Leave out the fronto-parallel sweep");
+  t.Integer("--neighbours", &o.neighbours.count, "Neighbour images per reference (1..16)")
+      .Range(1, 16);
+  t.Real("--min-baseline", &o.neighbours.min_baseline,
+         "Smallest baseline, as a fraction of the median camera spacing")
+      .Range(0, 10, false, true);
+  t.Real("--max-angle", &o.neighbours.max_angle_deg,
+         "Largest angle between viewing directions, degrees")
+      .Range(0, 90, true);
+  t.Real("--min-coverage", &o.neighbours.min_coverage,
+         "Share of the reference's sparse points a neighbour must see")
+      .Range(0, 1);
+  t.Integer("--window", &o.sweep.window, "ZNCC window side in pixels (odd, 3..31)")
+      .Range(3, 31)
+      .Check([&o] {
+        if (o.sweep.window % 2 == 0) throw UsageError("--window: must be odd, 3..31");
+      });
+  t.Integer("--best-k", &o.sweep.best_k, "Neighbours aggregated per pixel: the best K of N")
+      .AtLeast(1);
+  t.Real("--min-score", &o.sweep.min_score, "Aggregated ZNCC below which a pixel gets no depth")
+      .Range(-1, 1);
+  t.Real("--min-margin", &o.sweep.min_margin,
+         "Best score minus the mean over planes below which a match is ambiguous")
+      .Range(0, 2);
+  t.Integer("--refine", &o.sweep.refine,
+            "Sub-steps per plane spacing of the per-pixel refinement of the best plane "
+            "(0..64; 0: a parabola through the planes only)")
+      .Range(0, 64);
+  t.Real("--min-texture", &o.sweep.min_texture,
+         "Grey standard deviation (0..255) below which a window is textureless")
+      .AtLeast(0);
+  DeclareWorkOptions(t, o, "images", "in name order",
+                     "Recompute maps even when they are up to date");
+  return t;
+}
+
 void DensifyOptions::Check() const {
-  CheckWork();
-  if (!(scale > 0 && scale <= 1)) throw UsageError("--scale: must be in (0, 1]");
-  if (planes < 2 || planes > 512) throw UsageError("--planes: must be 2..512");
+  DensifyOptions copy = *this;
+  DeclareOptions(copy).Check();
   if (no_ground && no_facade && no_fronto)
     throw UsageError("--no-ground, --no-facade, --no-fronto: keep one direction");
-  neighbours.Check();
-  sweep.Check();
 }
 
 namespace {
@@ -86,29 +128,66 @@ std::vector<SweepFamily> Families(const DensifyOptions& o, const DenseScene& s, 
   return out;
 }
 
-// Sweeps image i and writes its depth and confidence maps (atomically). Returns the valid share.
+// One image's work: its index, its neighbours, and the files its maps are made from beyond the
+// model (its own image and its neighbours').
+struct DenseJob {
+  size_t i = 0;
+  std::vector<size_t> neighbours;
+  std::vector<fs::path> in;
+};
+
+// Sweeps image job.i and writes its depth and confidence maps (atomically), each recorded in the
+// ledger once in place. Returns the valid share.
 double DensifyOne(const DensifyOptions& o, const Workspace& ws, const DenseScene& s,
-                  const StereoNeighbourFinder& finder, size_t i, DensifyReport& rep) {
+                  const DenseJob& job, Ledger& ledger) {
+  const size_t i = job.i;
   std::vector<Eigen::Vector3d> pts = PointsSeenBy(s.rec, *s.images[i]);
-  const std::vector<size_t> nbs = finder.Select(i, pts);
-  if (nbs.empty()) ++rep.no_neighbours;
   if (pts.size() < 3)  // an image with (almost) no sparse points sweeps over its neighbours' points
-    for (size_t j : nbs)
+    for (size_t j : job.neighbours)
       for (const auto& X : PointsSeenBy(s.rec, *s.images[j])) pts.push_back(X);
   StereoView ref{s.cameras[i], s.w2c[i],
                  LoadGrey(ws.ImagePath(s.images[i]->name), s.rec.cameras.at(s.images[i]->camera_id),
                           s.cameras[i])};
   std::vector<StereoView> views;
-  for (size_t j : nbs)
+  for (size_t j : job.neighbours)
     views.push_back({s.cameras[j], s.w2c[j],
                      LoadGrey(ws.ImagePath(s.images[j]->name),
                               s.rec.cameras.at(s.images[j]->camera_id), s.cameras[j])});
   const DepthMap dm = SweepDepth(ref, views, Families(o, s, i, pts), o.sweep);
-  WriteImage(ws.StereoDepthPath(s.images[i]->name).string(), dm.depth);
-  WriteImage(ws.StereoConfidencePath(s.images[i]->name).string(), dm.confidence);
+  const fs::path depth = ws.StereoDepthPath(s.images[i]->name),
+                 confidence = ws.StereoConfidencePath(s.images[i]->name);
+  WriteImage(depth.string(), dm.depth);
+  ledger.Done(depth, job.in);
+  WriteImage(confidence.string(), dm.confidence);
+  ledger.Done(confidence, job.in);
   size_t valid = 0;
   for (float z : dm.depth.data) valid += std::isfinite(z);
   return dm.depth.data.empty() ? 0 : double(valid) / double(dm.depth.data.size());
+}
+
+// The selected images whose maps are not both up to date, with their neighbours (chosen among
+// all images of the model).
+std::vector<DenseJob> StaleJobs(const DensifyOptions& o, const Workspace& ws, const DenseScene& s,
+                                const std::vector<size_t>& chosen, Ledger& ledger,
+                                DensifyReport& rep) {
+  const StereoNeighbourFinder finder(s.w2c, s.cameras, o.neighbours);
+  std::vector<DenseJob> todo;
+  for (size_t i : chosen) {
+    DenseJob job;
+    job.i = i;
+    job.neighbours = finder.Select(i, PointsSeenBy(s.rec, *s.images[i]));
+    job.in.push_back(ws.ImagePath(s.images[i]->name));
+    for (size_t j : job.neighbours) job.in.push_back(ws.ImagePath(s.images[j]->name));
+    const std::string& name = s.images[i]->name;
+    // Each map is asked (so both count in the summary); either stale redoes both.
+    bool stale = !ledger.Stale(ws.StereoDepthPath(name), job.in, o.force).empty();
+    stale = !ledger.Stale(ws.StereoConfidencePath(name), job.in, o.force).empty() || stale;
+    if (stale)
+      todo.push_back(std::move(job));
+    else
+      ++rep.skipped;
+  }
+  return todo;
 }
 
 }  // namespace
@@ -121,46 +200,28 @@ DensifyReport RunDensify(const DensifyOptions& o) {
   const std::vector<size_t> chosen = o.Select().Apply(s.images.size());
   DensifyReport rep;
   rep.selected = chosen.size();
-  const std::vector<fs::path> inputs = ws.SparseModelFiles();
-  std::vector<size_t> todo;
-  for (size_t i : chosen) {
-    const fs::path d = ws.StereoDepthPath(s.images[i]->name),
-                   c = ws.StereoConfidencePath(s.images[i]->name);
-    if (!o.force && IsUpToDate(d, inputs) && IsUpToDate(c, inputs))
-      ++rep.skipped;
-    else
-      todo.push_back(i);
-  }
+  DensifyOptions resolved = o;
+  const OptionTable table = DeclareOptions(resolved);
+  // The maps are inside the workspace: its record, provenance/densify.json (a shard's own).
+  Ledger ledger(ws.root(), o.ProvenanceName("densify"), table, ws.SparseModelFiles(), ws.root());
+  const std::vector<DenseJob> todo = StaleJobs(o, ws, s, chosen, ledger, rep);
+  rep.why = ledger.Summary();
   RemoveStaleTemporaries(ws.StereoDir());  // a killed run's leftovers, even when all is up to date
   if (todo.empty()) return rep;
   CreateFolder(ws.StereoDir());
   Progress bar("densify", todo.size(), o.quiet);
   double share = 0;
   const auto t0 = Clock::now();
-  const StereoNeighbourFinder finder(s.w2c, s.cameras, o.neighbours);
-  for (size_t i : todo) {
-    share += DensifyOne(o, ws, s, finder, i, rep);
+  for (const DenseJob& job : todo) {
+    if (job.neighbours.empty()) ++rep.no_neighbours;
+    share += DensifyOne(o, ws, s, job, ledger);
     ++rep.written;
     bar.Step();
   }
   rep.ms_per_image =
       std::chrono::duration<double, std::milli>(Clock::now() - t0).count() / double(rep.written);
   rep.valid_share = share / double(rep.written);
-  nlohmann::json opts = {{"scale", o.scale},
-                         {"planes", o.planes},
-                         {"neighbours", o.neighbours.count},
-                         {"window", o.sweep.window},
-                         {"best_k", o.sweep.best_k},
-                         {"min_score", o.sweep.min_score},
-                         {"min_texture", o.sweep.min_texture},
-                         {"min_margin", o.sweep.min_margin},
-                         {"refine", o.sweep.refine},
-                         {"no_ground", o.no_ground},
-                         {"no_facade", o.no_facade},
-                         {"no_fronto", o.no_fronto},
-                         {"frames", o.frames},
-                         {"shard", o.shard}};
-  ws.WriteProvenance(o.ProvenanceName("densify"), opts, inputs);
+  ledger.Write();
   return rep;
 }
 

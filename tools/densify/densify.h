@@ -5,6 +5,7 @@
 #include <string>
 
 #include "cli/work.h"
+#include "run/option_table.h"
 #include "stereo/neighbours.h"
 #include "stereo/plane_sweep.h"
 
@@ -22,10 +23,15 @@ struct DensifyOptions : WorkOptions {
   void Check() const;
 };
 
+// The option table (run/option_table.h) bound to `o`: --help, checks, provenance and the
+// staleness key of the maps all come from it.
+OptionTable DeclareOptions(DensifyOptions& o);
+
 struct DensifyReport {
   size_t selected = 0, written = 0, skipped = 0, no_neighbours = 0;
   double valid_share = 0;   // mean share of pixels with a depth, over the maps written
   double ms_per_image = 0;  // sweep time per written map
+  std::string why;          // why maps were remade ("4 redone: --planes changed"), "" when none was
 };
 
 DensifyReport RunDensify(const DensifyOptions& options);

@@ -4,14 +4,37 @@
 
 #include "base/atomic_file.h"
 #include "base/error.h"
+#include "cli/work.h"
 #include "image/image.h"
 #include "io/colmap_model.h"
 #include "io/exposure_tsv.h"
+#include "run/ledger.h"
 #include "workspace/workspace.h"
 
 namespace mvtm {
 
-void ExposureToolOptions::Check() const { fit.Check(); }
+OptionTable DeclareOptions(ExposureToolOptions& o) {
+  OptionTable t("exposure");
+  t.Positional("WS", &o.workspace, "Workspace folder (sparse/ with points, images/)").Dir();
+  t.Flag("--offsets", &o.fit.offsets,
+         "Fit offsets as well as gains (black-level changes; less robust to noisy samples)");
+  t.Integer("--iterations", &o.fit.iterations, "Alternating least-squares rounds (1..1000)")
+      .Range(1, 1000);
+  t.Real("--outlier-mads", &o.fit.outlier_mads,
+         "Observations further than this many median absolute deviations from the fit are dropped")
+      .Above(0);
+  t.Integer("--min-points", &o.fit.min_points,
+            "Observations an image needs to be fitted (else identity)")
+      .Range(2, 1000000);
+  t.Flag("--force", &o.force, "Refit even when exposure.tsv is up to date").Cosmetic();
+  DeclareQuietOption(t, o.quiet);
+  return t;
+}
+
+void ExposureToolOptions::Check() const {
+  ExposureToolOptions copy = *this;
+  DeclareOptions(copy).Check();
+}
 
 namespace {
 
@@ -45,14 +68,20 @@ ExposureToolReport RunExposure(const ExposureToolOptions& o) {
   o.Check();
   const Workspace ws(o.workspace);
   ws.Require("exposure", {WsItem::kSparse, WsItem::kImages});
+  const Reconstruction rec = ReadColmapModel(ws.SparseDir().string());
+  const auto images = rec.ImagesByName();
+  // exposure.tsv is made from the model and every image's pixels.
+  std::vector<fs::path> inputs = ws.SparseModelFiles();
+  for (const ImageRecord* im : images) inputs.push_back(ws.ImagePath(im->name));
+  ExposureToolOptions resolved = o;
+  const OptionTable table = DeclareOptions(resolved);
+  Ledger ledger(ws.root(), "exposure", table, inputs, ws.root());
   ExposureToolReport rep;
-  const std::vector<fs::path> inputs = ws.SparseModelFiles();
-  if (!o.force && IsUpToDate(ws.ExposurePath(), inputs)) {
+  if (ledger.Stale(ws.ExposurePath(), {}, o.force).empty()) {
     rep.up_to_date = true;
     return rep;
   }
-  const Reconstruction rec = ReadColmapModel(ws.SparseDir().string());
-  const auto images = rec.ImagesByName();
+  rep.why = ledger.Summary();
   std::vector<Image> pixels;
   for (const ImageRecord* im : images) {
     const std::string path = ws.ImagePath(im->name).string();
@@ -63,14 +92,11 @@ ExposureToolReport RunExposure(const ExposureToolOptions& o) {
   const std::vector<ExposureObservation> obs = ObservePoints(rec, images, pixels);
   const std::vector<Exposure> e = FitExposure(obs, images.size(), o.fit);
   WriteExposureTsv(ws.ExposurePath().string(), Rows(images, e, obs));
+  ledger.Done(ws.ExposurePath());
   rep.images = images.size();
   rep.observations = obs.size();
   Summarise(e, rep);
-  nlohmann::json opts = {{"offsets", o.fit.offsets},
-                         {"iterations", o.fit.iterations},
-                         {"outlier_mads", o.fit.outlier_mads},
-                         {"min_points", o.fit.min_points}};
-  ws.WriteProvenance("exposure", opts, inputs);
+  ledger.Write();
   return rep;
 }
 

@@ -13,29 +13,45 @@
 #include "io/mesh_io.h"
 #include "io/partners.h"
 #include "render/context.h"
+#include "run/ledger.h"
 #include "workspace/projector_sources.h"
 #include "workspace/workspace.h"
 
 namespace mvtm {
 
+OptionTable DeclareOptions(Inpaint3dOptions& o) {
+  OptionTable t("inpaint3d");
+  t.Positional("WS", &o.workspace,
+               "Workspace folder (sparse/, images/, masks/, partners.tsv, mesh.ply; depth/ used "
+               "when present)")
+      .Dir();
+  t.Choice("--method", &o.method, kInpaintMethods,
+           "3d: partners through the mesh; telea, ns: OpenCV inpainting; patch2d: thesis 5.2 "
+           "templates");
+  t.Integer("--partners", &o.partners, "N: partners used per image (ranks 1..N of partners.tsv)")
+      .Range(1, 16);
+  t.Integer("--dilate", &o.dilate, "Pixels the mask is dilated by before inpainting").Range(0, 64);
+  t.Real("--radius", &o.radius, "telea, ns: inpainting radius in pixels").Range(0, 1000, true);
+  t.Real("--bias", &o.bias, "3d: occlusion bias, relative: occluded when z > depth*(1+B)")
+      .Range(0, 1, false, true);
+  t.Choice("--gl", &o.gl, GlBackendTable(), "3d: OpenGL backend");
+  DeclareWorkOptions(t, o, "images", "in name order", "Rewrite outputs that are up to date");
+  return t;
+}
+
 void Inpaint3dOptions::Check() const {
-  if (partners < 1 || partners > 16)
-    throw UsageError("--partners: " + std::to_string(partners) + " is not in 1..16");
-  if (dilate < 0 || dilate > 64)
-    throw UsageError("--dilate: " + std::to_string(dilate) + " is not in 0..64");
-  if (!(radius > 0 && radius <= 1000)) throw UsageError("--radius: must be in (0, 1000]");
-  if (!(bias >= 0 && bias < 1)) throw UsageError("--bias: must be in [0, 1)");
-  CheckChoice(method, kInpaintMethods, "--method");
-  CheckWork();
-  ParseGlBackend(gl);
+  Inpaint3dOptions copy = *this;
+  DeclareOptions(copy).Check();
 }
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
 
-bool UsesMesh(const Inpaint3dOptions& o) { return o.method == "3d"; }
-bool UsesPartners(const Inpaint3dOptions& o) { return o.method == "3d" || o.method == "patch2d"; }
+bool UsesMesh(const Inpaint3dOptions& o) { return o.method == InpaintMethod::k3d; }
+bool UsesPartners(const Inpaint3dOptions& o) {
+  return o.method == InpaintMethod::k3d || o.method == InpaintMethod::kPatch2d;
+}
 
 // What every image of the run shares: the model, its images in name order, their partners.
 struct Inputs {
@@ -77,12 +93,12 @@ std::vector<size_t> PartnersOf(const Inputs& in, const std::string& name, int li
 // The mesh, GL context and renderer of the 3d method, made when the first image needs them.
 class MeshStage {
  public:
-  Renderer& Get(const Workspace& ws, const std::string& gl, ProjectorSources& sources,
+  Renderer& Get(const Workspace& ws, GlBackend gl, ProjectorSources& sources,
                 std::string& gl_description) {
     if (renderer_) return *renderer_;
     mesh_ = std::make_unique<Mesh>(ReadMesh(ws.MeshPath().string()));
     if (mesh_->faces.empty()) throw Error(ws.MeshPath().string(), 0, "the mesh has no triangles");
-    ctx_ = GlContext::Create(ParseGlBackend(gl));
+    ctx_ = GlContext::Create(gl);
     gl_description = ctx_->Describe();
     renderer_ = std::make_unique<Renderer>(*mesh_);
     sources.SetRenderer(renderer_.get());
@@ -97,15 +113,18 @@ class MeshStage {
 
 // The state one run carries from image to image.
 struct Run {
-  Run(const Inpaint3dOptions& options, const Workspace& workspace, const Inputs& inputs)
+  Run(const Inpaint3dOptions& options, const Workspace& workspace, const Inputs& inputs,
+      Ledger& record)
       : o(options),
         ws(workspace),
         in(inputs),
+        ledger(record),
         sources(ws, in.rec, in.images, nullptr, /*prefer_textures=*/false) {}
 
   const Inpaint3dOptions& o;
   const Workspace& ws;
   const Inputs& in;
+  Ledger& ledger;  // the outputs' record: what is up to date, what this run wrote
   // Partners are read from images/ (never textures/, so re-runs do not feed on earlier output).
   ProjectorSources sources;
   MeshStage mesh;
@@ -138,13 +157,14 @@ Inpainted InpaintImage(Run& run, size_t i, const fs::path& src, const Image& img
     CheckViewSize(img, view, src.string());
     return InpaintThroughMesh(renderer, view, img, mask, projs, run.o.bias);
   }
-  if (run.o.method == "patch2d") {
+  if (run.o.method == InpaintMethod::kPatch2d) {
     std::vector<const Image*> partners;
     for (size_t k : ps) partners.push_back(&run.sources.ImageOf(k));
     return InpaintPatch2d(img, mask, partners, run.o.radius);
   }
   return InpaintOpenCv(
-      img, mask, run.o.method == "ns" ? OpenCvInpaintMethod::kNs : OpenCvInpaintMethod::kTelea,
+      img, mask,
+      run.o.method == InpaintMethod::kNs ? OpenCvInpaintMethod::kNs : OpenCvInpaintMethod::kTelea,
       run.o.radius);
 }
 
@@ -170,17 +190,35 @@ void CopyUnmasked(const fs::path& src, const fs::path& out, const fs::path& prov
              PngCompression::kFastFlat);
 }
 
-// Writes textures/NAME and its provenance image for image `i`, unless up to date.
+// The files image i's outputs are made from beyond the run's inputs: its image and mask, and with
+// partners its partners' images (patch2d, 3d) and masks and depth maps (3d). Absent ones count:
+// a mask that appears makes the outputs stale.
+std::vector<fs::path> ItemInputs(const Run& run, size_t i) {
+  const Workspace& ws = run.ws;
+  const std::string& name = run.in.images[i]->name;
+  std::vector<fs::path> in = {ws.ImagePath(name), ws.MaskPath(name)};
+  if (!UsesPartners(run.o)) return in;
+  for (size_t k : PartnersOf(run.in, name, run.o.partners)) {
+    const std::string& partner = run.in.images[k]->name;
+    in.push_back(ws.ImagePath(partner));
+    if (!UsesMesh(run.o)) continue;
+    in.push_back(ws.MaskPath(partner));
+    in.push_back(ws.DepthPath(partner));
+  }
+  return in;
+}
+
+// Writes textures/NAME and its provenance image for image `i`, unless both are up to date.
 void ProcessImage(Run& run, size_t i) {
   const Workspace& ws = run.ws;
   const std::string& name = run.in.images[i]->name;
   const fs::path src = ws.ImagePath(name), mp = ws.MaskPath(name), out = ws.TexturePath(name);
-  const fs::path prov =
-      ws.TexturePath((fs::path("provenance") / fs::path(name).replace_extension(".png")).string());
-  std::vector<fs::path> inputs = {src, mp};
-  if (UsesPartners(run.o)) inputs.push_back(ws.PartnersPath());
-  if (UsesMesh(run.o)) inputs.push_back(ws.MeshPath());
-  if (!run.o.force && IsUpToDate(out, inputs) && IsUpToDate(prov, inputs)) {
+  const fs::path prov = ws.TextureProvenancePath(name);
+  const std::vector<fs::path> in = ItemInputs(run, i);
+  // Each output is asked (so both count in the summary); either stale redoes both.
+  bool stale = !run.ledger.Stale(out, in, run.o.force).empty();
+  stale = !run.ledger.Stale(prov, in, run.o.force).empty() || stale;
+  if (!stale) {
     ++run.rep.skipped;
     return;
   }
@@ -201,17 +239,18 @@ void ProcessImage(Run& run, size_t i) {
     Add(run.rep, r.counts);
     ++run.rep.inpainted;
   }
+  run.ledger.Done(out, in);
+  run.ledger.Done(prov, in);
   run.rep.ms += std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-void WriteRunProvenance(const Inpaint3dOptions& o, const Workspace& ws) {
-  nlohmann::json opts = {{"method", o.method}, {"partners", o.partners}, {"dilate", o.dilate},
-                         {"radius", o.radius}, {"bias", o.bias},         {"frames", o.frames},
-                         {"shard", o.shard}};
-  std::vector<fs::path> ins;
+// The files every output depends on: the model, and the mesh and partners.tsv when the method
+// uses them.
+std::vector<fs::path> RunInputs(const Inpaint3dOptions& o, const Workspace& ws) {
+  std::vector<fs::path> ins = ws.SparseModelFiles();
   if (UsesMesh(o)) ins.push_back(ws.MeshPath());
   if (UsesPartners(o)) ins.push_back(ws.PartnersPath());
-  ws.WriteProvenance(o.ProvenanceName("inpaint3d"), opts, ins);
+  return ins;
 }
 
 }  // namespace
@@ -221,7 +260,11 @@ Inpaint3dReport RunInpaint3d(const Inpaint3dOptions& o) {
   Workspace ws(o.workspace);
   const Inputs in = ReadInputs(o, ws);
   const std::vector<size_t> chosen = o.Select().Apply(in.images.size());
-  Run run(o, ws, in);
+  Inpaint3dOptions resolved = o;
+  const OptionTable table = DeclareOptions(resolved);
+  // The outputs are inside the workspace: its record, provenance/inpaint3d.json (a shard's own).
+  Ledger ledger(ws.root(), o.ProvenanceName("inpaint3d"), table, RunInputs(o, ws), ws.root());
+  Run run(o, ws, in, ledger);
   run.rep.images = chosen.size();
   // A killed run's leftovers go, even when every output is up to date.
   RemoveStaleTemporaries(ws.TexturesDir());
@@ -231,7 +274,8 @@ Inpaint3dReport RunInpaint3d(const Inpaint3dOptions& o) {
     ProcessImage(run, i);
     bar.Step();
   }
-  WriteRunProvenance(o, ws);
+  run.rep.why = ledger.Summary();
+  if (run.rep.inpainted + run.rep.copied > 0) ledger.Write({{"gl_used", run.rep.gl}});
   return run.rep;
 }
 

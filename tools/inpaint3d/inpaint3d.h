@@ -14,7 +14,8 @@
 //   patch2d  InpaintPatch2d: thesis §5.2, templates around each blob matched in the partner
 //            images, the blob copied from the best match. No partner: Telea.
 // Inputs are always the recorded images (images/NAME), never textures/. Outputs, each written
-// atomically and skipped when newer than its inputs unless `force`:
+// atomically and skipped when up to date (run/ledger.h: same options, unchanged inputs) unless
+// `force`:
 //   textures/NAME                          the image, same format, channel count and bit depth;
 //                                          an image with no mask (or an empty one) is copied
 //                                          byte for byte
@@ -24,27 +25,39 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "cli/work.h"
 #include "inpaint/inpaint.h"  // kProvenance* values
+#include "render/context.h"
+#include "run/option_table.h"
 
 namespace mvtm {
 
-// --method choices.
-inline const std::vector<std::string> kInpaintMethods = {"3d", "telea", "ns", "patch2d"};
+// --method: partners through the mesh, OpenCV's Telea or Navier-Stokes, or thesis 5.2 templates.
+enum class InpaintMethod { k3d, kTelea, kNs, kPatch2d };
+inline const std::vector<std::pair<InpaintMethod, std::string>> kInpaintMethods = {
+    {InpaintMethod::k3d, "3d"},
+    {InpaintMethod::kTelea, "telea"},
+    {InpaintMethod::kNs, "ns"},
+    {InpaintMethod::kPatch2d, "patch2d"}};
 
 struct Inpaint3dOptions : WorkOptions {
-  std::string workspace;      // WS
-  std::string method = "3d";  // one of kInpaintMethods
-  int partners = 4;           // partners used per image (ranks 1..N of partners.tsv), 1..16
-  int dilate = 1;             // pixels the mask is dilated by before inpainting, 0..64
-  double radius = 3;          // telea/ns: inpainting radius in pixels, > 0
-  double bias = 0.005;        // 3d: relative occlusion bias, [0, 1)
-  std::string gl = "auto";    // 3d: OpenGL backend, one of GlBackendNames()
+  std::string workspace;  // WS
+  InpaintMethod method = InpaintMethod::k3d;
+  int partners = 4;                 // partners used per image (ranks 1..N of partners.tsv), 1..16
+  int dilate = 1;                   // pixels the mask is dilated by before inpainting, 0..64
+  double radius = 3;                // telea/ns: inpainting radius in pixels, > 0
+  double bias = 0.005;              // 3d: relative occlusion bias, [0, 1)
+  GlBackend gl = GlBackend::kAuto;  // 3d: OpenGL backend
 
   void Check() const;  // throws UsageError naming the bad value
 };
+
+// The option table (run/option_table.h) bound to `o`: --help, checks, provenance and the
+// staleness key of the outputs all come from it.
+OptionTable DeclareOptions(Inpaint3dOptions& o);
 
 struct Inpaint3dReport {
   size_t images = 0;     // selected
@@ -55,6 +68,7 @@ struct Inpaint3dReport {
          from_2d = 0;
   double ms = 0;  // total processing time of written images
   std::string gl;
+  std::string why;  // why outputs were remade ("4 redone: --dilate changed"), "" when none was
 };
 
 // Runs the tool. Throws Error (data) / UsageError (options).

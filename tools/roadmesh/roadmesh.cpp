@@ -10,6 +10,7 @@
 #include "base/error.h"
 #include "base/stats.h"
 #include "cli/progress.h"
+#include "cli/work.h"
 #include "fusion/fusion.h"
 #include "image/image.h"
 #include "io/colmap_model.h"
@@ -18,6 +19,7 @@
 #include "mesh/merge.h"
 #include "mesh/vertex_colours.h"
 #include "render/context.h"
+#include "run/ledger.h"
 #include "stereo/neighbours.h"
 #include "workspace/workspace.h"
 
@@ -72,23 +74,45 @@ std::vector<double> ImageGroundHeights(const Reconstruction& rec,
   return per_image;
 }
 
-// Checks the workspace holds what the run needs and no mesh (unless --force); returns where the
-// new mesh goes. mesh.ply is the first name Workspace::MeshPath() looks for, so the new mesh wins.
-fs::path PrepareWorkspace(const Workspace& ws, const RoadMeshOptions& o) {
+// Throws unless the workspace holds what the run needs.
+void RequireInputs(const Workspace& ws, const RoadMeshOptions& o) {
   std::vector<WsItem> needs = {WsItem::kSparse};
   if (o.dense) needs.push_back(WsItem::kStereo);
   if (!o.no_colours) needs.push_back(WsItem::kImages);
   ws.Require("roadmesh", needs);
-  const fs::path existing = ws.MeshPath();
-  if (fs::exists(existing) && !o.force)
+}
+
+// The files the mesh is made from: the model, the images that colour it (textures/NAME when
+// there, as BakeColours reads them) and with --dense densify's maps (missing ones are left out;
+// one that appears makes the mesh stale).
+std::vector<fs::path> MeshInputs(const Workspace& ws, const Reconstruction& rec,
+                                 const RoadMeshOptions& o) {
+  std::vector<fs::path> in = ws.SparseModelFiles();
+  for (const ImageRecord* im : rec.ImagesByName()) {
+    if (!o.no_colours) in.push_back(ws.SourceImagePath(im->name));
+    if (o.dense) {
+      in.push_back(ws.StereoDepthPath(im->name));
+      in.push_back(ws.StereoConfidencePath(im->name));
+    }
+  }
+  return in;
+}
+
+// Why mesh.ply must be (re)built, "" when it is up to date. A mesh roadmesh did not make (or one
+// edited since) is refused unless --force; mesh.ply is the first name Workspace::MeshPath()
+// looks for, so the new mesh wins over COLMAP's.
+std::string MeshStale(const Workspace& ws, const RoadMeshOptions& o, Ledger& ledger) {
+  const fs::path out = ws.NewMeshPath(), existing = ws.MeshPath();
+  const std::string why = ledger.Stale(out, {}, o.force);
+  if (!o.force && fs::exists(existing) && (existing != out || why == "no record"))
     throw Error(existing.string(), 0, "a mesh exists already (--force replaces it)");
-  return ws.NewMeshPath();
+  return why;
 }
 
 // Vertex colours from the workspace's images (in name order); sets rep.gl and rep.coloured.
 void BakeColours(const Workspace& ws, const Reconstruction& rec, const RoadMeshOptions& o,
                  Mesh& mesh, RoadMeshReport& rep) {
-  auto ctx = GlContext::Create(ParseGlBackend(o.gl));
+  auto ctx = GlContext::Create(o.gl);
   rep.gl = ctx->Describe();
   VertexColourBaker baker(mesh);
   const auto images = rec.ImagesByName();
@@ -150,31 +174,15 @@ Mesh DenseMesh(const Workspace& ws, const Reconstruction& rec, const RoadMeshOpt
   return out;
 }
 
-void WriteRoadMeshProvenance(const Workspace& ws, const RoadMeshOptions& o,
-                             const RoadMeshReport& rep) {
-  std::vector<fs::path> inputs;
-  inputs = ws.SparseModelFiles();
-  if (o.dense)
-    for (const auto& e : fs::directory_iterator(ws.StereoDir())) inputs.push_back(e.path());
-  nlohmann::json opts = {{"width", o.width},
-                         {"wall_height", o.wall_height},
-                         {"resolution", o.resolution},
-                         {"metric", o.metric},
-                         {"unit", rep.unit.unit},
-                         {"unit_source", rep.unit.source},
-                         {"no_colours", o.no_colours},
-                         {"dense", o.dense},
-                         {"voxel", o.voxel},
-                         {"max_depth", o.max_depth},
-                         {"min_agree", o.min_agree},
-                         {"ground_below", o.ground_below},
-                         {"walls_behind", o.walls_behind},
-                         {"gl", rep.gl},
-                         {"camera_height", rep.camera_height},
-                         {"ground_points", rep.ground_points},
-                         {"left_wall", rep.left_wall},
-                         {"right_wall", rep.right_wall}};
-  ws.WriteProvenance("roadmesh", opts, inputs);
+// What the record keeps beside the options: the unit and the fitted corridor (model units).
+nlohmann::json RunFacts(const RoadMeshReport& rep) {
+  return {{"gl_used", rep.gl},
+          {"unit", rep.unit.unit},
+          {"unit_source", rep.unit.source},
+          {"camera_height", rep.camera_height},
+          {"ground_points", rep.ground_points},
+          {"left_wall", rep.left_wall},
+          {"right_wall", rep.right_wall}};
 }
 
 }  // namespace
@@ -218,29 +226,68 @@ std::string DescribeSceneUnit(const SceneUnit& su) {
   return buf;
 }
 
+OptionTable DeclareOptions(RoadMeshOptions& o) {
+  OptionTable t("roadmesh");
+  t.Positional("WS", &o.workspace, "Workspace folder (sparse/, images/)").Dir();
+  t.Real("--width", &o.width,
+         "Road width in metre-equivalents (0 < M <= 50): ground points within M/4 (else "
+         "M/2) of the path; walls at least M/2 + 1 away")
+      .Range(0, 50, true);
+  t.Real("--wall-height", &o.wall_height,
+         "Wall height above the ground in metre-equivalents (0 < M <= 200)")
+      .Range(0, 200, true);
+  t.Real("--resolution", &o.resolution,
+         "Grid spacing along and across in metre-equivalents (0.05 <= M <= 5)")
+      .Range(0.05, 5);
+  t.Flag("--metric", &o.metric,
+         "The model is in metres: lengths are metres (else the model's unit is its camera "
+         "height over 1.65 m)");
+  t.Flag("--no-colours", &o.no_colours, "Write no vertex colours (no images, no OpenGL needed)");
+  t.Flag("--dense", &o.dense,
+         "Fuse densify's depth maps (stereo/) into the mesh on a sparse signed-distance volume; "
+         "the corridor's ground only where they leave holes");
+  t.Real("--voxel", &o.voxel, "--dense: voxel size as a fraction of the median camera spacing")
+      .Range(0, 10, true);
+  t.Real("--max-depth", &o.max_depth, "--dense: depth used, in median camera spacings")
+      .Range(0, 1000, true);
+  t.Integer("--min-agree", &o.min_agree, "--dense: other views that must confirm a depth pixel")
+      .Range(1, 16);
+  t.Real("--ground-below", &o.ground_below,
+         "--dense: lower the corridor ground by this many voxels under the fused surface "
+         "(0: at its fitted height)")
+      .Range(0, 100);
+  t.Real("--walls-behind", &o.walls_behind,
+         "--dense: move the corridor walls back by this many voxels behind the fused surface, "
+         "so they show only through its holes (-1: no walls)")
+      .Range(-1, 1000);
+  t.Flag("--force", &o.force, "Replace an existing mesh").Cosmetic();
+  t.Choice("--gl", &o.gl, GlBackendTable(), "OpenGL backend");
+  DeclareQuietOption(t, o.quiet);
+  return t;
+}
+
 void RoadMeshOptions::Check() const {
-  if (!(width > 0 && width <= 50)) throw UsageError("--width: must be in (0, 50] metres");
-  if (!(wall_height > 0 && wall_height <= 200))
-    throw UsageError("--wall-height: must be in (0, 200] metres");
-  if (!(resolution >= 0.05 && resolution <= 5))
-    throw UsageError("--resolution: must be in [0.05, 5] metres");
-  if (!(voxel > 0 && voxel <= 10)) throw UsageError("--voxel: must be in (0, 10] camera spacings");
-  if (!(max_depth > 0 && max_depth <= 1000))
-    throw UsageError("--max-depth: must be in (0, 1000] camera spacings");
-  if (min_agree < 1 || min_agree > 16) throw UsageError("--min-agree: must be 1..16");
-  if (!(ground_below >= 0 && ground_below <= 100))
-    throw UsageError("--ground-below: must be in [0, 100] voxels");
-  if (!(walls_behind >= -1 && walls_behind <= 1000))
-    throw UsageError("--walls-behind: must be in [0, 1000] voxels, or -1 (no walls)");
-  ParseGlBackend(gl);
+  RoadMeshOptions copy = *this;
+  DeclareOptions(copy).Check();
 }
 
 RoadMeshReport RunRoadMesh(const RoadMeshOptions& o) {
   o.Check();
   const Workspace ws(o.workspace);
-  const fs::path out_path = PrepareWorkspace(ws, o);
+  RequireInputs(ws, o);
   const Reconstruction rec = ReadColmapModel(ws.SparseDir().string());
+  RoadMeshOptions resolved = o;
+  const OptionTable table = DeclareOptions(resolved);
+  // The mesh is in the workspace: its record, provenance/roadmesh.json ("metric" among its
+  // options is what Workspace::MetricRecord looks for).
+  Ledger ledger(ws.root(), "roadmesh", table, MeshInputs(ws, rec, o), ws.root());
   RoadMeshReport rep;
+  rep.mesh_path = ws.NewMeshPath().string();
+  if (MeshStale(ws, o, ledger).empty()) {
+    rep.up_to_date = true;
+    return rep;
+  }
+  rep.why = ledger.Summary();
   rep.images = rec.images.size();
   rep.points = rec.points3D.size();
   if (rep.images < 2)
@@ -261,9 +308,9 @@ RoadMeshReport RunRoadMesh(const RoadMeshOptions& o) {
   rep.faces = mesh.faces.size();
   if (!o.no_colours) BakeColours(ws, rec, o, mesh, rep);
 
-  WriteMesh(out_path.string(), mesh);
-  rep.mesh_path = out_path.string();
-  WriteRoadMeshProvenance(ws, o, rep);
+  WriteMesh(rep.mesh_path, mesh);
+  ledger.Done(rep.mesh_path);
+  ledger.Write(RunFacts(rep));
   return rep;
 }
 

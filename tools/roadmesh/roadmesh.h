@@ -15,6 +15,8 @@
 #include <cstddef>
 #include <string>
 
+#include "render/context.h"
+#include "run/option_table.h"
 #include "scene/reconstruction.h"
 
 namespace mvtm {
@@ -37,13 +39,17 @@ struct RoadMeshOptions {
                              // fitted height), [0, 100]
   double walls_behind = 20;  // --dense: corridor walls moved back by this many voxels behind the
                              // fused surface; -1: no walls, [0, 1000]
-  bool force = false;        // replace an existing mesh
-  std::string gl = "auto";   // auto | egl | osmesa (depth maps for the colour visibility test)
+  bool force = false;        // replace an existing mesh, even one roadmesh did not make
+  GlBackend gl = GlBackend::kAuto;  // depth maps for the colour visibility test
   bool quiet = false;
 
   // Throws UsageError naming the bad value and the allowed range.
   void Check() const;
 };
+
+// The option table (run/option_table.h) bound to `o`: --help, checks, provenance and the
+// staleness key of the mesh all come from it.
+OptionTable DeclareOptions(RoadMeshOptions& o);
 
 // The model's length unit, from the scene (no metric assumption).
 //   Camera height: every sparse point an image observes below its principal point and in the
@@ -89,6 +95,8 @@ struct RoadMeshReport {
   size_t corridor_wall_faces = 0;  // --dense: corridor wall triangles behind the fused surface
   std::string gl;
   std::string mesh_path;
+  bool up_to_date = false;  // mesh.ply was up to date: nothing was built (the rest is unset)
+  std::string why;          // why an existing mesh was rebuilt ("1 redone: --width changed")
 };
 
 RoadMeshReport RunRoadMesh(const RoadMeshOptions& options);

@@ -37,13 +37,6 @@ int main(int argc, char** argv) {
       "Turn semantic label images into cleaned per-frame vehicle masks: connected components, "
       "centroid tracking, gap interpolation, Gaussian smoothing, false-positive rejection. "
       "With --rank, order sequences by total vehicle area.");
-  // The operands are a list (LABELDIR WS, or LABELDIR... with --rank): a table positional holds
-  // one value, so they are declared here.
-  app.add_option("PATHS", o.paths,
-                 "LABELDIR WS: label images (*.png, name order) and the workspace written to; "
-                 "with --rank: LABELDIR...")
-      ->required()
-      ->type_name("");
   mvtm::AddOptionTable(app, table);
   return mvtm::RunMain(app, "segtrack", argc, argv, [&] {
     if (o.rank) {

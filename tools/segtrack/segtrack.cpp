@@ -147,6 +147,9 @@ TrackResult TrackLabels(const std::vector<fs::path>& files, const LabelDecoder& 
 
 OptionTable DeclareOptions(SegtrackOptions& o) {
   OptionTable t("segtrack");
+  t.PositionalList("PATHS", &o.paths,
+                   "LABELDIR WS: label images (*.png, name order) and the workspace written to; "
+                   "with --rank: LABELDIR...");
   t.Text("--classes", &o.classes, "Vehicle class ids, comma-separated (class-id or palette labels)")
       .Alternative("8,5")
       .Check([&o] {

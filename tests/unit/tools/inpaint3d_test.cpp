@@ -71,7 +71,8 @@ class Inpaint3dFixture : public ::testing::Test {
   static Inpaint3dReport Inpaint(const std::string& method) {
     Inpaint3dOptions o;
     o.workspace = Ws().string();
-    o.method = method;
+    for (const auto& [e, name] : kInpaintMethods)
+      if (name == method) o.method = e;
     o.force = true;
     o.quiet = true;
     return RunInpaint3d(o);
