@@ -21,6 +21,15 @@ void ConfigureApp(CLI::App& app, const std::string& tool, const std::string& des
   app.get_formatter()->column_width(34);
 }
 
+int RunTool(OptionTable& table, const std::string& description, int argc, char** argv,
+            const std::function<int()>& run, const std::string& footer) {
+  CLI::App app;
+  ConfigureApp(app, table.tool(), description);
+  if (!footer.empty()) app.footer(footer);
+  AddOptionTable(app, table);
+  return RunMain(app, table.tool(), argc, argv, run);
+}
+
 int RunMain(CLI::App& app, const std::string& tool, int argc, char** argv,
             const std::function<int()>& run) {
   std::setlocale(LC_ALL, "C");

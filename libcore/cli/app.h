@@ -11,6 +11,8 @@
 #include <functional>
 #include <string>
 
+#include "run/option_table.h"
+
 namespace mvtm {
 
 // Creates an App with mvtm's conventions: `--version`, a footer pointing at the man page.
@@ -18,5 +20,11 @@ void ConfigureApp(CLI::App& app, const std::string& tool, const std::string& des
 
 int RunMain(CLI::App& app, const std::string& tool, int argc, char** argv,
             const std::function<int()>& run);
+
+// A tool's whole main() around its declared option table: an App named after table.tool(),
+// described by `description` (and `footer` when the exit statuses need more than the common
+// three), the table put into it (AddOptionTable), then RunMain.
+int RunTool(OptionTable& table, const std::string& description, int argc, char** argv,
+            const std::function<int()>& run, const std::string& footer = "");
 
 }  // namespace mvtm

@@ -9,23 +9,21 @@
 int main(int argc, char** argv) {
   mvtm::BakeDepthOptions o;
   mvtm::OptionTable table = mvtm::DeclareOptions(o);
-  CLI::App app;
-  mvtm::ConfigureApp(
-      app, "bakedepth",
+  return mvtm::RunTool(
+      table,
       "Pre-bake one linear float32 depth map (depth/NAME.exr, +inf = no surface) per "
-      "image of a workspace from its mesh, for the PTM occlusion test.");
-  mvtm::AddOptionTable(app, table);
-  return mvtm::RunMain(app, "bakedepth", argc, argv, [&] {
-    auto r = mvtm::RunBakeDepth(o);
-    if (!o.quiet) {
-      std::cerr << "bakedepth: " << r.written << " depth maps written, " << r.skipped
-                << " up to date";
-      if (!r.why.empty()) std::cerr << " [" << r.why << "]";
-      if (r.written)
-        std::fprintf(stderr, " (%.1f ms render, %.1f ms write per map; %s)",
-                     r.render_ms / r.written, r.write_ms / r.written, r.gl.c_str());
-      std::cerr << "\n";
-    }
-    return 0;
-  });
+      "image of a workspace from its mesh, for the PTM occlusion test.",
+      argc, argv, [&] {
+        auto r = mvtm::RunBakeDepth(o);
+        if (!o.quiet) {
+          std::cerr << "bakedepth: " << r.written << " depth maps written, " << r.skipped
+                    << " up to date";
+          if (!r.why.empty()) std::cerr << " [" << r.why << "]";
+          if (r.written)
+            std::fprintf(stderr, " (%.1f ms render, %.1f ms write per map; %s)",
+                         r.render_ms / r.written, r.write_ms / r.written, r.gl.c_str());
+          std::cerr << "\n";
+        }
+        return 0;
+      });
 }

@@ -9,25 +9,25 @@
 int main(int argc, char** argv) {
   mvtm::DensifyOptions o;
   mvtm::OptionTable table = mvtm::DeclareOptions(o);
-  CLI::App app;
-  mvtm::ConfigureApp(
-      app, "densify",
+  return mvtm::RunTool(
+      table,
       "Dense depth and confidence per image of a workspace (stereo/NAME.exr, stereo/NAME.conf.exr) "
       "by "
-      "multi-view plane-sweep stereo on the CPU: ground, facade and fronto-parallel sweeps.");
-  mvtm::AddOptionTable(app, table);
-  return mvtm::RunMain(app, "densify", argc, argv, [&] {
-    auto r = mvtm::RunDensify(o);
-    if (!o.quiet) {
-      std::fprintf(stderr, "densify: %zu depth maps written, %zu up to date", r.written, r.skipped);
-      if (!r.why.empty()) std::fprintf(stderr, " [%s]", r.why.c_str());
-      if (r.written)
-        std::fprintf(stderr, " (%.0f ms per image, %.1f %% of pixels with a depth)", r.ms_per_image,
-                     100 * r.valid_share);
-      if (r.no_neighbours)
-        std::fprintf(stderr, "; %zu images had no usable neighbour (+inf maps)", r.no_neighbours);
-      std::fprintf(stderr, "\n");
-    }
-    return 0;
-  });
+      "multi-view plane-sweep stereo on the CPU: ground, facade and fronto-parallel sweeps.",
+      argc, argv, [&] {
+        auto r = mvtm::RunDensify(o);
+        if (!o.quiet) {
+          std::fprintf(stderr, "densify: %zu depth maps written, %zu up to date", r.written,
+                       r.skipped);
+          if (!r.why.empty()) std::fprintf(stderr, " [%s]", r.why.c_str());
+          if (r.written)
+            std::fprintf(stderr, " (%.0f ms per image, %.1f %% of pixels with a depth)",
+                         r.ms_per_image, 100 * r.valid_share);
+          if (r.no_neighbours)
+            std::fprintf(stderr, "; %zu images had no usable neighbour (+inf maps)",
+                         r.no_neighbours);
+          std::fprintf(stderr, "\n");
+        }
+        return 0;
+      });
 }

@@ -8,26 +8,24 @@
 int main(int argc, char** argv) {
   mvtm::ExposureToolOptions o;
   mvtm::OptionTable table = mvtm::DeclareOptions(o);
-  CLI::App app;
-  mvtm::ConfigureApp(
-      app, "exposure",
+  return mvtm::RunTool(
+      table,
       "Fit a gain and an offset per image of a workspace (I = gain * L + offset) to the sparse "
       "points the images share, and write WS/exposure.tsv: ptmrender then blends its projectors "
-      "at one common exposure.");
-  mvtm::AddOptionTable(app, table);
-  return mvtm::RunMain(app, "exposure", argc, argv, [&] {
-    const auto r = mvtm::RunExposure(o);
-    if (o.quiet) return 0;
-    if (r.up_to_date)
-      std::fprintf(stderr, "exposure: %s/exposure.tsv is up to date (--force refits)\n",
-                   o.workspace.c_str());
-    else
-      std::fprintf(
-          stderr,
-          "exposure: %zu of %zu images fitted from %zu observations; gain %.3f..%.3f, offset "
-          "%.1f..%.1f%s\n",
-          r.fitted, r.images, r.observations, r.gain_min, r.gain_max, r.offset_min, r.offset_max,
-          r.why.empty() ? "" : (" [" + r.why + "]").c_str());
-    return 0;
-  });
+      "at one common exposure.",
+      argc, argv, [&] {
+        const auto r = mvtm::RunExposure(o);
+        if (o.quiet) return 0;
+        if (r.up_to_date)
+          std::fprintf(stderr, "exposure: %s/exposure.tsv is up to date (--force refits)\n",
+                       o.workspace.c_str());
+        else
+          std::fprintf(
+              stderr,
+              "exposure: %zu of %zu images fitted from %zu observations; gain %.3f..%.3f, offset "
+              "%.1f..%.1f%s\n",
+              r.fitted, r.images, r.observations, r.gain_min, r.gain_max, r.offset_min,
+              r.offset_max, r.why.empty() ? "" : (" [" + r.why + "]").c_str());
+        return 0;
+      });
 }

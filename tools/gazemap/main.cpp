@@ -6,16 +6,14 @@
 int main(int argc, char** argv) {
   mvtm::GazemapOptions o;
   mvtm::OptionTable table = mvtm::DeclareOptions(o);
-  CLI::App app;
-  mvtm::ConfigureApp(
-      app, "gazemap",
+  return mvtm::RunTool(
+      table,
       "Map an eye tracker's gaze on ptmrender's frames back onto the road: I-VT fixations (Tobii "
       "defaults), the 3-D point on the workspace's mesh under each, the source photographs that "
       "see it unoccluded with the pixel in each, dwell time per area of interest (printed), and "
-      "pictures: fixations on their photos, a top-down heat map.");
-  mvtm::AddOptionTable(app, table);
-  return mvtm::RunMain(app, "gazemap", argc, argv, [&] {
-    mvtm::PrintGazemapReport(o, mvtm::RunGazemap(o));
-    return 0;
-  });
+      "pictures: fixations on their photos, a top-down heat map.",
+      argc, argv, [&] {
+        mvtm::PrintGazemapReport(o, mvtm::RunGazemap(o));
+        return 0;
+      });
 }

@@ -9,23 +9,22 @@
 int main(int argc, char** argv) {
   mvtm::PtmRenderOptions o;
   mvtm::OptionTable table = mvtm::DeclareOptions(o);
-  CLI::App app;
-  mvtm::ConfigureApp(
-      app, "ptmrender",
+  return mvtm::RunTool(
+      table,
       "Render a workspace's mesh textured by projecting its photographs (projective texture "
-      "mapping) along any trajectory, headless; only the effects the scene needs are compiled.");
-  mvtm::AddOptionTable(app, table);
-  return mvtm::RunMain(app, "ptmrender", argc, argv, [&] {
-    auto r = mvtm::RunPtmRender(o, std::cout);
-    if (!o.quiet && !o.explain) {
-      std::fprintf(stderr, "ptmrender: %zu frames rendered, %zu up to date", r.rendered, r.skipped);
-      if (!r.why.empty()) std::fprintf(stderr, " [%s]", r.why.c_str());
-      if (r.rendered)
-        std::fprintf(stderr, " (%.1f ms render, %.1f ms depth, %.1f ms load per frame; %s)",
-                     r.render_ms / r.rendered, r.depth_ms / r.rendered, r.load_ms / r.rendered,
-                     r.gl.c_str());
-      std::fprintf(stderr, "\n");
-    }
-    return 0;
-  });
+      "mapping) along any trajectory, headless; only the effects the scene needs are compiled.",
+      argc, argv, [&] {
+        auto r = mvtm::RunPtmRender(o, std::cout);
+        if (!o.quiet && !o.explain) {
+          std::fprintf(stderr, "ptmrender: %zu frames rendered, %zu up to date", r.rendered,
+                       r.skipped);
+          if (!r.why.empty()) std::fprintf(stderr, " [%s]", r.why.c_str());
+          if (r.rendered)
+            std::fprintf(stderr, " (%.1f ms render, %.1f ms depth, %.1f ms load per frame; %s)",
+                         r.render_ms / r.rendered, r.depth_ms / r.rendered, r.load_ms / r.rendered,
+                         r.gl.c_str());
+          std::fprintf(stderr, "\n");
+        }
+        return 0;
+      });
 }

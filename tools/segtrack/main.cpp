@@ -31,24 +31,22 @@ void PrintSummary(const mvtm::SegtrackReport& r) {
 int main(int argc, char** argv) {
   mvtm::SegtrackOptions o;
   mvtm::OptionTable table = mvtm::DeclareOptions(o);
-  CLI::App app;
-  mvtm::ConfigureApp(
-      app, "segtrack",
+  return mvtm::RunTool(
+      table,
       "Turn semantic label images into cleaned per-frame vehicle masks: connected components, "
       "centroid tracking, gap interpolation, Gaussian smoothing, false-positive rejection. "
-      "With --rank, order sequences by total vehicle area.");
-  mvtm::AddOptionTable(app, table);
-  return mvtm::RunMain(app, "segtrack", argc, argv, [&] {
-    if (o.rank) {
-      auto rows = mvtm::RankSequences(o);
-      std::printf("rank\tarea\tfraction\tframes\tlabeldir\n");
-      for (size_t i = 0; i < rows.size(); ++i)
-        std::printf("%zu\t%.0f\t%.6f\t%zu\t%s\n", i + 1, rows[i].area, rows[i].fraction,
-                    rows[i].frames, rows[i].labeldir.c_str());
-      return 0;
-    }
-    auto r = mvtm::RunSegtrack(o);
-    if (!o.quiet) PrintSummary(r);
-    return 0;
-  });
+      "With --rank, order sequences by total vehicle area.",
+      argc, argv, [&] {
+        if (o.rank) {
+          auto rows = mvtm::RankSequences(o);
+          std::printf("rank\tarea\tfraction\tframes\tlabeldir\n");
+          for (size_t i = 0; i < rows.size(); ++i)
+            std::printf("%zu\t%.0f\t%.6f\t%zu\t%s\n", i + 1, rows[i].area, rows[i].fraction,
+                        rows[i].frames, rows[i].labeldir.c_str());
+          return 0;
+        }
+        auto r = mvtm::RunSegtrack(o);
+        if (!o.quiet) PrintSummary(r);
+        return 0;
+      });
 }
