@@ -21,7 +21,7 @@ void ConfigureApp(CLI::App& app, const std::string& tool, const std::string& des
   app.get_formatter()->column_width(34);
 }
 
-int RunTool(OptionTable& table, const std::string& description, int argc, char** argv,
+int RunTool(OptionTable table, const std::string& description, int argc, char** argv,
             const std::function<int()>& run, const std::string& footer) {
   CLI::App app;
   ConfigureApp(app, table.tool(), description);

@@ -24,7 +24,7 @@ int RunMain(CLI::App& app, const std::string& tool, int argc, char** argv,
 // A tool's whole main() around its declared option table: an App named after table.tool(),
 // described by `description` (and `footer` when the exit statuses need more than the common
 // three), the table put into it (AddOptionTable), then RunMain.
-int RunTool(OptionTable& table, const std::string& description, int argc, char** argv,
+int RunTool(OptionTable table, const std::string& description, int argc, char** argv,
             const std::function<int()>& run, const std::string& footer = "");
 
 }  // namespace mvtm

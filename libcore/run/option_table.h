@@ -177,4 +177,12 @@ class OptionTable {
   std::deque<OptionSpec> options_;  // a deque: OptionRef handles stay valid as options are added
 };
 
+// Checks an Options struct through its table: DeclareOptions(copy).Check() on a copy (the table
+// binds non-const fields; found by argument-dependent lookup next to the Options type).
+template <class Options>
+void CheckDeclared(const Options& o) {
+  Options copy = o;
+  DeclareOptions(copy).Check();
+}
+
 }  // namespace mvtm

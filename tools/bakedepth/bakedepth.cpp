@@ -28,8 +28,7 @@ OptionTable DeclareOptions(BakeDepthOptions& o) {
 }
 
 void BakeDepthOptions::Check() const {
-  BakeDepthOptions copy = *this;
-  DeclareOptions(copy).Check();
+  CheckDeclared(*this);
 }
 
 BakeDepthReport RunBakeDepth(const BakeDepthOptions& o) {

@@ -59,8 +59,7 @@ OptionTable DeclareOptions(DensifyOptions& o) {
 }
 
 void DensifyOptions::Check() const {
-  DensifyOptions copy = *this;
-  DeclareOptions(copy).Check();
+  CheckDeclared(*this);
   if (no_ground && no_facade && no_fronto)
     throw UsageError("--no-ground, --no-facade, --no-fronto: keep one direction");
 }

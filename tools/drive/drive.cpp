@@ -304,8 +304,7 @@ OptionTable DeclareOptions(DriveOptions& o) {
 }
 
 void DriveOptions::Check() const {
-  DriveOptions copy = *this;
-  DeclareOptions(copy).Check();
+  CheckDeclared(*this);
   if (lane_change.empty() && controls.empty())
     throw UsageError("give CONTROLS, or --lane-change T0:DURATION:OFFSET");
   if (!lane_change.empty() && !controls.empty())

@@ -32,8 +32,7 @@ OptionTable DeclareOptions(ExposureToolOptions& o) {
 }
 
 void ExposureToolOptions::Check() const {
-  ExposureToolOptions copy = *this;
-  DeclareOptions(copy).Check();
+  CheckDeclared(*this);
 }
 
 namespace {

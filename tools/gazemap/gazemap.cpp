@@ -446,8 +446,7 @@ OptionTable DeclareOptions(GazemapOptions& o) {
 }
 
 void GazemapOptions::Check() const {
-  GazemapOptions copy = *this;
-  DeclareOptions(copy).Check();
+  CheckDeclared(*this);
   const bool physical = !screen_mm.empty() || distance != 0;
   if (physical && px_per_degree != 0)
     throw UsageError("give --screen-mm and --distance, or --px-per-degree, not both");

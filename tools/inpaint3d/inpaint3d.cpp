@@ -40,8 +40,7 @@ OptionTable DeclareOptions(Inpaint3dOptions& o) {
 }
 
 void Inpaint3dOptions::Check() const {
-  Inpaint3dOptions copy = *this;
-  DeclareOptions(copy).Check();
+  CheckDeclared(*this);
 }
 
 namespace {

@@ -5,30 +5,35 @@
 #include "cli/options.h"
 #include "orb2colmap.h"
 
+namespace {
+
+constexpr const char* kAbout =
+    "Convert ORB-SLAM2 keyframe or ground-truth poses (TUM or KITTI, camera-to-world) "
+    "into a COLMAP model of every frame, interpolating between keyframes.";
+
+// Runs the tool and prints its summary; the exit status.
+int RunAndReport(mvtm::Orb2ColmapOptions& o) {
+  auto r = mvtm::RunOrb2Colmap(o);
+  if (r.up_to_date) {
+    if (!o.quiet)
+      std::cerr << "orb2colmap: " << o.outdir << " is up to date (use --force to rewrite)\n";
+    return 0;
+  }
+  if (!o.quiet) {
+    std::cerr << "orb2colmap: " << r.written << " frames written from " << r.keyframes << " poses";
+    if (r.dropped) std::cerr << "; " << r.dropped << " outside the pose time span dropped";
+    if (r.clamped) std::cerr << "; " << r.clamped << " outside the pose time span clamped";
+    if (r.reordered) std::cerr << "; " << r.reordered << " poses were out of time order (sorted)";
+    if (!r.why.empty()) std::cerr << " [" << r.why << "]";
+    std::cerr << "\n";
+  }
+  return 0;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   mvtm::Orb2ColmapOptions o;
-  mvtm::OptionTable table = mvtm::DeclareOptions(o);
-  return mvtm::RunTool(
-      table,
-      "Convert ORB-SLAM2 keyframe or ground-truth poses (TUM or KITTI, camera-to-world) "
-      "into a COLMAP model of every frame, interpolating between keyframes.",
-      argc, argv, [&] {
-        auto r = mvtm::RunOrb2Colmap(o);
-        if (r.up_to_date) {
-          if (!o.quiet)
-            std::cerr << "orb2colmap: " << o.outdir << " is up to date (use --force to rewrite)\n";
-          return 0;
-        }
-        if (!o.quiet) {
-          std::cerr << "orb2colmap: " << r.written << " frames written from " << r.keyframes
-                    << " poses";
-          if (r.dropped) std::cerr << "; " << r.dropped << " outside the pose time span dropped";
-          if (r.clamped) std::cerr << "; " << r.clamped << " outside the pose time span clamped";
-          if (r.reordered)
-            std::cerr << "; " << r.reordered << " poses were out of time order (sorted)";
-          if (!r.why.empty()) std::cerr << " [" << r.why << "]";
-          std::cerr << "\n";
-        }
-        return 0;
-      });
+  return mvtm::RunTool(mvtm::DeclareOptions(o), kAbout, argc, argv,
+                       [&] { return RunAndReport(o); });
 }

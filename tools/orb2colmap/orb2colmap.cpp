@@ -64,8 +64,7 @@ OptionTable DeclareOptions(Orb2ColmapOptions& o) {
 }
 
 void Orb2ColmapOptions::Check() const {
-  Orb2ColmapOptions copy = *this;
-  DeclareOptions(copy).Check();
+  CheckDeclared(*this);
   int sources = !camera.empty() + !orb_settings.empty() + !kitti_calib.empty();
   if (sources != 1) throw UsageError("give exactly one of --camera, --orb-settings, --kitti-calib");
   if (!images.empty() && !fs::is_directory(images))

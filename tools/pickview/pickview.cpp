@@ -70,8 +70,7 @@ OptionTable DeclareOptions(PickViewOptions& o) {
 }
 
 void PickViewOptions::Check() const {
-  PickViewOptions copy = *this;
-  DeclareOptions(copy).Check();
+  CheckDeclared(*this);
   if (!partners && !other.empty()) throw UsageError("--other needs --partners");
   if (!partners && prefer_unmasked) throw UsageError("--prefer-unmasked needs --partners");
   if (partners && !queries.empty())

@@ -78,8 +78,7 @@ OptionTable DeclareOptions(PtmRenderOptions& o) {
 }
 
 void PtmRenderOptions::Check() const {
-  PtmRenderOptions copy = *this;
-  DeclareOptions(copy).Check();
+  CheckDeclared(*this);
   if (!poses.empty() && at_images) throw UsageError("give --poses FILE or --at-images, not both");
   if (exclude_self && !at_images) throw UsageError("--exclude-self needs --at-images");
 }

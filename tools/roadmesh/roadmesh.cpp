@@ -267,8 +267,7 @@ OptionTable DeclareOptions(RoadMeshOptions& o) {
 }
 
 void RoadMeshOptions::Check() const {
-  RoadMeshOptions copy = *this;
-  DeclareOptions(copy).Check();
+  CheckDeclared(*this);
 }
 
 RoadMeshReport RunRoadMesh(const RoadMeshOptions& o) {

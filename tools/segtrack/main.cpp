@@ -28,25 +28,32 @@ void PrintSummary(const mvtm::SegtrackReport& r) {
 
 }  // namespace
 
+namespace {
+
+constexpr const char* kAbout =
+    "Turn semantic label images into cleaned per-frame vehicle masks: connected components, "
+    "centroid tracking, gap interpolation, Gaussian smoothing, false-positive rejection. "
+    "With --rank, order sequences by total vehicle area.";
+
+// Runs the tool and prints its summary; the exit status.
+int RunAndReport(mvtm::SegtrackOptions& o) {
+  if (o.rank) {
+    auto rows = mvtm::RankSequences(o);
+    std::printf("rank\tarea\tfraction\tframes\tlabeldir\n");
+    for (size_t i = 0; i < rows.size(); ++i)
+      std::printf("%zu\t%.0f\t%.6f\t%zu\t%s\n", i + 1, rows[i].area, rows[i].fraction,
+                  rows[i].frames, rows[i].labeldir.c_str());
+    return 0;
+  }
+  auto r = mvtm::RunSegtrack(o);
+  if (!o.quiet) PrintSummary(r);
+  return 0;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   mvtm::SegtrackOptions o;
-  mvtm::OptionTable table = mvtm::DeclareOptions(o);
-  return mvtm::RunTool(
-      table,
-      "Turn semantic label images into cleaned per-frame vehicle masks: connected components, "
-      "centroid tracking, gap interpolation, Gaussian smoothing, false-positive rejection. "
-      "With --rank, order sequences by total vehicle area.",
-      argc, argv, [&] {
-        if (o.rank) {
-          auto rows = mvtm::RankSequences(o);
-          std::printf("rank\tarea\tfraction\tframes\tlabeldir\n");
-          for (size_t i = 0; i < rows.size(); ++i)
-            std::printf("%zu\t%.0f\t%.6f\t%zu\t%s\n", i + 1, rows[i].area, rows[i].fraction,
-                        rows[i].frames, rows[i].labeldir.c_str());
-          return 0;
-        }
-        auto r = mvtm::RunSegtrack(o);
-        if (!o.quiet) PrintSummary(r);
-        return 0;
-      });
+  return mvtm::RunTool(mvtm::DeclareOptions(o), kAbout, argc, argv,
+                       [&] { return RunAndReport(o); });
 }

@@ -188,8 +188,7 @@ OptionTable DeclareOptions(SegtrackOptions& o) {
 }
 
 void SegtrackOptions::Check() const {
-  SegtrackOptions copy = *this;
-  DeclareOptions(copy).Check();
+  CheckDeclared(*this);
   if (rank) {
     if (paths.empty()) throw UsageError("--rank needs at least one LABELDIR");
   } else if (paths.size() != 2) {

@@ -355,8 +355,7 @@ OptionTable DeclareOptions(SsimToolOptions& o) {
 }
 
 void SsimToolOptions::Check() const {
-  SsimToolOptions copy = *this;
-  DeclareOptions(copy).Check();
+  CheckDeclared(*this);
   if (a.empty() || b.empty()) throw UsageError("two images or two folders are required");
   ssim.Check();  // the window's size (truncate * sigma)
 }
