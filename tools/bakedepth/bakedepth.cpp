@@ -27,9 +27,7 @@ OptionTable DeclareOptions(BakeDepthOptions& o) {
   return t;
 }
 
-void BakeDepthOptions::Check() const {
-  CheckDeclared(*this);
-}
+void BakeDepthOptions::Check() const { CheckDeclared(*this); }
 
 BakeDepthReport RunBakeDepth(const BakeDepthOptions& o) {
   o.Check();

@@ -31,9 +31,7 @@ OptionTable DeclareOptions(ExposureToolOptions& o) {
   return t;
 }
 
-void ExposureToolOptions::Check() const {
-  CheckDeclared(*this);
-}
+void ExposureToolOptions::Check() const { CheckDeclared(*this); }
 
 namespace {
 

@@ -39,9 +39,7 @@ OptionTable DeclareOptions(Inpaint3dOptions& o) {
   return t;
 }
 
-void Inpaint3dOptions::Check() const {
-  CheckDeclared(*this);
-}
+void Inpaint3dOptions::Check() const { CheckDeclared(*this); }
 
 namespace {
 

@@ -266,9 +266,7 @@ OptionTable DeclareOptions(RoadMeshOptions& o) {
   return t;
 }
 
-void RoadMeshOptions::Check() const {
-  CheckDeclared(*this);
-}
+void RoadMeshOptions::Check() const { CheckDeclared(*this); }
 
 RoadMeshReport RunRoadMesh(const RoadMeshOptions& o) {
   o.Check();
