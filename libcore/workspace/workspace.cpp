@@ -144,25 +144,4 @@ fs::path Workspace::MetricRecord(const std::string& except_tool) const {
   return {};
 }
 
-void Workspace::WriteProvenance(const std::string& tool, const nlohmann::json& options,
-                                const std::vector<fs::path>& inputs) const {
-  nlohmann::json j;
-  j["tool"] = tool;
-  j["version"] = kVersion;
-  std::time_t now = std::time(nullptr);
-  char stamp[32];
-  std::strftime(stamp, sizeof stamp, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
-  j["time"] = stamp;
-  j["options"] = options;
-  nlohmann::json in = nlohmann::json::array();
-  for (const auto& p : inputs) {
-    if (!fs::is_regular_file(p)) continue;
-    in.push_back({{"path", fs::relative(p, root_).string()},
-                  {"bytes", fs::file_size(p)},
-                  {"fnv1a64", FileChecksum(p)}});
-  }
-  j["inputs"] = in;
-  WriteTextAtomic(ProvenancePath(tool), [&](std::ostream& o) { o << j.dump(2) << "\n"; });
-}
-
 }  // namespace mvtm

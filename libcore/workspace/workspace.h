@@ -94,11 +94,6 @@ class Workspace {
   // Throws Error("WS: not ready for TOOL: missing a, b") when anything is missing.
   void Require(const std::string& tool, const std::vector<WsItem>& needs) const;
 
-  // Writes provenance/TOOL.json atomically: tool, version, time, options, and the size and
-  // FNV-1a 64 checksum of each input file.
-  void WriteProvenance(const std::string& tool, const nlohmann::json& options,
-                       const std::vector<fs::path>& inputs) const;
-
  private:
   fs::path root_;
 };

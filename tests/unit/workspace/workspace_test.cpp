@@ -38,12 +38,15 @@ TEST(Workspace, MissingItemsAndProvenance) {
   EXPECT_TRUE(ws.Missing({WsItem::kMesh}).empty());
   // FNV-1a 64 of "x" (0x78): (offset ^ 0x78) * prime mod 2^64, computed independently in Python.
   EXPECT_EQ(FileChecksum(d / "meshed-poisson.ply"), "44bda3d473cdc381");
-  ws.WriteProvenance("bakedepth", {{"scale", 0.5}}, {d / "meshed-poisson.ply"});
-  std::ifstream in(ws.ProvenancePath("bakedepth"));
-  auto j = nlohmann::json::parse(in);
-  EXPECT_EQ(j["options"]["scale"], 0.5);
-  EXPECT_EQ(j["inputs"][0]["path"], "meshed-poisson.ply");
-  EXPECT_EQ(j["inputs"][0]["fnv1a64"], "44bda3d473cdc381");
+  // The record that says the model is metric: any tool's with "metric": true, but never the
+  // asking tool's own (drive's --metric would make its record an input of itself).
+  fs::create_directories(d / "provenance");
+  std::ofstream(d / "provenance/drive.json") << R"({"tool": "drive", "options": {"metric": true}})";
+  EXPECT_EQ(ws.MetricRecord(), d / "provenance/drive.json");
+  EXPECT_EQ(ws.MetricRecord("drive"), fs::path());
+  std::ofstream(d / "provenance/roadmesh.json") << R"({"options": {"metric": true}})";
+  std::ofstream(d / "provenance/exposure.json") << "{not json";
+  EXPECT_EQ(ws.MetricRecord("drive"), d / "provenance/roadmesh.json");
   fs::remove_all(d);
 }
 
