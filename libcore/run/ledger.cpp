@@ -120,7 +120,9 @@ bool Ledger::Unchanged(const std::string& name, const fs::path& path, const nloh
   if (!stamp.is_object()) return false;
   const FileStamp& s = Current(name, path, false);
   if (!s.exists || s.bytes != stamp.value("bytes", uint64_t(0))) return false;
-  if (s.mtime_ns == stamp.value("mtime_ns", int64_t(0))) return true;
+  // A time recorded within a clock tick of the file's last write cannot vouch for it (a second
+  // write in the same tick keeps the time: git's "racy clean" case); its checksum decides.
+  if (s.mtime_ns == stamp.value("mtime_ns", int64_t(0)) && !stamp.value("racy", false)) return true;
   return Current(name, path, true).fnv1a64 == stamp.value("fnv1a64", std::string());
 }
 
@@ -138,7 +140,12 @@ const std::string& Ledger::RunId() {
 
 nlohmann::json Ledger::StampJson(const std::string& name, const fs::path& path) {
   const FileStamp& s = Current(name, path, true);
-  return {{"bytes", s.bytes}, {"mtime_ns", s.mtime_ns}, {"fnv1a64", s.fnv1a64}};
+  nlohmann::json j = {{"bytes", s.bytes}, {"mtime_ns", s.mtime_ns}, {"fnv1a64", s.fnv1a64}};
+  const int64_t now = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                          std::chrono::system_clock::now().time_since_epoch())
+                          .count();
+  if (now - s.mtime_ns < 2'000'000'000LL) j["racy"] = true;  // written within 2 s of stamping
+  return j;
 }
 
 // "" when a recorded run had this run's options and inputs; else what differs.

@@ -14,7 +14,7 @@
 //   stereo/NAME.conf.exr  its confidence, 0..1
 //   textures/NAME         images with vehicles removed (inpaint3d); preferred over images/
 //   textures/provenance/NAME.png  where each inpainted pixel came from (inpaint3d)
-//   provenance/TOOL.json  resolved options, version and input checksums of each tool's last run
+//   provenance/TOOL.json  the record of what made a tool's outputs here (run/ledger.h)
 // NAME keeps any sub-folders of the image name; derived files replace the extension (".png",
 // ".exr") after the full name's stem, e.g. "A_0001.jpg" → "masks/A_0001.png".
 // A COLMAP dense workspace (image_undistorter output + meshed-poisson.ply) is a valid workspace.

@@ -2,7 +2,8 @@
 # into one output folder. Each must exit 0; every file under a final name must equal the same
 # file from a single run (JSON provenance records apart from when things were written); no temporary may
 # be left. A record's "time" and its outputs' "mtime_ns" are when they were written, so they are
-# left out of the comparison.
+# left out of the comparison, and so is "racy" (whether an input was written within 2 s of the
+# run that recorded it).
 #   run_at_once N COMMAND...   starts N copies of COMMAND together (released at once by a
 #                              barrier) and waits for all; prints their exit statuses, their
 #                              stderr, and whether the runs overlapped in time
@@ -44,7 +45,7 @@ strip_times() {
 import json, sys
 def strip(v):
     if isinstance(v, dict):
-        return {k: strip(x) for k, x in v.items() if k not in ("time", "mtime_ns")}
+        return {k: strip(x) for k, x in v.items() if k not in ("time", "mtime_ns", "racy")}
     if isinstance(v, list):
         return [strip(x) for x in v]
     return v
