@@ -14,12 +14,12 @@ void AddOptionTable(CLI::App& app, OptionTable& table) {
   g_table = &table;
   for (const OptionSpec& s : table.options()) {
     if (s.hidden) continue;
-    CLI::Option* o = nullptr;
     if (s.is_flag) {
-      o = app.add_flag_function(
+      app.add_flag_function(
           s.names, [set = s.set](int64_t n) { set(n > 0 ? "1" : "0"); }, s.help);
       continue;
     }
+    CLI::Option* o = nullptr;
     if (s.is_list)
       o = app.add_option_function<std::vector<std::string>>(
           s.names, [set = s.set_list](const std::vector<std::string>& v) { set(v); }, s.help);
@@ -43,25 +43,6 @@ void AddOptionTable(CLI::App& app, OptionTable& table) {
                           throw CLI::Success();
                         })
       ->group("");
-}
-
-void AddWorkOptions(CLI::App& app, WorkOptions& work, const std::string& items,
-                    const std::string& order, const std::string& force_help) {
-  auto* fr =
-      app.add_option("--frames", work.frames, "Only " + items + " A:B (half-open, " + order + ")");
-  auto* sh = app.add_option("--shard", work.shard, "Only " + items + " i with i % N == I (I/N)");
-  fr->excludes(sh);
-  app.add_flag("--force", work.force, force_help);
-  AddQuietOption(app, work.quiet);
-}
-
-void AddQuietOption(CLI::App& app, bool& quiet) {
-  app.add_flag("-q,--quiet", quiet, "No progress bar or summary");
-}
-
-CLI::Option* AddChoiceOption(CLI::App& app, const std::string& name, std::string& value,
-                             const std::vector<std::string>& choices, const std::string& help) {
-  return app.add_option(name, value, help)->check(CLI::IsMember(choices))->capture_default_str();
 }
 
 }  // namespace mvtm

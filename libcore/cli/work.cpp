@@ -59,12 +59,4 @@ ImageSize ParseImageSize(const std::string& spec, const std::string& option) {
   return {static_cast<uint64_t>(w), static_cast<uint64_t>(h)};
 }
 
-void CheckChoice(const std::string& value, const std::vector<std::string>& choices,
-                 const std::string& option) {
-  if (std::find(choices.begin(), choices.end(), value) != choices.end()) return;
-  std::string list;
-  for (const auto& c : choices) list += (list.empty() ? "" : ", ") + c;
-  throw UsageError(option + ": '" + value + "' is not one of " + list);
-}
-
 }  // namespace mvtm

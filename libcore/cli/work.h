@@ -54,8 +54,4 @@ void CheckRange(double v, double lo, double hi, bool lo_open, const std::string&
 // Parses "WxH" (1..kMaxImageSide each). `option` names the option in messages ("--size").
 ImageSize ParseImageSize(const std::string& spec, const std::string& option = "--size");
 
-// Throws UsageError("OPTION: 'VALUE' is not one of a, b, c") unless value is in `choices`.
-void CheckChoice(const std::string& value, const std::vector<std::string>& choices,
-                 const std::string& option);
-
 }  // namespace mvtm

@@ -10,22 +10,10 @@
 
 namespace mvtm {
 
-const std::vector<std::string>& GlBackendNames() {
-  static const std::vector<std::string> names = {"auto", "egl", "osmesa"};
-  return names;
-}
-
 const std::vector<std::pair<GlBackend, std::string>>& GlBackendTable() {
   static const std::vector<std::pair<GlBackend, std::string>> table = {
       {GlBackend::kAuto, "auto"}, {GlBackend::kEgl, "egl"}, {GlBackend::kOsMesa, "osmesa"}};
   return table;
-}
-
-GlBackend ParseGlBackend(const std::string& s) {
-  const auto& names = GlBackendNames();
-  for (size_t i = 0; i < names.size(); ++i)
-    if (s == names[i]) return static_cast<GlBackend>(i);
-  throw UsageError("--gl: '" + s + "' is not one of auto, egl, osmesa");
 }
 
 namespace {

@@ -21,12 +21,8 @@ namespace mvtm {
 
 enum class GlBackend { kAuto, kEgl, kOsMesa };
 
-// The backends' names in the order of the enum: "auto", "egl", "osmesa" (--gl's choices).
-const std::vector<std::string>& GlBackendNames();
 // The backends and their names, for a declared choice option (run/option_table.h).
 const std::vector<std::pair<GlBackend, std::string>>& GlBackendTable();
-// Parses one of GlBackendNames(); throws UsageError naming --gl and the choices.
-GlBackend ParseGlBackend(const std::string& s);
 
 class GlContext {
  public:

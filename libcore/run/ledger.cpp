@@ -246,7 +246,6 @@ void Ledger::Done(const fs::path& output, const std::vector<fs::path>& item_inpu
                                 {"mtime_ns", s.mtime_ns},
                                 {"fnv1a64", FileChecksum(output)},
                                 {"in", in}};
-  dirty_ = true;
   MaybeFlush();
 }
 
@@ -295,7 +294,6 @@ void Ledger::Write(const nlohmann::json& extra) {
   j["outputs"] = outputs;
   WriteTextAtomic(root_ / "provenance" / (record_ + ".json"),
                   [&](std::ostream& o) { o << j.dump(1) << "\n"; });
-  dirty_ = false;
 }
 
 std::string Ledger::Summary() const {

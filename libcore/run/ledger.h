@@ -103,7 +103,6 @@ class Ledger {
   std::map<std::string, size_t> reasons_;
   mutable std::recursive_mutex mutex_;
   int64_t last_flush_ns_ = 0;
-  bool dirty_ = false;
 };
 
 }  // namespace mvtm

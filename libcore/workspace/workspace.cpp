@@ -69,10 +69,6 @@ std::vector<fs::path> Workspace::SparseModelFiles() const {
 fs::path Workspace::TracksPath() const { return root_ / "tracks.tsv"; }
 fs::path Workspace::PartnersPath() const { return root_ / "partners.tsv"; }
 fs::path Workspace::ExposurePath() const { return root_ / "exposure.tsv"; }
-fs::path Workspace::ProvenancePath(const std::string& tool) const {
-  return root_ / "provenance" / (tool + ".json");
-}
-
 std::vector<std::string> Workspace::Missing(const std::vector<WsItem>& needs) const {
   std::vector<std::string> out;
   auto model = [&] { return HasColmapModel(SparseDir().string()); };

@@ -81,7 +81,6 @@ class Workspace {
   // exposure.tsv: gain and offset per image (exposure); ptmrender brings projectors to one
   // exposure.
   fs::path ExposurePath() const;
-  fs::path ProvenancePath(const std::string& tool) const;
   // The provenance record that says the model is metric — a tool's last run with the option
   // "metric": true (roadmesh --metric) — as the record's path; empty when none does.
   // A record that cannot be read or parsed says nothing; `except_tool`'s own records

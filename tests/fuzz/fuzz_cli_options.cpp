@@ -1,6 +1,6 @@
-// mvtm — libFuzzer harness: the option-value parsers of libcore/cli (work.h, selection.h) and
-// base/text.h. Byte 0 picks the parser (value mod 8); the rest is the option value. Accepts only
-// mvtm::Error; see fuzz_util.h.
+// mvtm — libFuzzer harness: the option-value parsers of libcore/cli (work.h, selection.h),
+// run/option_table.h's choices and base/text.h. Byte 0 picks the parser (value mod 8); the rest is
+// the option value. Accepts only mvtm::Error; see fuzz_util.h.
 #include <string>
 #include <vector>
 
@@ -9,6 +9,7 @@
 #include "cli/selection.h"
 #include "cli/work.h"
 #include "fuzz_util.h"
+#include "run/option_table.h"
 
 namespace {
 
@@ -55,9 +56,20 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         w.ProvenanceName("tool");
         break;
       }
-      case 4:
-        mvtm::CheckChoice(value, {"kdtree", "brute", "flann", "grid9"}, "--method");
+      case 4: {  // a declared choice option (run/option_table.h), as a command line sets it
+        enum class Method { kKdtree, kBrute, kFlann, kGrid9 };
+        Method m = Method::kKdtree;
+        mvtm::OptionTable t("fuzz");
+        t.Choice("--method", &m,
+                 {{Method::kKdtree, "kdtree"},
+                  {Method::kBrute, "brute"},
+                  {Method::kFlann, "flann"},
+                  {Method::kGrid9, "grid9"}},
+                 "Method");
+        t.Find("--method")->set(value);
+        if (t.Find("--method")->text() != value) __builtin_trap();  // stored what was given
         break;
+      }
       case 5:
         mvtm::ParseDoubleArg(value, "--value");
         break;

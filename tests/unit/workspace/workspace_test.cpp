@@ -15,7 +15,6 @@ TEST(Workspace, DerivedPaths) {
   EXPECT_EQ(ws.MaskPath("A_0001.jpg"), fs::path("/w/masks/A_0001.png"));
   EXPECT_EQ(ws.DepthPath("sub/A_0001.png"), fs::path("/w/depth/sub/A_0001.exr"));
   EXPECT_EQ(ws.ImagePath("A_0001.jpg"), fs::path("/w/images/A_0001.jpg"));
-  EXPECT_EQ(ws.ProvenancePath("ptmrender"), fs::path("/w/provenance/ptmrender.json"));
 }
 
 TEST(Workspace, MissingItemsAndProvenance) {
