@@ -19,21 +19,31 @@ FileStamp StatFile(const fs::path& path) {
   return s;
 }
 
-std::string FileChecksum(const fs::path& path) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw Error(path.string(), 0, "cannot open");
-  uint64_t h = 1469598103934665603ULL;
-  char buf[1 << 16];
-  while (f) {
-    f.read(buf, sizeof buf);
-    for (std::streamsize i = 0; i < f.gcount(); ++i) {
-      h ^= static_cast<unsigned char>(buf[i]);
-      h *= 1099511628211ULL;
-    }
+uint64_t Fnv1a64(const void* data, size_t size, uint64_t h) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (size_t i = 0; i < size; ++i) {
+    h ^= p[i];
+    h *= 1099511628211ULL;
   }
+  return h;
+}
+
+std::string Hex64(uint64_t h) {
   char hex[17];
   std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
   return hex;
+}
+
+std::string FileChecksum(const fs::path& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw Error(path.string(), 0, "cannot open");
+  uint64_t h = kFnv1aOffset;
+  char buf[1 << 16];
+  while (f) {
+    f.read(buf, sizeof buf);
+    h = Fnv1a64(buf, static_cast<size_t>(f.gcount()), h);
+  }
+  return Hex64(h);
 }
 
 }  // namespace mvtm

@@ -26,20 +26,6 @@ int64_t NowNs() {
       .count();
 }
 
-std::string Hex(uint64_t h) {
-  char hex[17];
-  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
-  return hex;
-}
-
-uint64_t Fnv(const std::string& s, uint64_t h = 1469598103934665603ULL) {
-  for (unsigned char c : s) {
-    h ^= c;
-    h *= 1099511628211ULL;
-  }
-  return h;
-}
-
 // True when `name` is TOOL.json or TOOL-shard-N.json.
 bool IsRecordOf(const std::string& name, const std::string& tool) {
   if (name == tool + ".json") return true;
@@ -48,12 +34,6 @@ bool IsRecordOf(const std::string& name, const std::string& tool) {
   if (name.compare(name.size() - 5, 5, ".json") != 0) return false;
   const std::string n = name.substr(pre.size(), name.size() - pre.size() - 5);
   return std::all_of(n.begin(), n.end(), [](char c) { return c >= '0' && c <= '9'; });
-}
-
-// The tool's name from its record name ("ptmrender-shard-3" → "ptmrender").
-std::string ToolOf(const std::string& record) {
-  const auto p = record.rfind("-shard-");
-  return p == std::string::npos ? record : record.substr(0, p);
 }
 
 nlohmann::json ReadJsonOrNull(const fs::path& p) {
@@ -70,7 +50,7 @@ Ledger::Ledger(fs::path root, std::string record, const OptionTable& table,
     : root_(std::move(root)),
       base_(std::move(base)),
       record_(std::move(record)),
-      tool_(ToolOf(record_)),
+      tool_(table.tool()),
       table_(table),
       options_key_(table.OutputJson()),
       kept_(nlohmann::json::object()),
@@ -133,7 +113,7 @@ const std::string& Ledger::RunId() {
     std::string id = options_key_.dump();
     for (const auto& [name, path] : inputs_)
       id += "\n" + name + " " + Current(name, path, true).fnv1a64;
-    run_id_ = Hex(Fnv(id));
+    run_id_ = Hex64(Fnv1a64(id.data(), id.size()));
   }
   return run_id_;
 }
