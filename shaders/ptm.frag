@@ -17,6 +17,18 @@ uniform vec3 u_background;          // 0..1
 uniform mat3 u_Rt;                  // render camera → world rotation
 uniform vec4 u_K;                   // render fx fy cx cy
 uniform vec2 u_size;                // render size
+#ifdef MVTM_EXPOSURE
+uniform vec2 u_render_exposure;     // gain, offset/255: the render camera's exposure
+#endif
+
+// A projector's radiance L (common exposure) as the render camera records it.
+vec3 Expose(vec3 c) {
+#ifdef MVTM_EXPOSURE
+  return u_render_exposure.x * c + u_render_exposure.y;
+#else
+  return c;
+#endif
+}
 
 void main() {
   ivec2 p = ivec2(gl_FragCoord.xy);
@@ -29,8 +41,13 @@ void main() {
 #ifdef MVTM_PTM
     vec2 pix = vec2(gl_FragCoord.x, u_size.y - gl_FragCoord.y);  // pixel centre, row 0 on top
     vec3 rel = u_Rt * vec3((pix - u_K.zw) / u_K.xy * z, z);       // point − camera centre
-    if (FirstProjector(rel, 1.0, false, k, c)) {
-      o_colour = vec4(c, 1.0);
+#ifdef MVTM_BLEND
+    bool seen = BlendProjectors(rel, k, c);
+#else
+    bool seen = FirstProjector(rel, 1.0, false, k, c);
+#endif
+    if (seen) {
+      o_colour = vec4(Expose(c), 1.0);
       o_source = uint(k);
     }
 #endif
@@ -42,7 +59,7 @@ void main() {
   vec2 pix = vec2((v_ndc.x + 1.0) * 0.5 * u_size.x, (1.0 - v_ndc.y) * 0.5 * u_size.y);
   vec3 dir = u_Rt * vec3((pix - u_K.zw) / u_K.xy, 1.0);
   if (FirstProjector(dir, 0.0, true, k, c)) {
-    o_colour = vec4(c, 1.0);
+    o_colour = vec4(Expose(c), 1.0);
     o_source = uint(k);
   }
 #endif

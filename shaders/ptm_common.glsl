@@ -6,6 +6,9 @@
 //   MVTM_MASKS                skip masked projector texels (the next projector is tried)
 //   MVTM_SKYBOX               background from projectors, where their depth map is +inf
 //   MVTM_EXPOSURE             bring each projector's samples to the workspace's common exposure
+//   MVTM_BLEND                blend every projector that sees a point, weighted in the spirit of
+//                             the unstructured lumigraph (angle, resolution, border feathering,
+//                             soft occlusion), instead of taking the first one
 uniform int u_num_projectors;
 uniform mat3 u_proj_R[MVTM_MAX_PROJECTORS];   // world → projector camera rotation
 uniform vec3 u_proj_t[MVTM_MAX_PROJECTORS];   // R_k (C_render − C_k), double on the CPU
@@ -25,21 +28,53 @@ uniform sampler2DArray u_masks;               // R8, 1 = do not use this texel
 #ifdef MVTM_EXPOSURE
 uniform vec2 u_proj_exposure[MVTM_MAX_PROJECTORS];  // gain, offset/255 of I = gain·L + offset
 #endif
+#ifdef MVTM_BLEND
+uniform float u_blend_power;   // p: weight ∝ (1 / (penalty + 1e-3 rad))^p; larger = sharper
+uniform float u_feather;       // pixels over which a projector fades out towards its border
+uniform float u_res_weight;    // radians of penalty for a projector twice as far as the camera
+uniform float u_soft;          // soft occlusion: visibility falls from 1 at z = d·(1 + bias)
+                               // to 0 at z = d·(1 + bias + soft)
+#endif
 
 // Projects camera-relative point (or direction, w = 0) into projector k. Returns false when
 // the point is behind the projector (reverse-projection rejection) or outside its image (clip
 // test). uv: pixel coordinates, COLMAP convention (top-left pixel centre at 0.5, 0.5).
-bool ProjectInto(int k, vec3 rel, float w, out vec2 uv, out float z) {
-  vec3 x = u_proj_R[k] * rel + w * u_proj_t[k];
+bool ProjectInto(int k, vec3 rel, float w, out vec2 uv, out float z, out vec3 x) {
+  x = u_proj_R[k] * rel + w * u_proj_t[k];
   z = x.z;
   if (!(z > 1e-6 * max(1.0, length(x)))) return false;  // on or behind the projector plane
   uv = u_proj_K[k].xy * (x.xy / z) + u_proj_K[k].zw;
   return all(greaterThanEqual(uv, vec2(0.0))) && all(lessThan(uv, u_proj_size));
 }
+bool ProjectInto(int k, vec3 rel, float w, out vec2 uv, out float z) {
+  vec3 x;
+  return ProjectInto(k, rel, w, uv, z, x);
+}
 
 ivec3 Texel(int k, vec2 uv) {
   return ivec3(clamp(ivec2(floor(uv)), ivec2(0), ivec2(u_proj_size) - 1), u_proj_layer[k]);
 }
+
+#ifdef MVTM_OCCLUSION
+// The farthest of the four depth texels around uv (the bilinear footprint): a surface seen at a
+// grazing angle changes depth by metres per texel, and a single nearest texel would reject
+// visible points on it.
+float FootprintDepth(int k, vec2 uv) {
+#ifdef GL_ARB_texture_gather
+  vec4 q = textureGather(u_depths, vec3(uv / u_proj_size, float(u_proj_layer[k])));
+  return max(max(q.x, q.y), max(q.z, q.w));
+#else
+  ivec2 base = ivec2(floor(uv - 0.5));
+  float d = 0.0;
+  for (int j = 0; j < 2; ++j)
+    for (int i = 0; i < 2; ++i) {
+      ivec2 t = clamp(base + ivec2(i, j), ivec2(0), ivec2(u_proj_size) - 1);
+      d = max(d, texelFetch(u_depths, ivec3(t, u_proj_layer[k]), 0).r);
+    }
+  return d;
+#endif
+}
+#endif
 
 bool Usable(int k, vec2 uv, float z, bool at_infinity) {
 #ifdef MVTM_MASKS
@@ -52,21 +87,8 @@ bool Usable(int k, vec2 uv, float z, bool at_infinity) {
   }
 #endif
 #ifdef MVTM_OCCLUSION
-  // Occluded only when all four depth texels around uv (the bilinear footprint) are nearer:
-  // a surface seen at a grazing angle changes depth by metres per texel, and a single nearest
-  // texel would reject visible points on it.
-#ifdef GL_ARB_texture_gather
-  vec4 q = textureGather(u_depths, vec3(uv / u_proj_size, float(u_proj_layer[k])));
-  float d = max(max(q.x, q.y), max(q.z, q.w));
-#else
-  ivec2 base = ivec2(floor(uv - 0.5));
-  float d = 0.0;
-  for (int j = 0; j < 2; ++j)
-    for (int i = 0; i < 2; ++i) {
-      ivec2 t = clamp(base + ivec2(i, j), ivec2(0), ivec2(u_proj_size) - 1);
-      d = max(d, texelFetch(u_depths, ivec3(t, u_proj_layer[k]), 0).r);
-    }
-#endif
+  // Occluded only when all four depth texels around uv are nearer.
+  float d = FootprintDepth(k, uv);
   if (!isinf(d) && z > d * (1.0 + u_bias)) return false;  // something nearer hides this point
 #endif
   return true;
@@ -95,3 +117,62 @@ bool FirstProjector(vec3 rel, float w, bool at_infinity, out int k, out vec3 c) 
   }
   return false;
 }
+
+#ifdef MVTM_BLEND
+// How much of projector k's sample at uv (depth z) to trust: 0 when masked, fading from 1 to 0
+// as the point falls behind the projector's depth (soft occlusion).
+float Visibility(int k, vec2 uv, float z) {
+#ifdef MVTM_MASKS
+  if (texelFetch(u_masks, Texel(k, uv), 0).r > 0.5) return 0.0;
+#endif
+#ifdef MVTM_OCCLUSION
+  float d = FootprintDepth(k, uv);
+  if (!isinf(d)) return 1.0 - smoothstep(d * (1.0 + u_bias), d * (1.0 + u_bias + u_soft), z);
+#endif
+  return 1.0;
+}
+
+// Every projector that sees camera-relative point `rel`, blended (Buehler et al. 2001 in spirit):
+// weight = visibility · border feather · ((best + 1e-3) / (penalty + 1e-3))^p, penalty = the
+// angle between the render ray and the projector's ray at the point + u_res_weight · how much
+// farther the projector is, best = the least penalty (so weights stay in [0, 1] for any p). True
+// with the colour and the rank of the heaviest projector; false when none sees the point.
+bool BlendProjectors(vec3 rel, out int best, out vec3 c) {
+  vec2 uv[MVTM_MAX_PROJECTORS];
+  float trust[MVTM_MAX_PROJECTORS], pen[MVTM_MAX_PROJECTORS];
+  float rn = length(rel), least = 1e30;
+  for (int k = 0; k < MVTM_MAX_PROJECTORS; ++k) {
+    trust[k] = 0.0;
+    pen[k] = 0.0;
+    if (k >= u_num_projectors) break;
+    float z;
+    vec3 x;
+    if (!ProjectInto(k, rel, 1.0, uv[k], z, x)) continue;
+    float v = Visibility(k, uv[k], z);
+    if (!(v > 0.0)) continue;
+    vec2 e = min(uv[k], u_proj_size - uv[k]);
+    trust[k] = v * max(clamp(min(e.x, e.y) / u_feather, 0.0, 1.0), 1e-3);
+    float xn = length(x);
+    float cosa = dot(u_proj_R[k] * rel, x) / max(rn * xn, 1e-30);
+    pen[k] = acos(clamp(cosa, -1.0, 1.0)) + u_res_weight * max(0.0, 1.0 - rn / xn);
+    least = min(least, pen[k]);
+  }
+  float wsum = 0.0, wbest = 0.0;
+  vec3 acc = vec3(0.0);
+  best = -1;
+  for (int k = 0; k < MVTM_MAX_PROJECTORS; ++k) {
+    if (k >= u_num_projectors) break;
+    if (!(trust[k] > 0.0)) continue;
+    float w = trust[k] * pow((least + 1e-3) / (pen[k] + 1e-3), u_blend_power);
+    acc += w * Sample(k, uv[k]);
+    wsum += w;
+    if (w > wbest) {
+      wbest = w;
+      best = k;
+    }
+  }
+  if (!(wsum > 0.0)) return false;
+  c = acc / wsum;
+  return true;
+}
+#endif

@@ -82,15 +82,61 @@ void VertexColourBaker::Add(const Camera& camera, const Rigid3d& world_to_camera
 size_t VertexColourBaker::Finish(Mesh& mesh) const {
   if (mesh.vertices.size() != sum_.size())
     throw Error("vertex colours: the mesh is not the one baked");
+  const size_t n = mesh.vertices.size();
+  std::vector<Eigen::Vector3d> colour(n, Eigen::Vector3d::Constant(128.0));
+  std::vector<uint8_t> known(n, 0);
   size_t coloured = 0;
-  mesh.colors.resize(mesh.vertices.size());
-  for (size_t v = 0; v < mesh.vertices.size(); ++v) {
-    if (weight_[v] > 0) ++coloured;
-    for (int ch = 0; ch < 3; ++ch) {
-      const double c = weight_[v] > 0 ? sum_[v][ch] / weight_[v] : 128.0;  // unseen: mid grey
-      mesh.colors[v][size_t(ch)] = static_cast<uint8_t>(std::lround(std::clamp(c, 0.0, 255.0)));
+  for (size_t v = 0; v < n; ++v)
+    if (weight_[v] > 0) {
+      colour[v] = sum_[v] / weight_[v];
+      known[v] = 1;
+      ++coloured;
     }
+  // Unseen vertices take the mean colour of their already coloured neighbours, front by front
+  // outwards from the seen ones (a vertex's front is its edge distance to the nearest seen one).
+  std::vector<std::vector<uint32_t>> nbr(n);
+  for (const auto& f : mesh.faces)
+    for (int i = 0; i < 3; ++i) {
+      nbr[f[size_t(i)]].push_back(f[size_t((i + 1) % 3)]);
+      nbr[f[size_t((i + 1) % 3)]].push_back(f[size_t(i)]);
+    }
+  std::vector<uint32_t> front;
+  for (size_t v = 0; v < n; ++v)
+    if (!known[v])
+      for (uint32_t u : nbr[v])
+        if (known[u]) {
+          front.push_back(uint32_t(v));
+          break;
+        }
+  while (!front.empty()) {
+    std::vector<std::pair<uint32_t, Eigen::Vector3d>> fill;
+    for (uint32_t v : front) {
+      if (known[v]) continue;
+      Eigen::Vector3d s = Eigen::Vector3d::Zero();
+      int k = 0;
+      for (uint32_t u : nbr[v])
+        if (known[u]) s += colour[u], ++k;
+      if (k) fill.emplace_back(v, s / k);
+    }
+    std::vector<uint32_t> next;
+    for (const auto& [v, c] : fill) {
+      if (known[v]) continue;
+      colour[v] = c;
+      known[v] = 2;
+    }
+    for (const auto& [v, c] : fill)
+      for (uint32_t u : nbr[v])
+        if (!known[u]) next.push_back(u);
+    for (const auto& [v, c] : fill) known[v] = 1;
+    std::sort(next.begin(), next.end());
+    next.erase(std::unique(next.begin(), next.end()), next.end());
+    front = std::move(next);
   }
+  mesh.colors.resize(n);
+  for (size_t v = 0; v < n; ++v)
+    for (int ch = 0; ch < 3; ++ch)
+      mesh.colors[v][size_t(ch)] =
+          static_cast<uint8_t>(std::lround(std::clamp(colour[v][ch], 0.0, 255.0)));
   return coloured;
 }
 

@@ -6,8 +6,10 @@
 // around it + 0.02: depth maps rendered through render/renderer.h, so silhouettes and grazing
 // angles are kept) and faces the camera (cosine between its normal and the direction to the
 // camera above 0.02). Its sample is the bilinear image value at the projection (pixel centres at
-// +0.5; grey images give grey colours), weighted by cosine / distance. Unseen vertices are mid
-// grey (128).
+// +0.5; grey images give grey colours), weighted by cosine / distance. Unseen vertices take the
+// colour of their seen neighbours: the mean of the already coloured vertices they share an edge
+// with, front by front outwards from the seen ones (never black); a part of the mesh no image
+// sees anywhere stays mid grey (128).
 //
 // Conventions: poses are COLMAP's (world-to-camera; the quaternion is normalised here); cameras
 // undistorted (PINHOLE / SIMPLE_PINHOLE), scaled to the image when its size differs; images in

@@ -16,6 +16,7 @@ std::vector<std::string> EffectsPlan::Defines() const {
   if (masks) d.push_back("MVTM_MASKS");
   if (skybox) d.push_back("MVTM_SKYBOX");
   if (exposure) d.push_back("MVTM_EXPOSURE");
+  if (ptm && blend && projectors > 1) d.push_back("MVTM_BLEND");
   return d;
 }
 
@@ -77,6 +78,12 @@ EffectsPlan PlanEffects(const SceneSurvey& s) {
   plan.masks = s.ptm && !s.no_masks && !s.mask_example.empty();
   plan.skybox = s.ptm && !s.no_skybox && s.frames_with_holes > 0;
   plan.exposure = s.ptm && !s.no_exposure && !s.exposure_example.empty();
+  plan.blend = plan.projectors > 1 && !s.no_blend;
+  plan.blend_power = s.blend_power;
+  plan.feather = s.feather;
+  plan.res_weight = s.res_weight;
+  plan.soft = s.soft;
+  plan.fill = s.ptm && !s.no_fill && s.frames_with_holes > 0;
   return plan;
 }
 
@@ -119,6 +126,16 @@ nlohmann::json ExplainEffects(const SceneSurvey& s, const EffectsPlan& plan) {
                                     : s.projectors_requested == 1
                                         ? "--projectors 1 (vertex colours where it does not reach)"
                                         : "no frame has more than one admissible projector")},
+      {"blend",
+       Choice(plan.blend,
+              "several projectors see most points: each pixel blends those that see it, "
+              "weighted by the angle between its ray and theirs (power " +
+                  ShortDouble(plan.blend_power) + "), resolution (" + ShortDouble(plan.res_weight) +
+                  " rad per halving), border feathering (" + ShortDouble(plan.feather) +
+                  " px) and soft occlusion (" + ShortDouble(plan.soft) + ")",
+              !s.ptm       ? vertex_mode
+              : s.no_blend ? "turned off by --no-blend (the first projector that sees a point)"
+                           : "a single projector per pixel")},
       {"vertex_colour_fallback",
        Choice(true, s.ptm ? "where no projector reaches" : vertex_mode, "")},
       {"masks", Choice(plan.masks, "selected projector " + s.mask_example + " has masked pixels",
@@ -132,11 +149,21 @@ nlohmann::json ExplainEffects(const SceneSurvey& s, const EffectsPlan& plan) {
               !s.ptm        ? vertex_mode
               : s.no_skybox ? "turned off by --no-skybox"
                             : "every pixel of every frame sees the mesh")},
+      {"fill",
+       Choice(plan.fill,
+              std::to_string(s.frames_with_holes) + " of " + std::to_string(s.frames_surveyed) +
+                  " frames see no surface somewhere: where no projector sees sky there either, "
+                  "the pixels are filled from their surroundings (push-pull), never the "
+                  "constant background",
+              !s.ptm      ? vertex_mode
+              : s.no_fill ? "turned off by --no-fill (constant background where nothing is seen)"
+                          : "every pixel of every frame sees the mesh")},
       {"exposure",
        Choice(plan.exposure,
               "selected projector " + s.exposure_example +
                   " was recorded at another exposure (exposure.tsv): its samples are brought to "
-                  "the common one",
+                  "the common one, and the render is recorded at the exposure of its nearest "
+                  "projectors (inverse-square distance weights)",
               !s.ptm ? vertex_mode
               : s.no_exposure
                   ? "turned off by --no-exposure"

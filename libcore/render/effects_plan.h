@@ -29,6 +29,18 @@ struct EffectsPlan {
   bool skybox = false;     // background from projectors at infinity (else constant colour)
   bool exposure = false;   // projectors' samples brought to the common exposure (gain, offset)
   double bias = 0.005;     // relative occlusion bias: occluded when z > d·(1 + bias)
+  // Blending (MVTM_BLEND): every projector that sees a point, weighted by visibility (soft
+  // occlusion), border feathering and (1 / (penalty + 1e-3 rad))^blend_power with penalty = the
+  // angle between the render ray and the projector's + res_weight · max(0, 1 − d_render/d_proj);
+  // off: the first projector in rank order that sees the point (thesis Alg. 3).
+  bool blend = false;
+  double blend_power = 2;   // sharpness p (large: the best-angle projector alone)
+  double feather = 16;      // pixels over which a projector fades out at its image border
+  double res_weight = 0.1;  // radians of penalty for a projector twice as far as the camera
+  double soft = 0.01;       // soft occlusion width, relative (visibility 1 → 0 over d·soft)
+  // Pixels no projector, no vertex and no sky colours (background) are filled from their
+  // surroundings (push-pull) instead of the constant background.
+  bool fill = false;
   std::array<float, 3> background{0, 0, 0};  // 0..255
 
   // The shader's #define switches for this plan.
@@ -38,11 +50,13 @@ struct EffectsPlan {
 // What the inputs of a job say, and what the user asked for.
 struct SceneSurvey {
   // The request.
-  bool ptm = true;                                                 // false: vertex-colour mode
-  int projectors_requested = 4;                                    // K
-  double bias = 0.005;                                             // relative occlusion bias
-  bool no_occlusion = false, no_masks = false, no_skybox = false;  // the user's switches
-  bool no_exposure = false;                                        // the user's switch
+  bool ptm = true;                                                      // false: vertex-colour mode
+  int projectors_requested = 4;                                         // K
+  double bias = 0.005;                                                  // relative occlusion bias
+  bool no_occlusion = false, no_masks = false, no_skybox = false;       // the user's switches
+  bool no_exposure = false;                                             // the user's switch
+  bool no_blend = false, no_fill = false;                               // the user's switches
+  double blend_power = 2, feather = 16, res_weight = 0.1, soft = 0.01;  // EffectsPlan's
   // The inputs.
   bool projector_differs = false;   // some selected projector is not the pose it serves
   bool several_admissible = false;  // some pose has more than one admissible projector
@@ -74,8 +88,8 @@ void AddToSurvey(SceneSurvey& survey, const ViewCoverage& view, const std::strin
 EffectsPlan PlanEffects(const SceneSurvey& survey);
 
 // {"reverse_projection_rejection": {"on": true, "reason": "..."}, "clip_test": ..., "occlusion":
-// ..., "several_projectors": ..., "vertex_colour_fallback": ..., "masks": ..., "skybox": ...,
-// "exposure": ...}
+// ..., "several_projectors": ..., "blend": ..., "vertex_colour_fallback": ..., "masks": ...,
+// "skybox": ..., "fill": ..., "exposure": ...}
 nlohmann::json ExplainEffects(const SceneSurvey& survey, const EffectsPlan& plan);
 
 }  // namespace mvtm

@@ -11,6 +11,7 @@
 #include <unordered_map>
 
 #include "base/error.h"
+#include "image/push_pull.h"
 #include "render/gl_program.h"
 
 namespace mvtm {
@@ -358,7 +359,7 @@ struct Renderer::Impl {
   void DrawSurface(Target& t, const std::vector<Target::Format>& formats, const char* frag,
                    const View& view, RenderStats* stats);
   void Shade(const View& view, const std::vector<Projector>& projectors, const EffectsPlan& plan,
-             const std::vector<int>& layer_of);
+             const std::vector<int>& layer_of, FrameExposure exposure);
   void SetProjectors(GLuint prog, const View& v, const std::vector<Projector>& ps,
                      const EffectsPlan& plan, const std::vector<int>& layer_of) {
     int n = std::min<int>(plan.projectors, static_cast<int>(ps.size()));
@@ -390,6 +391,10 @@ struct Renderer::Impl {
     glUniform1i(glGetUniformLocation(prog, "u_depths"), 1);
     glUniform1i(glGetUniformLocation(prog, "u_masks"), 2);
     glUniform1f(glGetUniformLocation(prog, "u_bias"), float(plan.bias));
+    glUniform1f(glGetUniformLocation(prog, "u_blend_power"), float(plan.blend_power));
+    glUniform1f(glGetUniformLocation(prog, "u_feather"), float(std::max(plan.feather, 1e-3)));
+    glUniform1f(glGetUniformLocation(prog, "u_res_weight"), float(plan.res_weight));
+    glUniform1f(glGetUniformLocation(prog, "u_soft"), float(std::max(plan.soft, 1e-6)));
   }
 };
 
@@ -535,11 +540,27 @@ Renderer::Frame ReadFrame(int w, int h) {
   return out;
 }
 
+// plan.fill: the background pixels (no surface, no sky) take the colour of the rest around them.
+void FillBackground(Image& colour, Image& source) {
+  std::vector<uint8_t> known(source.pixels());
+  for (size_t p = 0; p < known.size(); ++p) known[p] = source.data[p] != kSourceBackground;
+  if (!PushPullFill(colour, known)) return;
+  for (size_t p = 0; p < known.size(); ++p) {
+    if (known[p]) continue;
+    source.data[p] = kSourceFilled;
+    for (int c = 0; c < colour.channels; ++c) {  // 8-bit frames, as ReadFrame gives
+      float& v = colour.data[p * colour.channels + c];
+      v = std::nearbyint(std::clamp(v, 0.f, 255.f));
+    }
+  }
+}
+
 }  // namespace
 
 // The second pass: ptm.frag once per pixel over the surface pass, into colour and source.
 void Renderer::Impl::Shade(const View& view, const std::vector<Projector>& projectors,
-                           const EffectsPlan& plan, const std::vector<int>& layer_of) {
+                           const EffectsPlan& plan, const std::vector<int>& layer_of,
+                           FrameExposure exposure) {
   std::vector<std::string> inc;
   if (plan.ptm || plan.skybox) inc.push_back("ptm_common.glsl");
   GLuint prog = Program("screen.vert", "ptm.frag", plan.Defines(), inc);
@@ -560,13 +581,16 @@ void Renderer::Impl::Shade(const View& view, const std::vector<Projector>& proje
   glUniform2f(glGetUniformLocation(prog, "u_size"), float(view.camera.width),
               float(view.camera.height));
   if (plan.ptm || plan.skybox) SetProjectors(prog, view, projectors, plan, layer_of);
+  glUniform2f(glGetUniformLocation(prog, "u_render_exposure"), exposure.gain,
+              exposure.offset / 255.f);
   glBindVertexArray(screen_vao);
   glDrawArrays(GL_TRIANGLES, 0, 3);
   glEnable(GL_DEPTH_TEST);
 }
 
 Renderer::Frame Renderer::Render(const View& view, const std::vector<Projector>& projectors,
-                                 const EffectsPlan& plan_in, RenderStats* stats, bool with_depth) {
+                                 const EffectsPlan& plan_in, RenderStats* stats, bool with_depth,
+                                 FrameExposure exposure) {
   view.camera.RequireUndistorted();
   Impl& m = *impl_;
   EffectsPlan plan = plan_in;
@@ -593,7 +617,7 @@ Renderer::Frame Renderer::Render(const View& view, const std::vector<Projector>&
   m.EnsureTarget(m.colour_target, w, h, {kRgba8, kSource}, false);
   glBindFramebuffer(GL_FRAMEBUFFER, m.colour_target.fbo);
   glViewport(0, 0, w, h);
-  m.Shade(view, projectors, plan, layer_of);
+  m.Shade(view, projectors, plan, layer_of, exposure);
   glFinish();
   auto t0 = Clock::now();
   Frame out = ReadFrame(w, h);
@@ -601,9 +625,12 @@ Renderer::Frame Renderer::Render(const View& view, const std::vector<Projector>&
     glBindFramebuffer(GL_FRAMEBUFFER, m.surface_target.fbo);
     out.depth = ReadLinearDepth(w, h);
   }
+  auto t_read = Clock::now();
+  if (plan.fill) FillBackground(out.colour, out.source);
   if (stats) {
     stats->shade_ms += Ms(t_shade, t0);
-    stats->readback_ms += Ms(t0, Clock::now());
+    stats->readback_ms += Ms(t0, t_read);
+    stats->fill_ms += Ms(t_read, Clock::now());
   }
   CheckGlError("Render");
   return out;

@@ -51,10 +51,18 @@ struct RenderStats {
   size_t chunks_drawn = 0, chunks_total = 0, triangles_drawn = 0;
   double cull_ms = 0, draw_ms = 0, readback_ms = 0;
   double shade_ms = 0;  // Render's second pass: texturing each pixel once
+  double fill_ms = 0;   // the push-pull fill (plan.fill)
 };
 
-// What a frame's pixels came from: 0..K−1 projector rank, 254 vertex colour, 255 background.
-inline constexpr uint8_t kSourceVertex = 254, kSourceBackground = 255;
+// What a frame's pixels came from: 0..K−1 projector rank (with blending: the heaviest), 253
+// filled from the surrounding pixels (plan.fill), 254 vertex colour, 255 background.
+inline constexpr uint8_t kSourceFilled = 253, kSourceVertex = 254, kSourceBackground = 255;
+
+// The exposure a render camera records at, I = gain · L + offset (8-bit scale), used with
+// plan.exposure; the identity is the workspace's common exposure.
+struct FrameExposure {
+  float gain = 1.f, offset = 0.f;
+};
 
 class Renderer {
  public:
@@ -78,9 +86,11 @@ class Renderer {
   // plan.skybox (sky is taken only where a projector sees no surface), masks when
   // plan.masks (a projector without one is treated as unmasked).
   // Two passes: the mesh once for the surface each pixel sees, then the texturing once per pixel.
-  // The skybox changes only pixels with no surface (those where depth is +inf).
+  // The skybox changes only pixels with no surface (those where depth is +inf); so does the fill
+  // (plan.fill: the pixels left at the background are filled by push-pull, render/fill.h).
   Frame Render(const View& view, const std::vector<Projector>& projectors, const EffectsPlan& plan,
-               RenderStats* stats = nullptr, bool with_depth = false);
+               RenderStats* stats = nullptr, bool with_depth = false,
+               FrameExposure exposure = FrameExposure());
 
   size_t triangles() const;
   size_t chunks() const;

@@ -60,6 +60,24 @@ OptionTable DeclareOptions(PtmRenderOptions& o) {
   t.Flag("--no-masks", &o.no_masks, "Ignore masks/ (vehicles are projected too)");
   t.Flag("--no-exposure", &o.no_exposure,
          "Ignore exposure.tsv (each projector at its own exposure)");
+  t.Flag("--no-blend", &o.no_blend,
+         "Take the first projector that sees a point instead of blending those that do");
+  t.Real("--blend-power", &o.blend_power,
+         "Blending sharpness p: weight (1/(angle penalty + 0.001 rad))^p")
+      .Range(0, 64);
+  t.Real("--feather", &o.feather, "Pixels over which a projector fades out at its image border")
+      .Range(0, 1000);
+  t.Real("--res-weight", &o.res_weight,
+         "Blending: radians of penalty for a projector twice as far from a point as the camera")
+      .Range(0, 100);
+  t.Real("--soft", &o.soft,
+         "Blending: soft occlusion width, relative (visibility 1 to 0 over depth*(1+bias..+soft))")
+      .Range(0, 1, false, true);
+  t.Flag("--no-fill", &o.no_fill,
+         "Constant background where nothing is seen instead of filling from the surroundings");
+  t.Choice("--render-exposure", &o.render_exposure, kRenderExposures,
+           "With exposure.tsv: record the render at its nearest projectors' exposure, or at the "
+           "workspace's common one");
   t.Text("--size", &o.size, "Render size WxH (default: the camera's)")
       .Alternative("40x12")
       .Check([&o] {
@@ -227,6 +245,12 @@ SceneSurvey StartSurvey(const PtmRenderOptions& o, const Workspace& ws, const Sc
   s.no_masks = o.no_masks;
   s.no_skybox = o.no_skybox;
   s.no_exposure = o.no_exposure;
+  s.no_blend = o.no_blend;
+  s.no_fill = o.no_fill;
+  s.blend_power = o.blend_power;
+  s.feather = o.feather;
+  s.res_weight = o.res_weight;
+  s.soft = o.soft;
   s.projector_differs = picks.differs;
   s.several_admissible = picks.several;
   if (s.ptm && !o.no_masks) s.mask_example = FindMaskedProjector(ws, scene, picks.used);
@@ -335,10 +359,28 @@ std::vector<Projector> FrameProjectors(const FrameJob& job, const EffectsPlan& p
   return ps;
 }
 
+// The exposure the render camera records at: its projectors' exposures weighted by inverse
+// squared distance (a projector at the pose itself alone), or the common one.
+FrameExposure RenderExposureOf(const FrameJob& job, const EffectsPlan& plan,
+                               const std::vector<Projector>& ps, size_t i) {
+  FrameExposure e;
+  if (!plan.exposure || job.o.render_exposure == RenderExposure::kCommon || ps.empty()) return e;
+  const Eigen::Vector3d c = job.poses[i].w2c.Centre();
+  double sw = 0, g = 0, off = 0;
+  for (const Projector& p : ps) {
+    const double d2 = (p.view.world_to_camera.Centre() - c).squaredNorm();
+    if (d2 == 0) return FrameExposure{p.gain, p.offset};
+    sw += 1 / d2;
+    g += p.gain / d2;
+    off += p.offset / d2;
+  }
+  return FrameExposure{float(g / sw), float(off / sw)};
+}
+
 // Renders the frames, surveying each from its own render (its depth: holes, coverage) instead of
 // a depth pass of its own. The plan starts as the survey without holes; the first frame with a
-// hole turns the skybox on (PlanEffects) and is rendered again. Frames before it are unchanged
-// by that, since the skybox only colours pixels with no surface.
+// hole turns the skybox and the fill on (PlanEffects) and is rendered again. Frames before it are
+// unchanged by that, since the skybox only colours pixels with no surface.
 void RenderFrames(const FrameJob& job, Renderer& renderer, const std::vector<size_t>& todo,
                   SceneSurvey& survey, EffectsPlan& plan, PtmRenderReport& rep) {
   const fs::path outdir(job.o.outdir);
@@ -363,20 +405,22 @@ void RenderFrames(const FrameJob& job, Renderer& renderer, const std::vector<siz
       }
       auto t1 = Clock::now();
       RenderStats stats;
-      f = renderer.Render(view, ps, plan, &stats, /*with_depth=*/survey.ptm);
+      f = renderer.Render(view, ps, plan, &stats, /*with_depth=*/survey.ptm,
+                          RenderExposureOf(job, plan, ps, i));
       auto t2 = Clock::now();
       rep.load_ms += Ms(t0, t1);
       rep.render_ms += Ms(t1, t2);
       rep.draw_ms += stats.draw_ms;
       rep.shade_ms += stats.shade_ms;
       rep.readback_ms += stats.readback_ms;
+      rep.fill_ms += stats.fill_ms;
       again = false;
       if (survey.ptm && !surveyed) {
         AddToSurvey(survey, CoverageOf(f.depth, view, ps.empty() ? nullptr : &ps[0].view),
                     job.poses[i].name);
         surveyed = true;
         const EffectsPlan now = PlanEffects(survey);
-        again = now.skybox != plan.skybox;
+        again = now.skybox != plan.skybox || now.fill != plan.fill;
         plan = now;
         rep.survey_ms += Ms(t2, Clock::now());
       }

@@ -19,6 +19,11 @@ enum class PtmMode { kPtm, kVertex };
 inline const std::vector<std::pair<PtmMode, std::string>> kPtmModes = {
     {PtmMode::kPtm, "ptm"}, {PtmMode::kVertex, "vertex"}};
 
+// --render-exposure: the exposure the rendered camera records at (with exposure.tsv).
+enum class RenderExposure { kNearest, kCommon };
+inline const std::vector<std::pair<RenderExposure, std::string>> kRenderExposures = {
+    {RenderExposure::kNearest, "nearest"}, {RenderExposure::kCommon, "common"}};
+
 // Work items: the render poses in order (--frames/--shard select among them).
 struct PtmRenderOptions : WorkOptions {
   std::string workspace, outdir;
@@ -32,10 +37,14 @@ struct PtmRenderOptions : WorkOptions {
   double bias = 0.005;  // relative occlusion bias
   bool no_occlusion = false, no_skybox = false, no_masks = false;
   bool no_exposure = false;  // ignore exposure.tsv (projectors at their own exposures)
-  std::string size;          // WxH render size (default: the camera's)
-  bool explain = false;      // print the effects plan as JSON and render nothing
-  bool provenance = false;   // also write OUTDIR/provenance/NAME.png (source of each pixel)
-  bool exr = false;          // write float EXR instead of PNG
+  bool no_blend = false;     // the first projector that sees a point, not a weighted blend
+  bool no_fill = false;      // constant background where nothing is seen, not push-pull
+  double blend_power = 2, feather = 16, res_weight = 0.1, soft = 0.01;  // EffectsPlan's
+  RenderExposure render_exposure = RenderExposure::kNearest;
+  std::string size;         // WxH render size (default: the camera's)
+  bool explain = false;     // print the effects plan as JSON and render nothing
+  bool provenance = false;  // also write OUTDIR/provenance/NAME.png (source of each pixel)
+  bool exr = false;         // write float EXR instead of PNG
   ViewSelectionOptions selection;
   GlBackend gl = GlBackend::kAuto;
 
@@ -53,6 +62,7 @@ struct PtmRenderReport {
   double draw_ms = 0;      // ... of which the mesh pass (RenderStats::draw_ms)
   double shade_ms = 0;     // ... of which the texturing pass (RenderStats::shade_ms)
   double readback_ms = 0;  // ... of which reading the frame back from GL
+  double fill_ms = 0;      // ... of which the push-pull fill (RenderStats::fill_ms)
   double depth_ms = 0;     // survey_ms + gathering depth maps (also in load_ms)
   double survey_ms = 0;    // the plan's depth passes (holes, coverage)
   double load_ms = 0;      // gathering each frame's projector images, masks and depth maps

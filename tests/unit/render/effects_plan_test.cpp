@@ -35,9 +35,16 @@ TEST(EffectsPlan, EverythingTheSceneCallsForIsOn) {
   EXPECT_TRUE(p.occlusion);
   EXPECT_TRUE(p.masks);
   EXPECT_TRUE(p.skybox);
-  EXPECT_EQ(p.Defines(), (std::vector<std::string>{"MVTM_MAX_PROJECTORS 3", "MVTM_PTM",
-                                                   "MVTM_OCCLUSION", "MVTM_MASKS", "MVTM_SKYBOX"}));
+  EXPECT_TRUE(p.blend);
+  EXPECT_TRUE(p.fill);
+  EXPECT_EQ(p.Defines(),
+            (std::vector<std::string>{"MVTM_MAX_PROJECTORS 3", "MVTM_PTM", "MVTM_OCCLUSION",
+                                      "MVTM_MASKS", "MVTM_SKYBOX", "MVTM_BLEND"}));
   const auto j = ExplainEffects(s, p);
+  EXPECT_EQ(j["fill"]["reason"],
+            "1 of 4 frames see no surface somewhere: where no projector sees sky there either, the "
+            "pixels are filled from their surroundings (push-pull), never the constant "
+            "background");
   EXPECT_EQ(j["masks"]["reason"], "selected projector A_0001.png has masked pixels");
   EXPECT_EQ(j["skybox"]["reason"], "1 of 4 frames see no surface somewhere (e.g. A_0002.png)");
   EXPECT_EQ(j["several_projectors"]["reason"],
@@ -50,10 +57,12 @@ TEST(EffectsPlan, NothingTheSceneDoesNotCallFor) {
   SceneSurvey s;  // one projector, the pose itself, no masks, no holes
   const EffectsPlan p = PlanEffects(s);
   EXPECT_EQ(p.projectors, 1);
-  EXPECT_FALSE(p.occlusion || p.masks || p.skybox);
+  EXPECT_FALSE(p.occlusion || p.masks || p.skybox || p.blend || p.fill);
   EXPECT_EQ(p.Defines(), (std::vector<std::string>{"MVTM_MAX_PROJECTORS 1", "MVTM_PTM"}));
   const auto j = ExplainEffects(s, p);
   EXPECT_EQ(j["occlusion"]["reason"], "every projector is the render pose itself");
+  EXPECT_EQ(j["blend"]["reason"], "a single projector per pixel");
+  EXPECT_EQ(j["fill"]["reason"], "every pixel of every frame sees the mesh");
   EXPECT_EQ(j["masks"]["reason"], "no selected projector has a non-empty mask");
   EXPECT_EQ(j["skybox"]["reason"], "every pixel of every frame sees the mesh");
   EXPECT_EQ(j["several_projectors"]["reason"], "no frame has more than one admissible projector");
@@ -63,10 +72,10 @@ TEST(EffectsPlan, NothingTheSceneDoesNotCallFor) {
 
 TEST(EffectsPlan, UserSwitchesWinAndSayWhy) {
   SceneSurvey s = Everything();
-  s.no_occlusion = s.no_masks = s.no_skybox = true;
+  s.no_occlusion = s.no_masks = s.no_skybox = s.no_fill = true;
   s.projectors_requested = 1;
   const EffectsPlan p = PlanEffects(s);
-  EXPECT_FALSE(p.occlusion || p.masks || p.skybox);
+  EXPECT_FALSE(p.occlusion || p.masks || p.skybox || p.fill);
   EXPECT_EQ(p.projectors, 1);
   const auto j = ExplainEffects(s, p);
   EXPECT_EQ(j["occlusion"]["reason"], "turned off by --no-occlusion");
@@ -74,17 +83,26 @@ TEST(EffectsPlan, UserSwitchesWinAndSayWhy) {
   EXPECT_EQ(j["skybox"]["reason"], "turned off by --no-skybox");
   EXPECT_EQ(j["several_projectors"]["reason"],
             "--projectors 1 (vertex colours where it does not reach)");
+  EXPECT_EQ(j["fill"]["reason"],
+            "turned off by --no-fill (constant background where nothing is seen)");
+  SceneSurvey b = Everything();
+  b.no_blend = true;
+  const EffectsPlan q = PlanEffects(b);
+  EXPECT_FALSE(q.blend);
+  EXPECT_EQ(q.projectors, 3);
+  EXPECT_EQ(ExplainEffects(b, q)["blend"]["reason"],
+            "turned off by --no-blend (the first projector that sees a point)");
 }
 
 TEST(EffectsPlan, VertexModeTurnsEveryProjectiveEffectOff) {
   SceneSurvey s = Everything();
   s.ptm = false;
   const EffectsPlan p = PlanEffects(s);
-  EXPECT_FALSE(p.ptm || p.occlusion || p.masks || p.skybox);
+  EXPECT_FALSE(p.ptm || p.occlusion || p.masks || p.skybox || p.blend || p.fill);
   EXPECT_EQ(p.Defines(), (std::vector<std::string>{"MVTM_MAX_PROJECTORS 1"}));
   const auto j = ExplainEffects(s, p);
   for (const char* e : {"reverse_projection_rejection", "clip_test", "occlusion",
-                        "several_projectors", "masks", "skybox"}) {
+                        "several_projectors", "blend", "masks", "skybox", "fill"}) {
     EXPECT_FALSE(j[e]["on"]) << e;
     EXPECT_EQ(j[e]["reason"], "vertex-colour mode") << e;
   }

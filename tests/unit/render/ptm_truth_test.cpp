@@ -12,6 +12,7 @@
 #include "bakedepth.h"
 #include "image/image.h"
 #include "image/ssim.h"
+#include "io/mesh_io.h"
 #include "mkroad/mkroad.h"
 #include "ptmrender.h"
 
@@ -174,10 +175,19 @@ TEST_F(PtmTruth, OffPathConfigurationsTable) {
   std::vector<Config> configs = {
       {"vertex", [](PtmRenderOptions& o) { o.mode = PtmMode::kVertex; }},
       {"ptm",
-       [](PtmRenderOptions& o) { o.projectors = 1, o.no_occlusion = true, o.no_skybox = true; }},
-      {"+occlusion", [](PtmRenderOptions& o) { o.projectors = 1, o.no_skybox = true; }},
-      {"+several", [](PtmRenderOptions& o) { o.projectors = 4, o.no_skybox = true; }},
-      {"+skybox", [](PtmRenderOptions& o) { o.projectors = 4; }},
+       [](PtmRenderOptions& o) {
+         o.projectors = 1, o.no_occlusion = true, o.no_skybox = true, o.no_fill = true;
+       }},
+      {"+occlusion",
+       [](PtmRenderOptions& o) { o.projectors = 1, o.no_skybox = true, o.no_fill = true; }},
+      {"+several",
+       [](PtmRenderOptions& o) {
+         o.projectors = 4, o.no_blend = true, o.no_skybox = true, o.no_fill = true;
+       }},
+      {"+blend",
+       [](PtmRenderOptions& o) { o.projectors = 4, o.no_skybox = true, o.no_fill = true; }},
+      {"+skybox", [](PtmRenderOptions& o) { o.projectors = 4, o.no_fill = true; }},
+      {"+fill", [](PtmRenderOptions& o) { o.projectors = 4; }},
   };
   std::printf("[off-path] mean SSIM against ray-traced truth\n%-12s", "variant");
   for (const auto& c : configs) std::printf(" %10s", c.name);
@@ -203,10 +213,67 @@ TEST_F(PtmTruth, OffPathConfigurationsTable) {
   std::printf("%-12s", "mean");
   for (size_t c = 0; c < configs.size(); ++c) std::printf(" %10.4f", sum[c] / variants);
   std::printf("\n");
-  // No added effect lowers the mean.
+  // No added effect lowers the mean, except that blending may cost a little here: on the
+  // fixture's exact mesh the nearest projector is already right, and a blend resamples several
+  // (measured: 0.7783 first projector, 0.7741 blended at power 2), while on meshes built from the
+  // photos it gains (mkroad's road build: lanes 0.631/0.642 → 0.634/0.664; KITTI 01's right
+  // camera: 0.729 → 0.747).
   for (size_t c = 1; c < configs.size(); ++c)
-    EXPECT_GE(sum[c], sum[c - 1] - 1e-9) << configs[c].name;
+    EXPECT_GE(sum[c], sum[c - 1] - (std::string(configs[c].name) == "+blend" ? 0.04 : 1e-9))
+        << configs[c].name;
   EXPECT_GT(sum[1], sum[0]);  // PTM beats vertex colours
+}
+
+// Issue 19's "no black, ever": a mesh with holes (every 9th triangle removed, as a mesh built
+// from photos has them) seen 1.5 m beside the path. Through a hole the render sees nothing, and
+// in that direction the projectors see the surface behind it, not sky: without the fill those
+// pixels are the constant black background. With it, not a single pixel is black where the
+// ray-traced truth is not.
+TEST_F(PtmTruth, NoBlackPixelBesideThePathOnAMeshWithHoles) {
+  const fs::path local = Root() / "local", holed = Root() / "holed";
+  fs::create_directories(holed);
+  for (const char* item : {"sparse", "images", "masks"})
+    fs::copy(local / item, holed / item, fs::copy_options::recursive);
+  Mesh mesh = ReadMesh((local / "mesh.ply").string());
+  std::vector<std::array<uint32_t, 3>> kept;
+  for (size_t f = 0; f < mesh.faces.size(); ++f)
+    if (f % 9 != 4) kept.push_back(mesh.faces[f]);
+  mesh.faces = kept;
+  WriteMesh((holed / "mesh.ply").string(), mesh);
+  BakeDepthOptions b;
+  b.workspace = holed.string();
+  b.quiet = true;
+  RunBakeDepth(b);
+  const fs::path truth = local / "truth/offpath/lane_left";
+  auto black = [](const Image& im, size_t p) {
+    for (int c = 0; c < std::min(im.channels, 3); ++c)
+      if (im.data[p * im.channels + c] > 2) return false;
+    return true;
+  };
+  auto count = [&](const std::string& out) {
+    size_t n = 0, frames = 0;
+    for (const auto& e : fs::directory_iterator(Root() / "renders" / out)) {
+      if (!e.is_regular_file()) continue;
+      const Image r = ReadImage(e.path().string());
+      const Image t = ReadImage((truth / "images" / e.path().filename()).string());
+      for (size_t p = 0; p < r.pixels(); ++p) n += black(r, p) && !black(t, p);
+      ++frames;
+    }
+    EXPECT_GT(frames, 0u);
+    return n;
+  };
+  for (bool fill : {false, true})
+    Render("holed", fill ? "holed_fill" : "holed_nofill", [&](PtmRenderOptions& o) {
+      o.poses = (truth / "sparse/images.txt").string();
+      o.no_fill = !fill;
+    });
+  const size_t without = count("holed_nofill"), with = count("holed_fill");
+  std::printf(
+      "[holed mesh, 1.5 m left] black pixels where the truth has none: %zu without the "
+      "fill, %zu with it\n",
+      without, with);
+  EXPECT_GT(without, 100u);  // the scene exercises the fill
+  EXPECT_EQ(with, 0u);
 }
 
 TEST_F(PtmTruth, UtmSceneRendersLikeTheOrigin) {

@@ -3,6 +3,7 @@
 // projector plane, grazing triangles, a projector that sees nothing, bad inputs).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -324,6 +325,93 @@ TEST_F(RenderTest, UnneededEffectsChangeNoPixel) {
   std::vector<Projector> masked = {{proj, &img, &d1, &half}, {proj2, &img2, &d2, &empty_mask}};
   masks.projectors = 2;
   EXPECT_NE(r.Render(view, masked, masks).colour.data, ref.colour.data);
+}
+
+TEST_F(RenderTest, BlendWeighsProjectorsByTheAngleOfTheirRays) {
+  // Two flat projectors (grey 50 at x = −1, grey 200 at x = +1) facing a wall 10 away. Rendered
+  // from projector A's own pose, A's rays are the render's (angle 0): A alone. Rendered from the
+  // midpoint, every pixel is the documented weighted mean (EffectsPlan: weight
+  // (1 / (angle + res_weight · max(0, 1 − d_render / d_proj) + 1e-3))^p), computed here in double
+  // from the wall point: 125 straight ahead by symmetry. The first-projector rule paints A's 50
+  // everywhere it reaches.
+  Renderer r(Plane(100, 10, Eigen::Vector3d::Zero(), 8));
+  Image a(64, 48, 3, 8, 50.f), b(64, 48, 3, 8, 200.f);
+  const Eigen::Vector3d ca(-1, 0, 0), cb(1, 0, 0);
+  View pa{Cam(), LookingDownZ(ca)}, pb{Cam(), LookingDownZ(cb)};
+  Image da = r.RenderDepth(pa), db = r.RenderDepth(pb);
+  std::vector<Projector> ps = {{pa, &a, &da, nullptr}, {pb, &b, &db, nullptr}};
+  EffectsPlan plan;
+  plan.projectors = 2;
+  plan.occlusion = true;
+  plan.blend = true;
+  plan.feather = 0;
+  Renderer::Frame self = r.Render(pa, ps, plan);
+  for (int x = 8; x < 56; ++x) EXPECT_NEAR(self.colour.at(x, 24, 0), 50.f, 1.f) << x;
+  const View mid_view{Cam(), LookingDownZ({0, 0, 0})};
+  Renderer::Frame mid = r.Render(mid_view, ps, plan);
+  auto weight = [&](const Eigen::Vector3d& X, const Eigen::Vector3d& c) {
+    const Eigen::Vector3d ray = X, proj = X - c;  // render camera at the origin
+    const double angle = std::acos(std::clamp(ray.normalized().dot(proj.normalized()), -1., 1.));
+    const double pen = angle + plan.res_weight * std::max(0.0, 1 - ray.norm() / proj.norm());
+    return std::pow(1 / (pen + 1e-3), plan.blend_power);
+  };
+  // +1: inside the image by half a pixel or more, −1: outside by as much, 0: on the edge.
+  auto sees = [](const View& p, const Eigen::Vector3d& X) {
+    const Eigen::Vector2d uv = p.camera.Project(p.world_to_camera * X);
+    const double margin = std::min({uv.x(), uv.y(), 64 - uv.x(), 48 - uv.y()});
+    return margin > 0.5 ? 1 : margin < -0.5 ? -1 : 0;
+  };
+  size_t both = 0;
+  for (int y : {4, 24, 43})
+    for (int x = 0; x < 64; ++x) {
+      const Eigen::Vector3d X = mid_view.camera.Unproject({x + 0.5, y + 0.5}, 10.0);
+      const int sa = sees(pa, X), sb = sees(pb, X);
+      if (sa * sb == -1) {
+        EXPECT_EQ(mid.colour.at(x, y, 0), sa > 0 ? 50.f : 200.f) << x << "," << y;
+      }
+      if (sa < 1 || sb < 1) continue;
+      const double wa = weight(X, ca), wb = weight(X, cb);
+      EXPECT_NEAR(mid.colour.at(x, y, 0), (50 * wa + 200 * wb) / (wa + wb), 1.0) << x << "," << y;
+      ++both;
+    }
+  EXPECT_GT(both, 150u);
+  EXPECT_NEAR((mid.colour.at(31, 24, 0) + mid.colour.at(32, 24, 0)) / 2, 125.f, 1.5f);
+  plan.blend = false;
+  Renderer::Frame first = r.Render(mid_view, ps, plan);
+  for (int x = 0; x < 64; ++x)
+    EXPECT_TRUE(first.source.at(x, 24) != 0.f || first.colour.at(x, 24, 0) == 50.f) << x;
+}
+
+TEST_F(RenderTest, FillLeavesNoPixelAtTheBackground) {
+  // A wall with a square hole: the hole sees nothing and, without sky, is background. With the
+  // fill its pixels take the colour around them (the projector's flat 80) and are marked filled.
+  Mesh wall = Plane(20, 10, Eigen::Vector3d::Zero(), 10);
+  std::vector<std::array<uint32_t, 3>> kept;
+  for (const auto& f : wall.faces) {
+    Eigen::Vector3d c = (wall.vertices[f[0]] + wall.vertices[f[1]] + wall.vertices[f[2]]) / 3;
+    if (std::abs(c.x()) > 4 || std::abs(c.y()) > 4) kept.push_back(f);
+  }
+  wall.faces = kept;
+  Renderer r(wall);
+  Image img(64, 48, 3, 8, 80.f);
+  View view{Cam(), LookingDownZ({0, 0, 0})};
+  std::vector<Projector> ps = {{view, &img, nullptr, nullptr}};
+  EffectsPlan plan;
+  Renderer::Frame without = r.Render(view, ps, plan);
+  size_t holes = 0;
+  for (float v : without.source.data) holes += v == kSourceBackground;
+  ASSERT_GT(holes, 100u);  // the scene does exercise the fill
+  plan.fill = true;
+  RenderStats stats;
+  Renderer::Frame with = r.Render(view, ps, plan, &stats);
+  size_t filled = 0;
+  for (size_t p = 0; p < with.source.pixels(); ++p) {
+    ASSERT_NE(with.source.data[p], kSourceBackground) << p;
+    filled += with.source.data[p] == kSourceFilled;
+    for (int c = 0; c < 3; ++c) ASSERT_EQ(with.colour.data[p * 3 + c], 80.f) << p;
+  }
+  EXPECT_EQ(filled, holes);
+  EXPECT_GE(stats.fill_ms, 0.0);
 }
 
 TEST_F(RenderTest, BadInputsAreClearErrors) {
