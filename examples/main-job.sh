@@ -11,6 +11,8 @@
 # 5. ptmrender  every recorded pose rendered from the *other* images (held out): vertex colours,
 #               PTM with the vehicles projected, PTM with masks; then inpaint3d removes the
 #               vehicles from the photographs and PTM renders again; and a 1.5 m lane change
+#               ... and once more on a mesh built from the photos (densify + roadmesh --dense,
+#               as a user without the fixture's true mesh would: workspace OUTDIR/photo_mesh)
 # 6. ssim       the photo-consistency table of the held-out renders against the truth
 # 7. drive      a car steered from a steering log (examples/steer-controls.awk) through a lane
 #               change into the curve, and a 3.5 m lane change along the recorded path of
@@ -51,8 +53,19 @@ echo "== 5. ptmrender held-out poses; inpaint3d; ptmrender again; a 1.5 m lane c
 "$bin/ptmrender" --at-images --exclude-self --provenance "$ws" "$out/heldout_ptm"
 "$bin/ptmrender" --lateral 1.5 "$ws" "$out/lane_left"
 
+echo "== 5b. the same held-out renders on a mesh built from the photos (densify, roadmesh --dense)" >&2
+pm=$out/photo_mesh
+mkdir -p "$pm"
+for item in images sparse masks textures partners.tsv; do
+  [ -e "$pm/$item" ] || ln -s "$ws/$item" "$pm/$item"
+done
+"$bin/densify" -q "$pm"
+"$bin/roadmesh" -q --dense --metric "$pm"
+"$bin/bakedepth" -q "$pm"
+"$bin/ptmrender" -q --at-images --exclude-self "$pm" "$out/heldout_ptm_photo_mesh"
+
 echo "== 6. ssim: held-out renders against the ray-traced truth (no vehicles)" >&2
-for r in vertex ptm_vehicles ptm_masks ptm; do
+for r in vertex ptm_vehicles ptm_masks ptm ptm_photo_mesh; do
   "$bin/ssim" "$out/heldout_$r" "$ws/truth/background" > "$out/ssim_$r.tsv"
 done
 mean() { awk -F'\t' -v c="$2" '$1 == "mean" { print $c }' "$1"; }
@@ -65,6 +78,7 @@ row "vertex colours" "$out/ssim_vertex.tsv"
 row "PTM, vehicles projected" "$out/ssim_ptm_vehicles.tsv"
 row "PTM, segtrack masks" "$out/ssim_ptm_masks.tsv"
 row "PTM, masks + inpaint3d textures" "$out/ssim_ptm.tsv"
+row "PTM, the same on the photos' mesh" "$out/ssim_ptm_photo_mesh.tsv"
 printf '\nlane change: %s frames in %s; effects plan in %s\n' "$(ls "$out/lane_left" | grep -c png)" "$out/lane_left" "$out/plan.json"
 
 echo "== 7. drive a lane change and the curve; ptmrender it; gazemap a synthetic gaze trace" >&2

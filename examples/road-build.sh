@@ -13,6 +13,9 @@
 #              for a metric model; a non-metric one needs 1.5 x its units per metre),
 #              MATCH_OVERLAP (COLMAP sequential matching overlap, default 5),
 #              MESH (dense | corridor: the mesh where COLMAP has no CUDA, default dense),
+#              METRIC (1: the poses are in metres, e.g. ground truth or GPS-aligned: roadmesh
+#              takes lengths as metres instead of deriving its unit from the scene's camera
+#              height, which a road without sparse points on the asphalt cannot give),
 #              HOLDOUT_STRICT (1: also score a strict hold-out: a second workspace without the
 #              held-out photos builds the mesh, its colours and the projectors; they take part in
 #              nothing that is scored, as in novel-view benchmarks)
@@ -58,11 +61,12 @@ colmap model_analyzer --path "$ws/sparse" 2>&1 | grep -E "Registered images|Poin
 
 # The mesh of a workspace where COLMAP has no CUDA: dense plane-sweep stereo fused on a sparse
 # signed-distance volume, closed by the corridor's ground (MESH=dense), or the corridor alone.
+metric=(); [ "${METRIC:-0}" = 1 ] && metric=(--metric)
 cpu_mesh() {
   if [ "${MESH:-dense}" = dense ]; then
-    "$bin/densify" "$1" && "$bin/roadmesh" --dense "$1"
+    "$bin/densify" "$1" && "$bin/roadmesh" --dense "${metric[@]}" "$1"
   else
-    "$bin/roadmesh" "$1"
+    "$bin/roadmesh" "${metric[@]}" "$1"
   fi
 }
 

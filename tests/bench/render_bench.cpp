@@ -87,6 +87,11 @@ static void PipelineBench(bool quick, fs::path ws) {
   std::ostringstream sink;
   const PtmRenderReport r = RunPtmRender(po, sink);
   fs::remove_all(po.outdir);
+  // The same frames without the effects issue 19 added (blending, fill): what they cost.
+  PtmRenderOptions first = po;
+  first.no_blend = first.no_fill = true;
+  const PtmRenderReport r0 = RunPtmRender(first, sink);
+  fs::remove_all(po.outdir);
   const double depth_after = bake(), depth_ms = (depth_before + depth_after) / 2;
   const double n = double(r.rendered), frame_ms = r.frames_ms / n;
   const double unwritten_ms = (r.frames_ms - r.write_ms) / n;
@@ -105,6 +110,16 @@ static void PipelineBench(bool quick, fs::path ws) {
                       std::to_string(po.projectors) + " projectors, baked depth, whole frame, " +
                           std::to_string(r.rendered) + " frames of mkroad --full",
                       1000 / frame_ms, "fps", "depth only (bakedepth's pass)", 1000 / depth_ms);
+  const double first_ms = r0.frames_ms / double(r0.rendered);
+  std::printf(
+      "  ptmrender, first projector, no fill %8.2f ms  %6.1f fps (blend + fill: %.2fx its "
+      "rate; texturing %.2f against %.2f ms, fill %.2f ms per frame)\n",
+      first_ms, 1000 / first_ms, first_ms / frame_ms, r.shade_ms / n,
+      r0.shade_ms / double(r0.rendered), r.fill_ms / n);
+  mvtm::bench::Report(
+      "ptmrender",
+      "blending + fill, whole frame, " + std::to_string(r.rendered) + " frames of mkroad --full",
+      1000 / frame_ms, "fps", "first projector, no fill (--no-blend --no-fill)", 1000 / first_ms);
   const double other = r.frames_ms - r.load_ms - r.survey_ms - r.render_ms - r.write_ms;
   std::printf(
       "  ptmrender per frame: load %.2f (depth maps %.2f), survey %.2f, render %.2f = "
@@ -156,21 +171,24 @@ int main(int argc, char** argv) {
     std::printf(
         "\nmesh: %zu triangles in %zu chunks (cell %.2f m); baking one depth map: %.1f ms\n",
         r.triangles(), r.chunks(), cell, bake_ms);
-    std::printf("%-30s %8s %8s %8s %8s %8s %8s %8s %9s %8s %8s %9s %8s %9s\n", "configuration",
-                "cull", "draw", "shade", "readback", "depth", "total", "fps", "x depth", "min shd",
-                "min tot", "x depth", "cpu", "x depth");
+    std::printf("%-30s %8s %8s %8s %8s %8s %8s %8s %8s %9s %8s %8s %9s %8s %9s\n", "configuration",
+                "cull", "draw", "shade", "readback", "fill", "depth", "total", "fps", "x depth",
+                "min shd", "min tot", "x depth", "cpu", "x depth");
     double base_ms = 0, base_best = 0, base_cpu = 0;
     struct Cfg {
       const char* name;
       bool ptm;
       int k;
       bool occlusion, baked;
+      bool blend = false, fill = false;
     };
     std::vector<Cfg> cfgs = {{"depth only (baseline)", false, 0, false, false},
                              {"vertex colours", false, 0, false, false},
                              {"PTM 1 projector", true, 1, false, false},
                              {"PTM 1 proj + occlusion, baked", true, 1, true, true},
                              {"PTM 4 proj + occlusion, baked", true, 4, true, true},
+                             {"PTM 4 proj + occl. + blend", true, 4, true, true, true, false},
+                             {"PTM 4 + occl. + blend + fill", true, 4, true, true, true, true},
                              {"PTM 4 proj + occl., on the fly", true, 4, true, false}};
     double encode_ms = 0;
     for (size_t c = 0; c < cfgs.size(); ++c) {
@@ -209,6 +227,8 @@ int main(int argc, char** argv) {
         plan.projectors = std::max(1, cfg.k);
         plan.occlusion = cfg.occlusion;
         plan.skybox = cfg.ptm && cfg.occlusion;  // the skybox needs the projectors' depth maps
+        plan.blend = cfg.blend;
+        plan.fill = cfg.fill;
         Renderer::Frame fr = r.Render(v, ps, plan, &st);
         best = std::min(best, Ms(tf, Clock::now()));
         best_shade = std::min(best_shade, st.shade_ms - shade0);
@@ -224,11 +244,11 @@ int main(int argc, char** argv) {
       double total = Ms(t0, Clock::now()) / frames, cpu = (CpuMs() - cpu0) / frames;
       if (c == 0) base_ms = total, base_best = best, base_cpu = cpu;
       std::printf(
-          "%-30s %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %8.1f %8.2fx %8.2f %8.2f %8.2fx %8.2f "
+          "%-30s %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %8.1f %8.2fx %8.2f %8.2f %8.2fx %8.2f "
           "%8.2fx\n",
           cfg.name, st.cull_ms / frames, st.draw_ms / frames, st.shade_ms / frames,
-          st.readback_ms / frames, depth_ms / frames, total, 1000 / total, total / base_ms,
-          c == 0 ? 0.0 : best_shade, best, best / base_best, cpu, cpu / base_cpu);
+          st.readback_ms / frames, st.fill_ms / frames, depth_ms / frames, total, 1000 / total,
+          total / base_ms, c == 0 ? 0.0 : best_shade, best, best / base_best, cpu, cpu / base_cpu);
     }
     std::printf(
         "PNG encoding of one %dx%d frame: %.1f ms (overlapped with rendering by ptmrender's writer "

@@ -158,8 +158,9 @@ TEST(PoseIndex, FewerAdmissibleThanKAndEmpty) {
 
 // Approximate methods: bounded miss rates on a trajectory-like set; grid9 and flann with
 // everything in reach are exact. FLANN's trees are shuffled from std::random_device (not
-// reproducible), so its miss rates are judged by the median over five independent builds: one
-// build's rate has a long tail (0.03 % to 9 % measured with 128 checks).
+// reproducible), so its miss rates are judged by the median over nine independent builds: one
+// build's rate has a long tail (0.03 % to 9 % measured with 128 checks; the median of five
+// builds once reached 5.55 %).
 TEST(PoseIndex, ApproximateMethodsAreCloseAndConvergeToExact) {
   std::mt19937 g(5);
   std::normal_distribution<double> n(0, 1);
@@ -200,14 +201,14 @@ TEST(PoseIndex, ApproximateMethodsAreCloseAndConvergeToExact) {
     return d;
   };
   std::vector<double> few, more;
-  for (int build = 0; build < 5; ++build) {
+  for (int build = 0; build < 9; ++build) {
     few.push_back(flann_miss(8).MissRate());
     more.push_back(flann_miss(128).MissRate());
   }
-  std::nth_element(few.begin(), few.begin() + 2, few.end());
-  std::nth_element(more.begin(), more.begin() + 2, more.end());
-  EXPECT_GT(few[2], more[2]);
-  EXPECT_LT(more[2], 0.05);
+  std::nth_element(few.begin(), few.begin() + 4, few.end());
+  std::nth_element(more.begin(), more.begin() + 4, more.end());
+  EXPECT_GT(few[4], more[4]);
+  EXPECT_LT(more[4], 0.05);
   // Every leaf in reach: exact whatever the trees.
   SelectionDiff all = flann_miss(100000);
   EXPECT_EQ(all.misses, 0u);
