@@ -13,6 +13,8 @@
 #              for a metric model; a non-metric one needs 1.5 x its units per metre),
 #              MATCH_OVERLAP (COLMAP sequential matching overlap, default 5),
 #              MESH (dense | corridor: the mesh where COLMAP has no CUDA, default dense),
+#              ROADMESH_FLAGS (extra roadmesh options, e.g. "--max-depth 80": fuse depths up to
+#              80 camera spacings instead of 40, for far roadside geometry on fast roads),
 #              METRIC (1: the poses are in metres, e.g. ground truth or GPS-aligned: roadmesh
 #              takes lengths as metres instead of deriving its unit from the scene's camera
 #              height, which a road without sparse points on the asphalt cannot give),
@@ -61,12 +63,13 @@ colmap model_analyzer --path "$ws/sparse" 2>&1 | grep -E "Registered images|Poin
 
 # The mesh of a workspace where COLMAP has no CUDA: dense plane-sweep stereo fused on a sparse
 # signed-distance volume, closed by the corridor's ground (MESH=dense), or the corridor alone.
-metric=(); [ "${METRIC:-0}" = 1 ] && metric=(--metric)
+read -r -a roadmesh_opts <<< "${ROADMESH_FLAGS:-}"
+[ "${METRIC:-0}" = 1 ] && roadmesh_opts+=(--metric)
 cpu_mesh() {
   if [ "${MESH:-dense}" = dense ]; then
-    "$bin/densify" "$1" && "$bin/roadmesh" --dense "${metric[@]}" "$1"
+    "$bin/densify" "$1" && "$bin/roadmesh" --dense "${roadmesh_opts[@]}" "$1"
   else
-    "$bin/roadmesh" "${metric[@]}" "$1"
+    "$bin/roadmesh" "${roadmesh_opts[@]}" "$1"
   fi
 }
 
