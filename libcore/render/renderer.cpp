@@ -543,8 +543,12 @@ Renderer::Frame ReadFrame(int w, int h) {
 // plan.fill: the background pixels (no surface, no sky) take the colour of the rest around them.
 void FillBackground(Image& colour, Image& source) {
   std::vector<uint8_t> known(source.pixels());
-  for (size_t p = 0; p < known.size(); ++p) known[p] = source.data[p] != kSourceBackground;
-  if (!PushPullFill(colour, known)) return;
+  size_t unknown = 0;
+  for (size_t p = 0; p < known.size(); ++p) {
+    known[p] = source.data[p] != kSourceBackground;
+    unknown += !known[p];
+  }
+  if (unknown == 0 || !PushPullFill(colour, known)) return;
   for (size_t p = 0; p < known.size(); ++p) {
     if (known[p]) continue;
     source.data[p] = kSourceFilled;
