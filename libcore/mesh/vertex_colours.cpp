@@ -100,37 +100,30 @@ size_t VertexColourBaker::Finish(Mesh& mesh) const {
       nbr[f[size_t(i)]].push_back(f[size_t((i + 1) % 3)]);
       nbr[f[size_t((i + 1) % 3)]].push_back(f[size_t(i)]);
     }
-  std::vector<uint32_t> front;
+  // Each round colours the unseen neighbours of the vertices the last round coloured (the first
+  // round: of the seen ones), from the colours known before the round.
+  std::vector<uint32_t> last;
   for (size_t v = 0; v < n; ++v)
-    if (!known[v])
+    if (known[v]) last.push_back(uint32_t(v));
+  while (!last.empty()) {
+    std::vector<uint32_t> front;
+    for (uint32_t v : last)
       for (uint32_t u : nbr[v])
-        if (known[u]) {
-          front.push_back(uint32_t(v));
-          break;
-        }
-  while (!front.empty()) {
-    std::vector<std::pair<uint32_t, Eigen::Vector3d>> fill;
-    for (uint32_t v : front) {
-      if (known[v]) continue;
-      Eigen::Vector3d s = Eigen::Vector3d::Zero();
+        if (!known[u]) front.push_back(u);
+    std::sort(front.begin(), front.end());
+    front.erase(std::unique(front.begin(), front.end()), front.end());
+    std::vector<Eigen::Vector3d> mean(front.size(), Eigen::Vector3d::Zero());
+    for (size_t i = 0; i < front.size(); ++i) {
       int k = 0;
-      for (uint32_t u : nbr[v])
-        if (known[u]) s += colour[u], ++k;
-      if (k) fill.emplace_back(v, s / k);
+      for (uint32_t u : nbr[front[i]])
+        if (known[u]) mean[i] += colour[u], ++k;
+      mean[i] /= k;  // k >= 1: a front vertex neighbours a coloured one
     }
-    std::vector<uint32_t> next;
-    for (const auto& [v, c] : fill) {
-      if (known[v]) continue;
-      colour[v] = c;
-      known[v] = 2;
+    for (size_t i = 0; i < front.size(); ++i) {
+      colour[front[i]] = mean[i];
+      known[front[i]] = 1;
     }
-    for (const auto& [v, c] : fill)
-      for (uint32_t u : nbr[v])
-        if (!known[u]) next.push_back(u);
-    for (const auto& [v, c] : fill) known[v] = 1;
-    std::sort(next.begin(), next.end());
-    next.erase(std::unique(next.begin(), next.end()), next.end());
-    front = std::move(next);
+    last = std::move(front);
   }
   mesh.colors.resize(n);
   for (size_t v = 0; v < n; ++v)
