@@ -79,10 +79,7 @@ EffectsPlan PlanEffects(const SceneSurvey& s) {
   plan.skybox = s.ptm && !s.no_skybox && s.frames_with_holes > 0;
   plan.exposure = s.ptm && !s.no_exposure && !s.exposure_example.empty();
   plan.blend = plan.projectors > 1 && !s.no_blend;
-  plan.blend_power = s.blend_power;
-  plan.feather = s.feather;
-  plan.res_weight = s.res_weight;
-  plan.soft = s.soft;
+  plan.weights = s.blend_weights;
   plan.fill = s.ptm && !s.no_fill && s.frames_with_holes > 0;
   return plan;
 }
@@ -130,9 +127,10 @@ nlohmann::json ExplainEffects(const SceneSurvey& s, const EffectsPlan& plan) {
        Choice(plan.blend,
               "several projectors see most points: each pixel blends those that see it, "
               "weighted by the angle between its ray and theirs (power " +
-                  ShortDouble(plan.blend_power) + "), resolution (" + ShortDouble(plan.res_weight) +
-                  " rad per halving), border feathering (" + ShortDouble(plan.feather) +
-                  " px) and soft occlusion (" + ShortDouble(plan.soft) + ")",
+                  ShortDouble(plan.weights.power) + "), resolution (" +
+                  ShortDouble(plan.weights.res_weight) + " rad per halving), border feathering (" +
+                  ShortDouble(plan.weights.feather) + " px) and soft occlusion (" +
+                  ShortDouble(plan.weights.soft) + ")",
               !s.ptm       ? vertex_mode
               : s.no_blend ? "turned off by --no-blend (the first projector that sees a point)"
                            : "a single projector per pixel")},

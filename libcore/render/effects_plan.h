@@ -20,6 +20,17 @@
 
 namespace mvtm {
 
+// How blending weighs the projectors that see a point: visibility (soft occlusion) × border
+// feathering × (1 / (penalty + 1e-3 rad))^power, penalty = the angle between the render ray and
+// the projector's + res_weight · max(0, 1 − d_render / d_proj). The user's knobs (ptmrender
+// --blend-power, --feather, --res-weight, --soft), carried unchanged into the plan.
+struct BlendWeights {
+  double power = 2;         // sharpness p (large: the best-angle projector alone)
+  double feather = 16;      // pixels over which a projector fades out at its image border
+  double res_weight = 0.1;  // radians of penalty for a projector twice as far as the camera
+  double soft = 0.01;       // soft occlusion width, relative (visibility 1 → 0 over d·soft)
+};
+
 // The effects a frame is rendered with (one shader variant per distinct plan).
 struct EffectsPlan {
   bool ptm = true;         // false: vertex colours only
@@ -29,15 +40,10 @@ struct EffectsPlan {
   bool skybox = false;     // background from projectors at infinity (else constant colour)
   bool exposure = false;   // projectors' samples brought to the common exposure (gain, offset)
   double bias = 0.005;     // relative occlusion bias: occluded when z > d·(1 + bias)
-  // Blending (MVTM_BLEND): every projector that sees a point, weighted by visibility (soft
-  // occlusion), border feathering and (1 / (penalty + 1e-3 rad))^blend_power with penalty = the
-  // angle between the render ray and the projector's + res_weight · max(0, 1 − d_render/d_proj);
-  // off: the first projector in rank order that sees the point (thesis Alg. 3).
+  // Blending (MVTM_BLEND): every projector that sees a point, weighted (BlendWeights); off: the
+  // first projector in rank order that sees the point (thesis Alg. 3).
   bool blend = false;
-  double blend_power = 2;   // sharpness p (large: the best-angle projector alone)
-  double feather = 16;      // pixels over which a projector fades out at its image border
-  double res_weight = 0.1;  // radians of penalty for a projector twice as far as the camera
-  double soft = 0.01;       // soft occlusion width, relative (visibility 1 → 0 over d·soft)
+  BlendWeights weights;
   // Pixels no projector, no vertex and no sky colours (background) are filled from their
   // surroundings (push-pull) instead of the constant background.
   bool fill = false;
@@ -50,13 +56,13 @@ struct EffectsPlan {
 // What the inputs of a job say, and what the user asked for.
 struct SceneSurvey {
   // The request.
-  bool ptm = true;                                                      // false: vertex-colour mode
-  int projectors_requested = 4;                                         // K
-  double bias = 0.005;                                                  // relative occlusion bias
-  bool no_occlusion = false, no_masks = false, no_skybox = false;       // the user's switches
-  bool no_exposure = false;                                             // the user's switch
-  bool no_blend = false, no_fill = false;                               // the user's switches
-  double blend_power = 2, feather = 16, res_weight = 0.1, soft = 0.01;  // EffectsPlan's
+  bool ptm = true;                                                 // false: vertex-colour mode
+  int projectors_requested = 4;                                    // K
+  double bias = 0.005;                                             // relative occlusion bias
+  bool no_occlusion = false, no_masks = false, no_skybox = false;  // the user's switches
+  bool no_exposure = false;                                        // the user's switch
+  bool no_blend = false, no_fill = false;                          // the user's switches
+  BlendWeights blend_weights;
   // The inputs.
   bool projector_differs = false;   // some selected projector is not the pose it serves
   bool several_admissible = false;  // some pose has more than one admissible projector

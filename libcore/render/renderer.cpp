@@ -391,10 +391,11 @@ struct Renderer::Impl {
     glUniform1i(glGetUniformLocation(prog, "u_depths"), 1);
     glUniform1i(glGetUniformLocation(prog, "u_masks"), 2);
     glUniform1f(glGetUniformLocation(prog, "u_bias"), float(plan.bias));
-    glUniform1f(glGetUniformLocation(prog, "u_blend_power"), float(plan.blend_power));
-    glUniform1f(glGetUniformLocation(prog, "u_feather"), float(std::max(plan.feather, 1e-3)));
-    glUniform1f(glGetUniformLocation(prog, "u_res_weight"), float(plan.res_weight));
-    glUniform1f(glGetUniformLocation(prog, "u_soft"), float(std::max(plan.soft, 1e-6)));
+    glUniform1f(glGetUniformLocation(prog, "u_blend_power"), float(plan.weights.power));
+    glUniform1f(glGetUniformLocation(prog, "u_feather"),
+                float(std::max(plan.weights.feather, 1e-3)));
+    glUniform1f(glGetUniformLocation(prog, "u_res_weight"), float(plan.weights.res_weight));
+    glUniform1f(glGetUniformLocation(prog, "u_soft"), float(std::max(plan.weights.soft, 1e-6)));
   }
 };
 

@@ -62,15 +62,16 @@ OptionTable DeclareOptions(PtmRenderOptions& o) {
          "Ignore exposure.tsv (each projector at its own exposure)");
   t.Flag("--no-blend", &o.no_blend,
          "Take the first projector that sees a point instead of blending those that do");
-  t.Real("--blend-power", &o.blend_power,
+  t.Real("--blend-power", &o.blend.power,
          "Blending sharpness p: weight (1/(angle penalty + 0.001 rad))^p")
       .Range(0, 64);
-  t.Real("--feather", &o.feather, "Pixels over which a projector fades out at its image border")
+  t.Real("--feather", &o.blend.feather,
+         "Pixels over which a projector fades out at its image border")
       .Range(0, 1000);
-  t.Real("--res-weight", &o.res_weight,
+  t.Real("--res-weight", &o.blend.res_weight,
          "Blending: radians of penalty for a projector twice as far from a point as the camera")
       .Range(0, 100);
-  t.Real("--soft", &o.soft,
+  t.Real("--soft", &o.blend.soft,
          "Blending: soft occlusion width, relative (visibility 1 to 0 over depth*(1+bias..+soft))")
       .Range(0, 1, false, true);
   t.Flag("--no-fill", &o.no_fill,
@@ -247,10 +248,7 @@ SceneSurvey StartSurvey(const PtmRenderOptions& o, const Workspace& ws, const Sc
   s.no_exposure = o.no_exposure;
   s.no_blend = o.no_blend;
   s.no_fill = o.no_fill;
-  s.blend_power = o.blend_power;
-  s.feather = o.feather;
-  s.res_weight = o.res_weight;
-  s.soft = o.soft;
+  s.blend_weights = o.blend;
   s.projector_differs = picks.differs;
   s.several_admissible = picks.several;
   if (s.ptm && !o.no_masks) s.mask_example = FindMaskedProjector(ws, scene, picks.used);

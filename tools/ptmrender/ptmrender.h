@@ -39,7 +39,7 @@ struct PtmRenderOptions : WorkOptions {
   bool no_exposure = false;  // ignore exposure.tsv (projectors at their own exposures)
   bool no_blend = false;     // the first projector that sees a point, not a weighted blend
   bool no_fill = false;      // constant background where nothing is seen, not push-pull
-  double blend_power = 2, feather = 16, res_weight = 0.1, soft = 0.01;  // EffectsPlan's
+  BlendWeights blend;        // --blend-power, --feather, --res-weight, --soft
   RenderExposure render_exposure = RenderExposure::kNearest;
   std::string size;         // WxH render size (default: the camera's)
   bool explain = false;     // print the effects plan as JSON and render nothing

@@ -344,7 +344,7 @@ TEST_F(RenderTest, BlendWeighsProjectorsByTheAngleOfTheirRays) {
   plan.projectors = 2;
   plan.occlusion = true;
   plan.blend = true;
-  plan.feather = 0;
+  plan.weights.feather = 0;
   Renderer::Frame self = r.Render(pa, ps, plan);
   for (int x = 8; x < 56; ++x) EXPECT_NEAR(self.colour.at(x, 24, 0), 50.f, 1.f) << x;
   const View mid_view{Cam(), LookingDownZ({0, 0, 0})};
@@ -352,8 +352,9 @@ TEST_F(RenderTest, BlendWeighsProjectorsByTheAngleOfTheirRays) {
   auto weight = [&](const Eigen::Vector3d& X, const Eigen::Vector3d& c) {
     const Eigen::Vector3d ray = X, proj = X - c;  // render camera at the origin
     const double angle = std::acos(std::clamp(ray.normalized().dot(proj.normalized()), -1., 1.));
-    const double pen = angle + plan.res_weight * std::max(0.0, 1 - ray.norm() / proj.norm());
-    return std::pow(1 / (pen + 1e-3), plan.blend_power);
+    const double pen =
+        angle + plan.weights.res_weight * std::max(0.0, 1 - ray.norm() / proj.norm());
+    return std::pow(1 / (pen + 1e-3), plan.weights.power);
   };
   // +1: inside the image by half a pixel or more, −1: outside by as much, 0: on the edge.
   auto sees = [](const View& p, const Eigen::Vector3d& X) {
