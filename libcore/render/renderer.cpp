@@ -359,7 +359,7 @@ struct Renderer::Impl {
   void DrawSurface(Target& t, const std::vector<Target::Format>& formats, const char* frag,
                    const View& view, RenderStats* stats);
   void Shade(const View& view, const std::vector<Projector>& projectors, const EffectsPlan& plan,
-             const std::vector<int>& layer_of, FrameExposure exposure);
+             const std::vector<int>& layer_of, CameraExposure exposure);
   void SetProjectors(GLuint prog, const View& v, const std::vector<Projector>& ps,
                      const EffectsPlan& plan, const std::vector<int>& layer_of) {
     int n = std::min<int>(plan.projectors, static_cast<int>(ps.size()));
@@ -380,8 +380,8 @@ struct Renderer::Impl {
       glUniform1i(glGetUniformLocation(prog, ("u_proj_layer" + i).c_str()),
                   layer_of[static_cast<size_t>(k)]);
       if (plan.exposure)
-        glUniform2f(glGetUniformLocation(prog, ("u_proj_exposure" + i).c_str()), ps[k].gain,
-                    ps[k].offset / 255.f);
+        glUniform2f(glGetUniformLocation(prog, ("u_proj_exposure" + i).c_str()),
+                    ps[k].exposure.gain, ps[k].exposure.offset / 255.f);
     }
     if (n > 0) {
       glUniform2f(glGetUniformLocation(prog, "u_proj_size"), float(ps[0].image->width),
@@ -565,7 +565,7 @@ void FillBackground(Image& colour, Image& source) {
 // The second pass: ptm.frag once per pixel over the surface pass, into colour and source.
 void Renderer::Impl::Shade(const View& view, const std::vector<Projector>& projectors,
                            const EffectsPlan& plan, const std::vector<int>& layer_of,
-                           FrameExposure exposure) {
+                           CameraExposure exposure) {
   std::vector<std::string> inc;
   if (plan.ptm || plan.skybox) inc.push_back("ptm_common.glsl");
   GLuint prog = Program("screen.vert", "ptm.frag", plan.Defines(), inc);
@@ -595,7 +595,7 @@ void Renderer::Impl::Shade(const View& view, const std::vector<Projector>& proje
 
 Renderer::Frame Renderer::Render(const View& view, const std::vector<Projector>& projectors,
                                  const EffectsPlan& plan_in, RenderStats* stats, bool with_depth,
-                                 FrameExposure exposure) {
+                                 CameraExposure exposure) {
   view.camera.RequireUndistorted();
   Impl& m = *impl_;
   EffectsPlan plan = plan_in;

@@ -33,6 +33,13 @@ struct View {
   Rigid3d world_to_camera;
 };
 
+// A camera's exposure, I = gain · L + offset (8-bit scale; radiometry/exposure.h): a projector's
+// photo was recorded at one, a render records at one (with plan.exposure); the identity is the
+// workspace's common exposure.
+struct CameraExposure {
+  float gain = 1.f, offset = 0.f;
+};
+
 struct Projector {
   View view;
   const Image* image = nullptr;  // 1 or 3 (or 4) channels, 8-bit scale, size = camera size
@@ -42,9 +49,9 @@ struct Projector {
   // every projector of a frame has a key ≥ 0 and the keys equal the previous frame's, the
   // textures already on the GPU are reused instead of uploaded again.
   int64_t key = -1;
-  // Exposure of the image, I = gain · L + offset (8-bit scale; radiometry/exposure.h): with
-  // plan.exposure its samples are brought to the common frame, (I − offset) / gain.
-  float gain = 1.f, offset = 0.f;
+  // The image's exposure: with plan.exposure its samples are brought to the common frame,
+  // (I − offset) / gain.
+  CameraExposure exposure{};
 };
 
 struct RenderStats {
@@ -57,12 +64,6 @@ struct RenderStats {
 // What a frame's pixels came from: 0..K−1 projector rank (with blending: the heaviest), 253
 // filled from the surrounding pixels (plan.fill), 254 vertex colour, 255 background.
 inline constexpr uint8_t kSourceFilled = 253, kSourceVertex = 254, kSourceBackground = 255;
-
-// The exposure a render camera records at, I = gain · L + offset (8-bit scale), used with
-// plan.exposure; the identity is the workspace's common exposure.
-struct FrameExposure {
-  float gain = 1.f, offset = 0.f;
-};
 
 class Renderer {
  public:
@@ -90,7 +91,7 @@ class Renderer {
   // (plan.fill: the pixels left at the background are filled by push-pull, render/fill.h).
   Frame Render(const View& view, const std::vector<Projector>& projectors, const EffectsPlan& plan,
                RenderStats* stats = nullptr, bool with_depth = false,
-               FrameExposure exposure = FrameExposure());
+               CameraExposure exposure = CameraExposure());
 
   size_t triangles() const;
   size_t chunks() const;

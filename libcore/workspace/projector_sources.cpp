@@ -26,15 +26,14 @@ std::map<std::string, ExposureRow> ReadWorkspaceExposure(const Workspace& ws) {
 
 bool ChangesSamples(const ExposureRow& e) { return float(e.gain) != 1.f || float(e.offset) != 0.f; }
 
-bool ProjectorSources::ExposureOf(size_t k, float& gain, float& offset) {
+bool ProjectorSources::ExposureOf(size_t k, CameraExposure& exposure) {
   if (!exposure_read_) {  // on first use: a run that does not use exposure never reads the file
     exposure_read_ = true;
     exposure_ = ReadWorkspaceExposure(ws_);
   }
   auto it = exposure_.find(images_[k]->name);
   const ExposureRow e = it == exposure_.end() ? ExposureRow() : it->second;
-  gain = float(e.gain);
-  offset = float(e.offset);
+  exposure = CameraExposure{float(e.gain), float(e.offset)};
   return ChangesSamples(e);
 }
 

@@ -46,7 +46,7 @@ class ProjectorSources {
   const Image* MaskOf(size_t k);  // nullptr when the image has no mask file
   // The image's exposure from WS/exposure.tsv (gain 1, offset 0 when absent); true when it is
   // not the identity.
-  bool ExposureOf(size_t k, float& gain, float& offset);
+  bool ExposureOf(size_t k, CameraExposure& exposure);
   View ViewOf(size_t k) const;
   void Trim();
   // Starts reading the files of the images `ks` that are not cached (colour; with `depth` the

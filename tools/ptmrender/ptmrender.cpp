@@ -351,7 +351,7 @@ std::vector<Projector> FrameProjectors(const FrameJob& job, const EffectsPlan& p
       rep.depth_ms += Ms(td, Clock::now());
     }
     if (plan.masks) p.mask = sources.MaskOf(c.index);
-    if (plan.exposure) sources.ExposureOf(c.index, p.gain, p.offset);
+    if (plan.exposure) sources.ExposureOf(c.index, p.exposure);
     ps.push_back(p);
   }
   return ps;
@@ -359,20 +359,20 @@ std::vector<Projector> FrameProjectors(const FrameJob& job, const EffectsPlan& p
 
 // The exposure the render camera records at: its projectors' exposures weighted by inverse
 // squared distance (a projector at the pose itself alone), or the common one.
-FrameExposure RenderExposureOf(const FrameJob& job, const EffectsPlan& plan,
-                               const std::vector<Projector>& ps, size_t i) {
-  FrameExposure e;
+CameraExposure RenderExposureOf(const FrameJob& job, const EffectsPlan& plan,
+                                const std::vector<Projector>& ps, size_t i) {
+  CameraExposure e;
   if (!plan.exposure || job.o.render_exposure == RenderExposure::kCommon || ps.empty()) return e;
   const Eigen::Vector3d c = job.poses[i].w2c.Centre();
   double sw = 0, g = 0, off = 0;
   for (const Projector& p : ps) {
     const double d2 = (p.view.world_to_camera.Centre() - c).squaredNorm();
-    if (d2 == 0) return FrameExposure{p.gain, p.offset};
+    if (d2 == 0) return p.exposure;
     sw += 1 / d2;
-    g += p.gain / d2;
-    off += p.offset / d2;
+    g += p.exposure.gain / d2;
+    off += p.exposure.offset / d2;
   }
-  return FrameExposure{float(g / sw), float(off / sw)};
+  return CameraExposure{float(g / sw), float(off / sw)};
 }
 
 // Renders the frames, surveying each from its own render (its depth: holes, coverage) instead of

@@ -123,8 +123,7 @@ TEST_F(RenderTest, ExposureBringsProjectorsToTheCommonFrame) {
   Image img = Pattern(64, 48);
   View v{Cam(), LookingDownZ({0.3, 0.2, 0})};
   Projector p{v, &img, nullptr, nullptr};
-  p.gain = 2.f;
-  p.offset = 10.f;
+  p.exposure = CameraExposure{2.f, 10.f};
   EffectsPlan plan;
   plan.exposure = true;
   const Renderer::Frame f = r.Render(v, {p}, plan);
