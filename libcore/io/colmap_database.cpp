@@ -104,22 +104,30 @@ void ColmapDatabase::UpdateCamera(uint32_t id, const Camera& c) {
 }
 
 uint32_t ColmapDatabase::UpsertImage(const std::string& name, uint32_t wanted_id,
-                                     uint32_t camera_id, const Rigid3d& w2c) {
+                                     uint32_t camera_id, const std::optional<Rigid3d>& prior) {
   if (!cache_loaded_) {
     cache_ = Images();
     cache_loaded_ = true;
   }
   auto it = cache_.find(name);
-  const auto& q = w2c.q;
-  const auto& t = w2c.t;
+  // The prior's seven values (NULL without one) bound from the statement's column `first`.
+  const auto bind_prior = [&prior](sqlite3_stmt* s, int first) {
+    if (!prior) {
+      for (int i = 0; i < 7; ++i) sqlite3_bind_null(s, first + i);
+      return;
+    }
+    const auto& q = prior->q;
+    const auto& t = prior->t;
+    const double v[7] = {q.w(), q.x(), q.y(), q.z(), t.x(), t.y(), t.z()};
+    for (int i = 0; i < 7; ++i) sqlite3_bind_double(s, first + i, v[i]);
+  };
   if (it != cache_.end()) {
     Stmt st(db_,
             "UPDATE images SET camera_id=?, prior_qw=?, prior_qx=?, prior_qy=?, prior_qz=?, "
             "prior_tx=?, prior_ty=?, prior_tz=? WHERE image_id=?;",
             path_);
     sqlite3_bind_int64(st.s, 1, camera_id);
-    double v[7] = {q.w(), q.x(), q.y(), q.z(), t.x(), t.y(), t.z()};
-    for (int i = 0; i < 7; ++i) sqlite3_bind_double(st.s, 2 + i, v[i]);
+    bind_prior(st.s, 2);
     sqlite3_bind_int64(st.s, 9, it->second.first);
     if (sqlite3_step(st.s) != SQLITE_DONE)
       throw Error(path_, 0, std::string("database: ") + sqlite3_errmsg(db_));
@@ -132,8 +140,7 @@ uint32_t ColmapDatabase::UpsertImage(const std::string& name, uint32_t wanted_id
   sqlite3_bind_int64(st.s, 1, wanted_id);
   sqlite3_bind_text(st.s, 2, name.c_str(), -1, SQLITE_TRANSIENT);
   sqlite3_bind_int64(st.s, 3, camera_id);
-  double v[7] = {q.w(), q.x(), q.y(), q.z(), t.x(), t.y(), t.z()};
-  for (int i = 0; i < 7; ++i) sqlite3_bind_double(st.s, 4 + i, v[i]);
+  bind_prior(st.s, 4);
   if (sqlite3_step(st.s) != SQLITE_DONE)
     throw Error(path_, 0, "database: image " + name + ": " + sqlite3_errmsg(db_));
   cache_[name] = {wanted_id, camera_id};

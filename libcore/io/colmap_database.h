@@ -9,6 +9,7 @@
 
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "camera/camera.h"
@@ -33,9 +34,11 @@ class ColmapDatabase {
   // Overwrites the model, size and parameters of an existing camera.
   void UpdateCamera(uint32_t camera_id, const Camera& camera);
   // Inserts an image with a pose prior (image_id chosen by the caller) or, when `name` exists,
-  // updates its camera and prior. Returns the image_id in the database.
+  // updates its camera and prior. No prior (std::nullopt) stores NULLs, as COLMAP does for an
+  // image without one (structure from motion finds the pose). Returns the image_id in the
+  // database.
   uint32_t UpsertImage(const std::string& name, uint32_t wanted_id, uint32_t camera_id,
-                       const Rigid3d& prior_world_to_camera);
+                       const std::optional<Rigid3d>& prior_world_to_camera);
 
   void Begin();
   void Commit();

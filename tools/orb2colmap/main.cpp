@@ -20,7 +20,12 @@ int RunAndReport(mvtm::Orb2ColmapOptions& o) {
     return 0;
   }
   if (!o.quiet) {
-    std::cerr << "orb2colmap: " << r.written << " frames written from " << r.keyframes << " poses";
+    if (o.trajectory == mvtm::kNoTrajectory)
+      std::cerr << "orb2colmap: the camera and " << r.written << " images without poses written to "
+                << o.database;
+    else
+      std::cerr << "orb2colmap: " << r.written << " frames written from " << r.keyframes
+                << " poses";
     if (r.dropped) std::cerr << "; " << r.dropped << " outside the pose time span dropped";
     if (r.clamped) std::cerr << "; " << r.clamped << " outside the pose time span clamped";
     if (r.reordered) std::cerr << "; " << r.reordered << " poses were out of time order (sorted)";

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <set>
 
 #include "base/atomic_file.h"
@@ -23,7 +24,8 @@ OptionTable DeclareOptions(Orb2ColmapOptions& o) {
   OptionTable t("orb2colmap");
   t.Positional("TRAJECTORY", &o.trajectory,
                "Poses: ORB-SLAM2 KeyFrameTrajectory/CameraTrajectory or TUM (t tx ty tz qx qy qz "
-               "qw), or KITTI 3x4 rows")
+               "qw), or KITTI 3x4 rows; '-' for none: the camera and the --images go into the "
+               "--database without pose priors, for structure from motion")
       .File();
   t.Positional("OUTDIR", &o.outdir, "Folder for cameras, images, points3D (.txt or .bin)").Dir();
   t.Choice("--input-format", &o.input_format, kOrbInputFormats, "Trajectory format");
@@ -69,6 +71,12 @@ void Orb2ColmapOptions::Check() const {
   if (sources != 1) throw UsageError("give exactly one of --camera, --orb-settings, --kitti-calib");
   if (!images.empty() && !fs::is_directory(images))
     throw UsageError("--images: '" + images + "' is not a folder");
+  if (trajectory == kNoTrajectory) {
+    if (images.empty() || database.empty())
+      throw UsageError("TRAJECTORY '-' (no poses) needs --images and --database");
+    if (!frames.empty() || !trajectory_times.empty())
+      throw UsageError("TRAJECTORY '-' (no poses) takes no --frames or --trajectory-times");
+  }
 }
 
 namespace {
@@ -106,7 +114,7 @@ std::vector<fs::path> Inputs(const Orb2ColmapOptions& o,
   std::vector<fs::path> inputs;
   for (const std::string& in :
        {o.trajectory, o.trajectory_times, o.frames, o.orb_settings, o.kitti_calib})
-    if (!in.empty()) inputs.emplace_back(in);
+    if (!in.empty() && in != kNoTrajectory) inputs.emplace_back(in);
   for (const std::string& f : image_files) inputs.push_back(fs::path(o.images) / f);
   return inputs;
 }
@@ -180,7 +188,7 @@ std::vector<TimedName> ReadFrames(const Orb2ColmapOptions& o, const std::vector<
 
 struct Posed {
   const TimedName* frame;
-  Rigid3d w2c;
+  std::optional<Rigid3d> w2c;  // none: TRAJECTORY '-'
 };
 
 // Interpolates each frame's pose (world-to-camera); frames outside the keyframes' time span are
@@ -238,14 +246,16 @@ Reconstruction BuildModel(const Orb2ColmapOptions& o, Camera cam, const std::vec
     ImageRecord im;
     im.camera_id = cam.id;
     im.name = p.frame->name;
-    im.world_to_camera = p.w2c;
     if (db) {
       auto it = db_images.find(im.name);
       uint32_t want = it != db_images.end() ? it->second.first : next_id++;
-      im.id = db->UpsertImage(im.name, want, cam.id, im.world_to_camera);
+      im.id = db->UpsertImage(im.name, want, cam.id, p.w2c);
     } else {
       im.id = fallback_id++;
     }
+    // Without poses the images are in the database only: the model holds the camera.
+    if (!p.w2c) continue;
+    im.world_to_camera = *p.w2c;
     model.images[im.id] = std::move(im);
   }
   if (db) db->Commit();
@@ -274,16 +284,24 @@ Orb2ColmapReport RunOrb2Colmap(const Orb2ColmapOptions& o) {
     rep.up_to_date = true;
     return rep;
   }
-  TrajectoryFormat fmt;
-  std::vector<StampedPose> keys = ReadInputTrajectory(o, &fmt).poses;
-  rep.reordered = SortKeyframes(keys, o.trajectory);
-  rep.keyframes = keys.size();
-
-  const std::vector<TimedName> frames = ReadFrames(o, keys, image_files, fmt);
+  std::vector<TimedName> frames;
+  std::vector<Posed> posed;
+  if (o.trajectory == kNoTrajectory) {
+    if (image_files.empty()) throw Error(o.images, 0, "no images in the folder");
+    for (size_t i = 0; i < image_files.size(); ++i)
+      frames.push_back({static_cast<double>(i), image_files[i], 0});
+    for (const TimedName& f : frames) posed.push_back({&f, std::nullopt});
+  } else {
+    TrajectoryFormat fmt;
+    std::vector<StampedPose> keys = ReadInputTrajectory(o, &fmt).poses;
+    rep.reordered = SortKeyframes(keys, o.trajectory);
+    rep.keyframes = keys.size();
+    frames = ReadFrames(o, keys, image_files, fmt);
+    // Poses first, so that nothing is written (model or database) when the input is unusable.
+    posed = PoseFrames(o, keys, frames, rep);
+  }
   rep.frames = frames.size();
   const Camera cam = ResolveCamera(o, image_files);
-  // Poses first, so that nothing is written (model or database) when the input is unusable.
-  const std::vector<Posed> posed = PoseFrames(o, keys, frames, rep);
   const Reconstruction model = BuildModel(o, cam, posed);
   if (o.binary)
     WriteColmapBinary(model, o.outdir);
@@ -291,7 +309,7 @@ Orb2ColmapReport RunOrb2Colmap(const Orb2ColmapOptions& o) {
     WriteColmapText(model, o.outdir);
   for (const fs::path& p : outputs) ledger.Done(p);
   ledger.Write();
-  rep.written = model.images.size();
+  rep.written = posed.size();
   return rep;
 }
 

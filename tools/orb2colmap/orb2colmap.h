@@ -21,6 +21,9 @@ inline const std::vector<std::pair<OrbInputFormat, std::string>> kOrbInputFormat
 inline const std::vector<std::pair<Outside, std::string>> kOrbOutside = {
     {Outside::kDrop, "drop"}, {Outside::kClamp, "clamp"}};
 
+// TRAJECTORY '-': no poses (the camera and the images into the database, for SfM).
+inline const std::string kNoTrajectory = "-";
+
 struct Orb2ColmapOptions {
   std::string trajectory;  // TUM / ORB-SLAM2 / KITTI poses (camera-to-world)
   std::string outdir;      // the model is written here (cameras, images, points3D)

@@ -1,0 +1,42 @@
+// georef — thin main: the declared option table, then RunGeoref().
+#include <cstdio>
+
+#include "cli/app.h"
+#include "cli/options.h"
+#include "georef.h"
+
+namespace {
+
+constexpr const char* kAbout =
+    "Make a structure-from-motion model upright and metric: up from the road under the "
+    "cameras (z up, x the first camera's heading, origin below it), metres from the camera's "
+    "height above the road; optionally score it against a reference trajectory.";
+
+int RunAndReport(mvtm::GeorefOptions& o) {
+  const auto r = mvtm::RunGeoref(o);
+  if (o.quiet) return 0;
+  if (r.up_to_date)
+    std::fprintf(stderr, "georef: %s is up to date (--force rewrites)\n", o.outdir.c_str());
+  else
+    std::fprintf(stderr,
+                 "georef: ground under %zu of %zu cameras (%zu points); camera height %.6g model "
+                 "units (spread %.2g), scale %.6g; road up %.2f deg from the cameras' up%s\n",
+                 r.cameras_with_ground, r.cameras, r.ground_points, r.camera_height,
+                 r.height_spread, r.scale, r.tilt_degrees,
+                 r.why.empty() ? "" : (" [" + r.why + "]").c_str());
+  if (!o.compare.empty())
+    std::printf(
+        "compare\tmatched %zu\tpath %.4f\tate_rmse %.6f\tate_percent %.4f\treference_scale "
+        "%.6f\n",
+        r.matched, r.path_length, r.ate_rmse,
+        r.path_length > 0 ? 100 * r.ate_rmse / r.path_length : 0.0, r.reference_scale);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  mvtm::GeorefOptions o;
+  return mvtm::RunTool(mvtm::DeclareOptions(o), kAbout, argc, argv,
+                       [&] { return RunAndReport(o); });
+}
