@@ -1,17 +1,30 @@
 #!/usr/bin/env bash
-# The whole road build as one shell script: photos + poses + intrinsics → a rendered, scored
-# mvtm workspace. Each step skips when its output exists (delete it, or the workspace, to redo).
+# The whole road build as one shell script: photos (or a video) + poses (or none) + intrinsics
+# (or none) → a rendered, scored mvtm workspace. Each step skips when its output exists (delete
+# it, or the workspace, to redo).
 #
-# usage: examples/road-build.sh IMAGES POSES OUT -- INTRINSICS...
-#   IMAGES      folder of the frames (sorted by name = frame order)
-#   POSES       ORB-SLAM2 KeyFrameTrajectory / TUM or KITTI poses (camera-to-world)
+# usage: examples/road-build.sh IMAGES|VIDEO POSES|- OUT [-- INTRINSICS...]
+#   IMAGES      folder of the frames (sorted by name = frame order); every photo is kept
+#   VIDEO       a video file instead: frames picks its frames (OUT/frames: travelled motion, no
+#               blurred frame, burned-in overlays masked) and the build runs on those
+#   POSES       ORB-SLAM2 KeyFrameTrajectory / TUM or KITTI poses (camera-to-world), taken as the
+#               poses of record; or - for none: COLMAP's incremental SfM finds them from the
+#               photos (sequential matching, one shared camera), georef turns the model upright
+#               and, with CAMERA_HEIGHT, metric
 #   OUT         working folder; the workspace is OUT/ws
 #   INTRINSICS  orb2colmap's intrinsics options, e.g. --kitti-calib calib.txt, or
-#               --camera "PINHOLE W H fx fy cx cy", or --orb-settings TUM1.yaml [--frames rgb.txt]
+#               --camera "PINHOLE W H fx fy cx cy", or --orb-settings TUM1.yaml [--frames rgb.txt];
+#               with POSES -, optional: without them COLMAP self-calibrates a SIMPLE_RADIAL
+#               camera (CAMERA_MODEL to choose another, e.g. OPENCV)
 # environment: MVTM_BIN (default build/bin), HOLDOUT (every Nth frame scored, default 5),
 #              LATERAL (lane change for the final render in model units, default 1.5: metres
 #              for a metric model; a non-metric one needs 1.5 x its units per metre),
-#              MATCH_OVERLAP (COLMAP sequential matching overlap, default 5),
+#              MATCH_OVERLAP (COLMAP sequential matching overlap, default 5; 10 with POSES -),
+#              LOOP_DETECTION (1: with POSES -, also match each frame against the frames most
+#              alike in a vocabulary tree built from the photos, for drives that revisit a place),
+#              CAMERA_HEIGHT (with POSES -: the camera's height above the road in metres, e.g.
+#              1.65 for KITTI; the model is then in metres, METRIC=1 follows),
+#              FRAME_SPACING (VIDEO: frames' --spacing, default 0.01 of the image width),
 #              MESH (dense | corridor: the mesh where COLMAP has no CUDA, default dense),
 #              ROADMESH_FLAGS (extra roadmesh options, e.g. "--max-depth 80": fuse depths up to
 #              80 camera spacings instead of 40, for far roadside geometry on fast roads),
@@ -22,42 +35,109 @@
 #              held-out photos builds the mesh, its colours and the projectors; they take part in
 #              nothing that is scored, as in novel-view benchmarks)
 #
-# Steps: orb2colmap (poses as priors) → COLMAP feature_extractor / sequential_matcher /
-# point_triangulator / bundle_adjuster / image_undistorter (CPU) → mesh (COLMAP dense MVS +
+# Steps: [frames (VIDEO)] → orb2colmap (poses as priors, or the camera alone with POSES -) →
+# COLMAP feature_extractor / sequential_matcher / point_triangulator / bundle_adjuster (poses of
+# record) or mapper + georef (POSES -) / image_undistorter (CPU) → mesh (COLMAP dense MVS +
 # poisson_mesher when COLMAP has CUDA, else densify + roadmesh --dense, or roadmesh alone) → segtrack (when OUT/ws/labels exists) →
 # pickview --partners (when the names carry several passes, A_0000.png …) → bakedepth →
 # inpaint3d (when there are masks) → ptmrender (held-out poses and a lane change) → ssim.
 set -euo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
 bin=${MVTM_BIN:-$top/build/bin}
-[ $# -ge 4 ] && [ "$4" = "--" ] || { echo "usage: $0 IMAGES POSES OUT -- INTRINSICS..." >&2; exit 2; }
-images=$(cd "$1" && pwd); poses=$2; out=$3; shift 4
+usage() { echo "usage: $0 IMAGES|VIDEO POSES|- OUT [-- INTRINSICS...]" >&2; exit 2; }
+[ $# -ge 3 ] || usage
+if [ $# -ge 4 ]; then [ "$4" = "--" ] || usage; fi
+[ "$2" = - ] || [ $# -ge 5 ] || { echo "$0: error: poses of record need INTRINSICS after --" >&2; usage; }
+[ -e "$1" ] || { echo "$0: error: $1: no such file or folder" >&2; exit 2; }
+input=$1; poses=$2; out=$3; shift 3; [ $# -ge 1 ] && shift
 mkdir -p "$out"; out=$(cd "$out" && pwd); ws=$out/ws
 holdout=${HOLDOUT:-5}; lateral=${LATERAL:-1.5}
 log() { echo "== $*" >&2; }
 colmap_log() { "$@" > "$out/colmap.log" 2>&1 || { tail -20 "$out/colmap.log" >&2; exit 1; }; }
+overlay=
+if [ -d "$input" ]; then
+  images=$(cd "$input" && pwd)
+else
+  log "0. frames: the video's frames, chosen by travelled image motion, blurred ones dropped"
+  "$bin/frames" ${FRAME_SPACING:+--spacing "$FRAME_SPACING"} "$input" "$out/frames"
+  images=$out/frames/images
+  [ -f "$out/frames/mask.png" ] && overlay=$out/frames
+fi
 
-log "1. orb2colmap: poses -> COLMAP model of every frame + database with pose priors"
-[ -f "$out/prior/images.txt" ] || "$bin/orb2colmap" --images "$images" --database "$out/db.db" "$@" "$poses" "$out/prior"
+if [ "$poses" = - ]; then
+  log "1. orb2colmap: the camera (when intrinsics are given) and the images into a COLMAP database, no poses"
+  if [ $# -ge 1 ] && [ ! -f "$out/db.db" ]; then
+    "$bin/orb2colmap" --images "$images" --database "$out/db.db.tmp" "$@" - "$out/prior"
+    mv "$out/db.db.tmp" "$out/db.db"
+  fi
+  log "2. COLMAP (CPU): SIFT, sequential matching, incremental SfM; georef: up and scale"
+  if [ ! -f "$out/ba/images.bin" ]; then
+    mask_opt=(); [ -n "$overlay" ] && mask_opt=(--ImageReader.camera_mask_path "$overlay/colmap_mask.png")
+    colmap_log colmap feature_extractor --database_path "$out/db.db" --image_path "$images" \
+      --SiftExtraction.use_gpu 0 --ImageReader.single_camera 1 \
+      --ImageReader.camera_model "${CAMERA_MODEL:-SIMPLE_RADIAL}" "${mask_opt[@]}"
+    loop_opt=()
+    if [ "${LOOP_DETECTION:-0}" = 1 ]; then
+      [ -f "$out/vocab_tree.bin" ] || colmap_log colmap vocab_tree_builder \
+        --database_path "$out/db.db" --vocab_tree_path "$out/vocab_tree.bin"
+      loop_opt=(--SequentialMatching.loop_detection 1 --SequentialMatching.vocab_tree_path "$out/vocab_tree.bin")
+    fi
+    colmap_log colmap sequential_matcher --database_path "$out/db.db" --SiftMatching.use_gpu 0 \
+      --SequentialMatching.overlap "${MATCH_OVERLAP:-10}" "${loop_opt[@]}"
+    # Given intrinsics stay as they are; without them the mapper refines focal length and
+    # distortion of the one shared camera.
+    fixed=(); [ $# -ge 1 ] && fixed=(--Mapper.ba_refine_focal_length 0 --Mapper.ba_refine_extra_params 0)
+    rm -rf "$out/sfm"; mkdir -p "$out/sfm"
+    colmap_log colmap mapper --database_path "$out/db.db" --image_path "$images" \
+      --output_path "$out/sfm" "${fixed[@]}"
+    # Several models when the chain of matches breaks: the largest is built, the rest reported.
+    best=; best_n=0; total=$(ls "$images" | wc -l)
+    for m in "$out"/sfm/*/; do
+      k=$(colmap model_analyzer --path "$m" 2>&1 | sed -n 's/.*Registered images: *\([0-9]*\).*/\1/p')
+      echo "SfM model $(basename "$m"): ${k:-0} of $total images registered" >&2
+      if [ "${k:-0}" -gt "$best_n" ]; then best=$m; best_n=$k; fi
+    done
+    [ -n "$best" ] || { echo "$0: error: COLMAP registered no image (see $out/colmap.log)" >&2; exit 1; }
+    [ "$best_n" -lt "$total" ] && echo "warning: $((total - best_n)) of $total images not in the model built (the others above, or unregistered)" >&2
+    rm -rf "$out/ba.tmp"
+    "$bin/georef" -q --binary ${CAMERA_HEIGHT:+--camera-height "$CAMERA_HEIGHT"} "$best" "$out/ba.tmp"
+    rm -rf "$out/ba"; mv "$out/ba.tmp" "$out/ba"
+  fi
+  if [ -n "${CAMERA_HEIGHT:-}" ]; then METRIC=1; fi
+else
+  [ $# -ge 1 ] || usage
+  log "1. orb2colmap: poses -> COLMAP model of every frame + database with pose priors"
+  [ -f "$out/prior/images.txt" ] || "$bin/orb2colmap" --images "$images" --database "$out/db.db" "$@" "$poses" "$out/prior"
 
-log "2. COLMAP (CPU): SIFT, sequential matching, triangulation with the poses, bundle adjustment"
-if [ ! -f "$out/ba/images.bin" ]; then
-  colmap_log colmap feature_extractor --database_path "$out/db.db" --image_path "$images" \
-    --SiftExtraction.use_gpu 0 --ImageReader.single_camera 1
-  colmap_log colmap sequential_matcher --database_path "$out/db.db" --SiftMatching.use_gpu 0 \
-    --SequentialMatching.overlap "${MATCH_OVERLAP:-5}"
-  mkdir -p "$out/tri" "$out/ba"
-  colmap_log colmap point_triangulator --database_path "$out/db.db" --image_path "$images" \
-    --input_path "$out/prior" --output_path "$out/tri"
-  # The poses are the poses of record (SLAM or ground truth, metric): bundle adjustment refines
-  # the points only. Left free, COLMAP's gauge lets the whole trajectory drift and rescale.
-  colmap_log colmap bundle_adjuster --input_path "$out/tri" --output_path "$out/ba" \
-    --BundleAdjustment.refine_extrinsics 0 --BundleAdjustment.refine_focal_length 0 \
-    --BundleAdjustment.refine_principal_point 0 --BundleAdjustment.refine_extra_params 0
+  log "2. COLMAP (CPU): SIFT, sequential matching, triangulation with the poses, bundle adjustment"
+  if [ ! -f "$out/ba/images.bin" ]; then
+    colmap_log colmap feature_extractor --database_path "$out/db.db" --image_path "$images" \
+      --SiftExtraction.use_gpu 0 --ImageReader.single_camera 1
+    colmap_log colmap sequential_matcher --database_path "$out/db.db" --SiftMatching.use_gpu 0 \
+      --SequentialMatching.overlap "${MATCH_OVERLAP:-5}"
+    mkdir -p "$out/tri" "$out/ba"
+    colmap_log colmap point_triangulator --database_path "$out/db.db" --image_path "$images" \
+      --input_path "$out/prior" --output_path "$out/tri"
+    # The poses are the poses of record (SLAM or ground truth, metric): bundle adjustment refines
+    # the points only. Left free, COLMAP's gauge lets the whole trajectory drift and rescale.
+    colmap_log colmap bundle_adjuster --input_path "$out/tri" --output_path "$out/ba" \
+      --BundleAdjustment.refine_extrinsics 0 --BundleAdjustment.refine_focal_length 0 \
+      --BundleAdjustment.refine_principal_point 0 --BundleAdjustment.refine_extra_params 0
+  fi
 fi
 if [ ! -d "$ws/sparse" ]; then
   colmap_log colmap image_undistorter --image_path "$images" --input_path "$out/ba" \
     --output_path "$ws" --output_type COLMAP
+fi
+[ -f "$out/ba/georef.json" ] && cp "$out/ba/georef.json" "$ws/georef.json"
+# A video's burned-in overlay: undistorted like the photos, one mask per image, so that fusion,
+# vertex colours and projection leave those pixels out (ptmrender fills them from other photos).
+if [ -n "$overlay" ] && [ ! -d "$ws/masks" ]; then
+  rm -rf "$out/overlay"; mkdir -p "$out/overlay/in"
+  for f in "$images"/*; do ln -s "$overlay/mask.png" "$out/overlay/in/$(basename "$f")"; done
+  colmap_log colmap image_undistorter --image_path "$out/overlay/in" --input_path "$out/ba" \
+    --output_path "$out/overlay/out" --output_type COLMAP
+  mv "$out/overlay/out/images" "$ws/masks"
 fi
 colmap model_analyzer --path "$ws/sparse" 2>&1 | grep -E "Registered images|Points:|Mean reprojection" >&2 || true
 

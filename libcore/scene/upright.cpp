@@ -4,6 +4,7 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -18,10 +19,13 @@ constexpr double kMinDepression = 2.0 * kPi / 180;  // below the optical axis
 constexpr double kMaxDepression = 60.0 * kPi / 180;
 constexpr double kMaxLateral = 2.0;            // |x| ≤ 2·y (camera frame)
 constexpr double kMaxTilt = 25.0 * kPi / 180;  // ground normal from the camera's up
-constexpr double kInlierFraction = 0.03;       // of the median depth below the camera
+constexpr double kInlierFraction = 0.05;       // of the plane's height below the camera
 constexpr size_t kMinInliers = 12;
 constexpr double kMinInlierShare = 0.3;
 constexpr int kRansacRounds = 300;
+constexpr size_t kNeighbours = 3;  // images before and after whose points count too
+
+double Sq(double v) { return v * v; }
 
 double Median(std::vector<double> v) {
   if (v.empty()) return 0;
@@ -66,16 +70,15 @@ struct CameraGround {
 CameraGround GroundUnder(const std::vector<Eigen::Vector3d>& pts, uint32_t seed) {
   CameraGround g;
   if (pts.size() < kMinInliers) return g;
-  std::vector<double> below;
-  below.reserve(pts.size());
-  for (const auto& p : pts) below.push_back(p.y());
-  const double tol = kInlierFraction * Median(below);
-  if (!(tol > 0)) return g;
   std::mt19937 rng(seed);
   std::uniform_int_distribution<size_t> pick(0, pts.size() - 1);
   const double cos_tilt = std::cos(kMaxTilt);
-  size_t best = 0;
+  // MSAC: each point costs its squared distance, capped at the tolerance, relative to the
+  // plane's height (scale-free). Counting inliers alone would favour a plane tilted to take in
+  // the pavement beside the road at the edge of the tolerance along with the road itself.
+  double best = std::numeric_limits<double>::infinity();
   Plane best_plane;
+  bool found = false;
   for (int r = 0; r < kRansacRounds; ++r) {
     const size_t a = pick(rng), b = pick(rng), c = pick(rng);
     if (a == b || b == c || a == c) continue;
@@ -86,28 +89,30 @@ CameraGround GroundUnder(const std::vector<Eigen::Vector3d>& pts, uint32_t seed)
     if (-n.y() < cos_tilt) continue;
     Plane pl{n, -n.dot(pts[a])};
     if (pl.h <= 0) continue;  // the plane must lie below the camera
-    size_t count = 0;
-    for (const auto& p : pts) count += pl.Distance(p) < tol;
-    if (count > best) {
-      best = count;
+    double cost = 0;
+    for (const auto& p : pts) cost += std::min(Sq(pl.Distance(p) / pl.h), Sq(kInlierFraction));
+    if (cost < best) {
+      best = cost;
       best_plane = pl;
+      found = true;
     }
   }
-  if (best < kMinInliers) return g;
-  // Least squares on the inliers, twice (the refit may gather a few more).
+  if (!found) return g;
+  // Least squares on the points well inside the tolerance, a few rounds (each refit may move
+  // the plane onto more of the road and off what lies beside it).
   Plane pl = best_plane;
   std::vector<Eigen::Vector3d> in;
-  for (int round = 0; round < 2; ++round) {
+  for (int round = 0; round < 3; ++round) {
     in.clear();
     for (const auto& p : pts)
-      if (pl.Distance(p) < tol) in.push_back(p);
+      if (pl.Distance(p) < 0.5 * kInlierFraction * pl.h) in.push_back(p);
     Plane refit;
     if (!FitPlane(in, refit) || -refit.n.y() < cos_tilt || refit.h <= 0) break;
     pl = refit;
   }
   in.clear();
   for (const auto& p : pts)
-    if (pl.Distance(p) < tol) in.push_back(p);
+    if (pl.Distance(p) < kInlierFraction * pl.h) in.push_back(p);
   if (in.size() < kMinInliers ||
       static_cast<double>(in.size()) < kMinInlierShare * static_cast<double>(pts.size()))
     return g;
@@ -117,13 +122,25 @@ CameraGround GroundUnder(const std::vector<Eigen::Vector3d>& pts, uint32_t seed)
   return g;
 }
 
-// The points image `im` observes that may be ground: below its optical axis, ahead, not far to
-// the side (camera coordinates).
-std::vector<Eigen::Vector3d> GroundCandidates(const Reconstruction& rec, const ImageRecord& im) {
+// The points that may be ground under image `i` of `images` (camera coordinates): observed by it
+// or by its neighbours in drive order (a dashcam sees little of the asphalt right under it, its
+// neighbours ahead and behind see that stretch at a better angle), below its optical axis, not
+// far to the side.
+std::vector<Eigen::Vector3d> GroundCandidates(const Reconstruction& rec,
+                                              const std::vector<const ImageRecord*>& images,
+                                              size_t i) {
+  const ImageRecord& im = *images[i];
+  std::vector<uint64_t> ids;
+  const size_t lo = i >= kNeighbours ? i - kNeighbours : 0,
+               hi = std::min(images.size(), i + kNeighbours + 1);
+  for (size_t k = lo; k < hi; ++k)
+    for (const Point2D& p2 : images[k]->points2D)
+      if (p2.point3D_id != kInvalidPoint3DId) ids.push_back(p2.point3D_id);
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
   std::vector<Eigen::Vector3d> pts;
-  for (const Point2D& p2 : im.points2D) {
-    if (p2.point3D_id == kInvalidPoint3DId) continue;
-    auto it = rec.points3D.find(p2.point3D_id);
+  for (uint64_t id : ids) {
+    auto it = rec.points3D.find(id);
     if (it == rec.points3D.end()) continue;
     const Eigen::Vector3d p = im.world_to_camera * it->second.xyz;
     if (p.z() <= 0 || p.y() <= 0) continue;
@@ -146,10 +163,11 @@ GroundFit FitGround(const Reconstruction& rec) {
   Eigen::Vector3d ground_up = Eigen::Vector3d::Zero();
   std::vector<double> heights;
   uint32_t seed = 1;
-  for (const ImageRecord* im : images) {
+  for (size_t i = 0; i < images.size(); ++i) {
+    const ImageRecord* im = images[i];
     const Eigen::Matrix3d Rt = im->world_to_camera.q.normalized().toRotationMatrix().transpose();
     cam_up += Rt * -Eigen::Vector3d::UnitY();
-    const CameraGround g = GroundUnder(GroundCandidates(rec, *im), seed++);
+    const CameraGround g = GroundUnder(GroundCandidates(rec, images, i), seed++);
     if (!g.ok) continue;
     ++fit.cameras_with_ground;
     fit.ground_points += g.inliers;

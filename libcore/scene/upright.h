@@ -4,12 +4,13 @@
 // SfM from photos alone gives a model in an arbitrary frame and unit. A dashcam is mounted at a
 // known height above the road (KITTI: 1.65 m), roughly level, and the road under it is the
 // dominant surface in the lower middle of every frame, so:
-//  * Ground under each camera: the 3-D points that camera observes below its optical axis
-//    (depression 2°–60°, lateral within 2 × their depth below the camera), fitted by RANSAC to a
-//    plane whose normal lies within 25° of the cameras' mean up axis (−y), then refined by least
-//    squares on the inliers. The inlier threshold is relative (2 % of the median depth below the
-//    camera of those points), so the fit is the same in any unit. Cameras with fewer than 12
-//    inliers (or under 40 % inliers) have no ground.
+//  * Ground under each camera: the 3-D points that camera or its 3 neighbours on either side (in
+//    name order) observe, below its optical axis (depression 2°–60°, lateral within 2 × their
+//    depth below the camera), fitted by RANSAC to a
+//    plane whose normal lies within 25° of that camera's up axis (−y), then refined by least
+//    squares on the inliers. The inlier threshold is relative (5 % of the candidate plane's height
+//    below the camera), so the fit is the same in any unit. Cameras with fewer than 12
+//    inliers (or under 30 % inliers) have no ground.
 //  * Up: the inlier-weighted mean of the ground normals (the road's mean normal over the drive
 //    estimates gravity; a camera's own axis is tilted by its mounting), else the cameras' mean up
 //    when no camera has ground.

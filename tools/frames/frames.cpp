@@ -43,7 +43,8 @@ Crop ParseCrop(const std::string& s) {
 OptionTable DeclareOptions(FramesOptions& o) {
   OptionTable t("frames");
   t.Positional("VIDEO", &o.video, "Video file (any container and codec FFmpeg reads)").File();
-  t.Positional("OUTDIR", &o.outdir, "Folder for images/, frames.tsv and mask.png").Dir();
+  t.Positional("OUTDIR", &o.outdir, "Folder for images/, frames.tsv, mask.png and colmap_mask.png")
+      .Dir();
   t.Real("--spacing", &o.select.spacing,
          "Median image motion between kept frames, as a fraction of the image width")
       .Range(0, 1, true);
@@ -85,10 +86,12 @@ Image ToImage(const cv::Mat& bgr) {
   return img;
 }
 
-Image MaskImage(const cv::Mat& m) {
+// masked = 255 (mvtm's masks), or with `keep` the other way round: COLMAP's camera mask, where
+// black pixels give no features.
+Image MaskImage(const cv::Mat& m, bool keep = false) {
   Image img(m.cols, m.rows, 1);
   for (int y = 0; y < m.rows; ++y)
-    for (int x = 0; x < m.cols; ++x) img.at(x, y) = m.at<uchar>(y, x) ? 255.f : 0.f;
+    for (int x = 0; x < m.cols; ++x) img.at(x, y) = (m.at<uchar>(y, x) != 0) != keep ? 255.f : 0.f;
   return img;
 }
 
@@ -114,7 +117,8 @@ namespace {
 FramesReport RunFramesInto(const FramesOptions& o) {
   FramesReport rep;
   const fs::path out(o.outdir), images = out / "images", tsv = out / "frames.tsv",
-                                mask_png = out / "mask.png";
+                                mask_png = out / "mask.png",
+                                colmap_mask_png = out / "colmap_mask.png";
   FramesOptions resolved = o;
   const OptionTable table = DeclareOptions(resolved);
   std::vector<fs::path> inputs{o.video};
@@ -210,9 +214,12 @@ FramesReport RunFramesInto(const FramesOptions& o) {
   if (!user_mask.empty()) mask = mask.empty() ? user_mask : (mask | user_mask);
   if (!mask.empty() && cv::countNonZero(mask) > 0) {
     WriteImage(mask_png.string(), MaskImage(mask), PngCompression::kFastFlat);
+    WriteImage(colmap_mask_png.string(), MaskImage(mask, true), PngCompression::kFastFlat);
     ledger.Done(mask_png);
-  } else {
-    fs::remove(mask_png);  // an earlier run's: this selection masks nothing
+    ledger.Done(colmap_mask_png);
+  } else {  // an earlier run's: this selection masks nothing
+    fs::remove(mask_png);
+    fs::remove(colmap_mask_png);
   }
   WriteTextAtomic(tsv, [&](std::ostream& os) {
     os << "name\tframe\ttime\tsharpness\tmotion\n";

@@ -8,6 +8,8 @@
 //                      motion since the previous kept frame (fraction of the width)
 //   mask.png           8-bit, 255 = not the scene (the overlay found, with --mask), in the
 //                      cropped frame's size; absent when nothing is masked
+//   colmap_mask.png    the same mask the other way round (0 = not the scene), for COLMAP's
+//                      feature_extractor --ImageReader.camera_mask_path
 // Decoding is one sequential pass (a video cannot be split without decoding it), so the tool
 // takes no --shard; a rerun decodes again but writes only the images that are not up to date,
 // and removes images of an earlier selection that this one does not keep.

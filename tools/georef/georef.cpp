@@ -33,7 +33,8 @@ OptionTable DeclareOptions(GeorefOptions& o) {
   t.Text("--compare", &o.compare,
          "Reference trajectory (TUM or KITTI camera-to-world, e.g. ground truth): print the "
          "absolute trajectory error after a similarity fit; images match KITTI lines by the "
-         "number in their name, TUM rows by the timestamp in their name")
+         "number in their name, TUM rows by the timestamp in their name, a COLMAP model's "
+         "images (folder) by name")
       .File()
       .Cosmetic();
   t.Flag("--binary", &o.binary, "Write cameras.bin, images.bin, points3D.bin");
@@ -80,13 +81,10 @@ bool NameNumber(const std::string& name, double& value) {
   return end && *end == '\0' && std::isfinite(value);
 }
 
-void Compare(const GeorefOptions& o, GeorefReport& rep) {
-  const Reconstruction rec = ReadColmapModel(o.outdir);
-  const TrajectoryFormat fmt = DetectTrajectoryFormat(o.compare);
-  if (fmt == TrajectoryFormat::kColmap)
-    throw Error(o.compare, 0, "--compare takes TUM or KITTI poses, not a COLMAP model");
-  const Trajectory ref = ReadTrajectory(o.compare, fmt);
-  std::vector<Eigen::Vector3d> src, dst;
+// Camera centres of `rec`'s images and of the reference poses they match: KITTI lines by the
+// number in the image's name, TUM rows by the timestamp in it.
+void MatchTrajectory(const Reconstruction& rec, const Trajectory& ref, TrajectoryFormat fmt,
+                     std::vector<Eigen::Vector3d>& src, std::vector<Eigen::Vector3d>& dst) {
   for (const ImageRecord* im : rec.ImagesByName()) {
     double key;
     if (!NameNumber(im->name, key)) continue;
@@ -103,6 +101,27 @@ void Compare(const GeorefOptions& o, GeorefReport& rep) {
     const Rigid3d c2w = im->world_to_camera.Inverse();
     src.push_back(c2w.t);
     dst.push_back(match->pose.t);
+  }
+}
+
+void Compare(const GeorefOptions& o, GeorefReport& rep) {
+  const Reconstruction rec = ReadColmapModel(o.outdir);
+  std::vector<Eigen::Vector3d> src, dst;
+  if (fs::is_directory(o.compare)) {  // another model of the same photos: match by name
+    const Reconstruction other = ReadColmapModel(o.compare);
+    std::map<std::string, const ImageRecord*> by_name;
+    for (const ImageRecord* im : other.ImagesByName()) by_name[im->name] = im;
+    for (const ImageRecord* im : rec.ImagesByName()) {
+      auto it = by_name.find(im->name);
+      if (it == by_name.end()) continue;
+      src.push_back(im->world_to_camera.Inverse().t);
+      dst.push_back(it->second->world_to_camera.Inverse().t);
+    }
+  } else {
+    const TrajectoryFormat fmt = DetectTrajectoryFormat(o.compare);
+    if (fmt == TrajectoryFormat::kColmap)
+      throw Error(o.compare, 0, "--compare takes a COLMAP model as its folder, not a file of it");
+    MatchTrajectory(rec, ReadTrajectory(o.compare, fmt), fmt, src, dst);
   }
   rep.matched = src.size();
   if (src.size() < 3)

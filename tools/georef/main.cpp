@@ -12,9 +12,7 @@ constexpr const char* kAbout =
     "cameras (z up, x the first camera's heading, origin below it), metres from the camera's "
     "height above the road; optionally score it against a reference trajectory.";
 
-int RunAndReport(mvtm::GeorefOptions& o) {
-  const auto r = mvtm::RunGeoref(o);
-  if (o.quiet) return 0;
+void PrintSummary(const mvtm::GeorefOptions& o, const mvtm::GeorefReport& r) {
   if (r.up_to_date)
     std::fprintf(stderr, "georef: %s is up to date (--force rewrites)\n", o.outdir.c_str());
   else
@@ -24,6 +22,12 @@ int RunAndReport(mvtm::GeorefOptions& o) {
                  r.cameras_with_ground, r.cameras, r.ground_points, r.camera_height,
                  r.height_spread, r.scale, r.tilt_degrees,
                  r.why.empty() ? "" : (" [" + r.why + "]").c_str());
+}
+
+int RunAndReport(mvtm::GeorefOptions& o) {
+  const auto r = mvtm::RunGeoref(o);
+  if (!o.quiet) PrintSummary(o, r);
+  // The comparison is data (stdout), printed with -q too; -q silences only the summary.
   if (!o.compare.empty())
     std::printf(
         "compare\tmatched %zu\tpath %.4f\tate_rmse %.6f\tate_percent %.4f\treference_scale "
