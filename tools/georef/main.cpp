@@ -22,6 +22,17 @@ void PrintSummary(const mvtm::GeorefOptions& o, const mvtm::GeorefReport& r) {
                  r.cameras_with_ground, r.cameras, r.ground_points, r.camera_height,
                  r.height_spread, r.scale, r.tilt_degrees,
                  r.why.empty() ? "" : (" [" + r.why + "]").c_str());
+  if (r.gps)
+    std::fprintf(
+        stderr,
+        "georef: GPS: %zu of %zu frames within the log, %zu fixes among them, %zu inliers, "
+        "%.3g m RMS; offset %.2f s; UTM "
+        "zone %s; scale %.6g m per model unit from GPS alone (+- %.2g), %s used\n",
+        r.gps_matched, r.gps_frames, r.gps_pairs, r.gps_inliers, r.gps_rms, r.gps_offset,
+        r.utm_zone.c_str(), r.scale_gps, r.scale_gps_sigma, r.scale_source.c_str());
+  if (r.gps_bad_checksums > 0)
+    std::fprintf(stderr, "georef: warning: %zu NMEA sentences with a wrong checksum skipped\n",
+                 r.gps_bad_checksums);
 }
 
 int RunAndReport(mvtm::GeorefOptions& o) {
