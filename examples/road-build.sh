@@ -7,8 +7,10 @@
 #   IMAGES      folder of the frames (sorted by name = frame order); every photo is kept
 #   VIDEO       a video file instead: frames picks its frames (OUT/frames: travelled motion, no
 #               blurred frame, burned-in overlays masked) and the build runs on those
-#   POSES       ORB-SLAM2 KeyFrameTrajectory / TUM or KITTI poses (camera-to-world), taken as the
-#               poses of record; or - for none: COLMAP's incremental SfM finds them from the
+#   POSES       ORB-SLAM2 KeyFrameTrajectory / TUM or KITTI poses (camera-to-world), a COLMAP
+#               model (folder, or its images.txt) or a NeRF/nerfstudio transforms.json, taken as
+#               the poses of record (the last two bring their camera: INTRINSICS optional); or
+#               - for none: COLMAP's incremental SfM finds them from the
 #               photos (sequential matching, one shared camera), georef turns the model upright
 #               and, with CAMERA_HEIGHT, metric
 #   OUT         working folder; the workspace is OUT/ws
@@ -24,6 +26,11 @@
 #              alike in a vocabulary tree built from the photos, for drives that revisit a place),
 #              CAMERA_HEIGHT (with POSES -: the camera's height above the road in metres, e.g.
 #              1.65 for KITTI; the model is then in metres, METRIC=1 follows),
+#              GPS (with POSES -: a GPX or NMEA log of the drive; the model goes to UTM in metres,
+#              the zone and origin in OUT/ws/georef.json; a VIDEO's frames are timed by frames,
+#              a folder of photos needs GPS_TIMES: frames.tsv-like NAME TIME lines or KITTI
+#              times.txt), GPS_OFFSET (seconds from the log's first fix to the video's start,
+#              default 0), GPS_SEARCH (seconds either side of GPS_OFFSET to search, default 0),
 #              FRAME_SPACING (VIDEO: frames' --spacing, default 0.01 of the image width),
 #              MESH (dense | corridor: the mesh where COLMAP has no CUDA, default dense),
 #              ROADMESH_FLAGS (extra roadmesh options, e.g. "--max-depth 80": fuse depths up to
@@ -47,7 +54,8 @@ bin=${MVTM_BIN:-$top/build/bin}
 usage() { echo "usage: $0 IMAGES|VIDEO POSES|- OUT [-- INTRINSICS...]" >&2; exit 2; }
 [ $# -ge 3 ] || usage
 if [ $# -ge 4 ]; then [ "$4" = "--" ] || usage; fi
-[ "$2" = - ] || [ $# -ge 5 ] || { echo "$0: error: poses of record need INTRINSICS after --" >&2; usage; }
+named_poses() { [ -d "$1" ] || [[ "$1" == *.json ]] || [[ "$(basename "$1")" == images.txt ]] || [[ "$(basename "$1")" == images.bin ]]; }
+[ "$2" = - ] || [ $# -ge 5 ] || named_poses "$2" || { echo "$0: error: these poses need INTRINSICS after --" >&2; usage; }
 [ -e "$1" ] || { echo "$0: error: $1: no such file or folder" >&2; exit 2; }
 input=$1; poses=$2; out=$3; shift 3; [ $# -ge 1 ] && shift
 mkdir -p "$out"; out=$(cd "$out" && pwd); ws=$out/ws
@@ -99,13 +107,19 @@ if [ "$poses" = - ]; then
     done
     [ -n "$best" ] || { echo "$0: error: COLMAP registered no image (see $out/colmap.log)" >&2; exit 1; }
     [ "$best_n" -lt "$total" ] && echo "warning: $((total - best_n)) of $total images not in the model built (the others above, or unregistered)" >&2
+    gps_opt=()
+    if [ -n "${GPS:-}" ]; then
+      gps_times=${GPS_TIMES:-}
+      [ -z "$gps_times" ] && [ -f "$out/frames/frames.tsv" ] && gps_times=$out/frames/frames.tsv
+      [ -n "$gps_times" ] || { echo "$0: error: GPS with a folder of photos needs GPS_TIMES (each photo's time)" >&2; exit 2; }
+      gps_opt=(--gps "$GPS" --times "$gps_times" --gps-offset "${GPS_OFFSET:-0}" --gps-search "${GPS_SEARCH:-0}")
+    fi
     rm -rf "$out/ba.tmp"
-    "$bin/georef" -q --binary ${CAMERA_HEIGHT:+--camera-height "$CAMERA_HEIGHT"} "$best" "$out/ba.tmp"
+    "$bin/georef" --binary ${CAMERA_HEIGHT:+--camera-height "$CAMERA_HEIGHT"} "${gps_opt[@]}" "$best" "$out/ba.tmp"
     rm -rf "$out/ba"; mv "$out/ba.tmp" "$out/ba"
   fi
-  if [ -n "${CAMERA_HEIGHT:-}" ]; then METRIC=1; fi
+  if [ -n "${CAMERA_HEIGHT:-}" ] || [ -n "${GPS:-}" ]; then METRIC=1; fi
 else
-  [ $# -ge 1 ] || usage
   log "1. orb2colmap: poses -> COLMAP model of every frame + database with pose priors"
   [ -f "$out/prior/images.txt" ] || "$bin/orb2colmap" --images "$images" --database "$out/db.db" "$@" "$poses" "$out/prior"
 

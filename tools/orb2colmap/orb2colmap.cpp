@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <set>
 
@@ -24,7 +25,9 @@ OptionTable DeclareOptions(Orb2ColmapOptions& o) {
   OptionTable t("orb2colmap");
   t.Positional("TRAJECTORY", &o.trajectory,
                "Poses: ORB-SLAM2 KeyFrameTrajectory/CameraTrajectory or TUM (t tx ty tz qx qy qz "
-               "qw), or KITTI 3x4 rows; '-' for none: the camera and the --images go into the "
+               "qw), or KITTI 3x4 rows; poses with names: a COLMAP model (its folder, or its "
+               "images.txt/.bin) or a NeRF/nerfstudio transforms.json, whose camera is used when "
+               "no intrinsics are given; '-' for none: the camera and the --images go into the "
                "--database without pose priors, for structure from motion")
       .File();
   t.Positional("OUTDIR", &o.outdir, "Folder for cameras, images, points3D (.txt or .bin)").Dir();
@@ -65,10 +68,23 @@ OptionTable DeclareOptions(Orb2ColmapOptions& o) {
   return t;
 }
 
+bool HasNamedPoses(const std::string& trajectory) {
+  const fs::path p(trajectory);
+  const std::string name = p.filename().string();
+  return fs::is_directory(p) || p.extension() == ".json" || name == "images.txt" ||
+         name == "images.bin";
+}
+
 void Orb2ColmapOptions::Check() const {
   CheckDeclared(*this);
   int sources = !camera.empty() + !orb_settings.empty() + !kitti_calib.empty();
-  if (sources != 1) throw UsageError("give exactly one of --camera, --orb-settings, --kitti-calib");
+  if (sources > 1 || (sources == 0 && !HasNamedPoses(trajectory)))
+    throw UsageError("give exactly one of --camera, --orb-settings, --kitti-calib");
+  if (HasNamedPoses(trajectory) &&
+      (!frames.empty() || !trajectory_times.empty() || input_format != OrbInputFormat::kAuto))
+    throw UsageError(
+        "a COLMAP model or transforms.json names its images: no --frames, --trajectory-times or "
+        "--input-format");
   if (!images.empty() && !fs::is_directory(images))
     throw UsageError("--images: '" + images + "' is not a folder");
   if (trajectory == kNoTrajectory) {
@@ -134,7 +150,8 @@ Trajectory ReadInputTrajectory(const Orb2ColmapOptions& o, TrajectoryFormat* fmt
                                                     : DetectTrajectoryFormat(o.trajectory);
   if (*fmt == TrajectoryFormat::kKitti) return ReadKittiPoses(o.trajectory, o.trajectory_times);
   if (*fmt == TrajectoryFormat::kTum) return ReadTum(o.trajectory);
-  throw Error(o.trajectory, 0, "a COLMAP model is already a COLMAP model: nothing to convert");
+  throw Error(o.trajectory, 0,
+              "a COLMAP images.txt is read as a model when named images.txt (or its folder)");
 }
 
 // Names the frames that have none: after the images (one each, in order), else after the
@@ -184,6 +201,53 @@ std::vector<TimedName> ReadFrames(const Orb2ColmapOptions& o, const std::vector<
   }
   NameFrames(o, image_files, fmt, frames);
   return frames;
+}
+
+// Poses that name their images (a COLMAP model, a NeRF transforms.json), and the camera they
+// come with (none when a model has several).
+struct NamedPoses {
+  std::optional<Camera> camera;
+  std::vector<TimedName> frames;  // time = order, name = the image's base name
+  std::vector<Rigid3d> w2c;
+};
+
+NamedPoses ReadNamedPoses(const Orb2ColmapOptions& o, const std::vector<std::string>& image_files) {
+  NamedPoses out;
+  const fs::path p(o.trajectory);
+  if (p.extension() == ".json") {
+    const NerfScene scene = ReadNerfTransforms(o.trajectory);
+    out.camera = scene.camera;
+    // NeRF file paths often drop the extension ("./train/r_0"): match an --images file by stem.
+    std::map<std::string, std::string> by_stem;
+    for (const std::string& f : image_files) by_stem.emplace(fs::path(f).stem().string(), f);
+    for (size_t i = 0; i < scene.frames.poses.size(); ++i) {
+      std::string name = Basename(scene.frames.names[i]);
+      if (fs::path(name).extension().empty() && by_stem.count(name)) name = by_stem[name];
+      out.frames.push_back({static_cast<double>(i), name, 0});
+      Rigid3d w2c = scene.frames.poses[i].pose.Inverse();
+      w2c.q.normalize();
+      out.w2c.push_back(w2c);
+    }
+  } else {
+    const fs::path dir = fs::is_directory(p) ? p : p.parent_path();
+    const Reconstruction model = ReadColmapModel(dir.empty() ? "." : dir.string());
+    if (model.cameras.size() == 1)
+      out.camera = model.cameras.begin()->second;
+    else if (o.camera.empty() && o.orb_settings.empty() && o.kitti_calib.empty())
+      throw UsageError(o.trajectory + ": the model has " + std::to_string(model.cameras.size()) +
+                       " cameras: give one with --camera, --orb-settings or --kitti-calib");
+    size_t i = 0;
+    for (const ImageRecord* im : model.ImagesByName()) {
+      out.frames.push_back({static_cast<double>(i++), im->name, 0});
+      out.w2c.push_back(im->world_to_camera);
+    }
+  }
+  if (out.frames.empty()) throw Error(o.trajectory, 0, "no posed image");
+  std::map<std::string, size_t> seen;
+  for (size_t i = 0; i < out.frames.size(); ++i)
+    if (!seen.emplace(out.frames[i].name, i).second)
+      throw Error(o.trajectory, 0, "image name '" + out.frames[i].name + "' repeats");
+  return out;
 }
 
 struct Posed {
@@ -286,11 +350,17 @@ Orb2ColmapReport RunOrb2Colmap(const Orb2ColmapOptions& o) {
   }
   std::vector<TimedName> frames;
   std::vector<Posed> posed;
+  std::optional<NamedPoses> named;
   if (o.trajectory == kNoTrajectory) {
     if (image_files.empty()) throw Error(o.images, 0, "no images in the folder");
     for (size_t i = 0; i < image_files.size(); ++i)
       frames.push_back({static_cast<double>(i), image_files[i], 0});
     for (const TimedName& f : frames) posed.push_back({&f, std::nullopt});
+  } else if (HasNamedPoses(o.trajectory)) {
+    named = ReadNamedPoses(o, image_files);
+    frames = named->frames;
+    rep.keyframes = frames.size();
+    for (size_t i = 0; i < frames.size(); ++i) posed.push_back({&frames[i], named->w2c[i]});
   } else {
     TrajectoryFormat fmt;
     std::vector<StampedPose> keys = ReadInputTrajectory(o, &fmt).poses;
@@ -301,7 +371,13 @@ Orb2ColmapReport RunOrb2Colmap(const Orb2ColmapOptions& o) {
     posed = PoseFrames(o, keys, frames, rep);
   }
   rep.frames = frames.size();
-  const Camera cam = ResolveCamera(o, image_files);
+  Camera cam;
+  if (named && o.camera.empty() && o.orb_settings.empty() && o.kitti_calib.empty()) {
+    cam = *named->camera;
+    cam.id = 1;
+  } else {
+    cam = ResolveCamera(o, image_files);
+  }
   const Reconstruction model = BuildModel(o, cam, posed);
   if (o.binary)
     WriteColmapBinary(model, o.outdir);
