@@ -119,8 +119,15 @@ void Workspace::Require(const std::string& tool, const std::vector<WsItem>& need
 }
 
 fs::path Workspace::MetricRecord(const std::string& except_tool) const {
-  const fs::path dir = root_ / "provenance";
   std::error_code ec;
+  // georef's record: the model was made metric (camera height or GPS) before it was undistorted.
+  const fs::path georef = root_ / "georef.json";
+  if (fs::is_regular_file(georef, ec)) {
+    std::ifstream in(georef);
+    const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+    if (!j.is_discarded() && j.is_object() && j.value("unit", "") == "metre") return georef;
+  }
+  const fs::path dir = root_ / "provenance";
   if (!fs::is_directory(dir, ec)) return {};
   std::vector<fs::path> files;
   for (const auto& e : fs::directory_iterator(dir, ec))

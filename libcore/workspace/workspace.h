@@ -81,7 +81,8 @@ class Workspace {
   // exposure.tsv: gain and offset per image (exposure); ptmrender brings projectors to one
   // exposure.
   fs::path ExposurePath() const;
-  // The provenance record that says the model is metric — a tool's last run with the option
+  // The record that says the model is metric — georef.json with "unit": "metre" (georef made the
+  // model metric from the camera height or GPS), else a tool's last run with the option
   // "metric": true (roadmesh --metric) — as the record's path; empty when none does.
   // A record that cannot be read or parsed says nothing; `except_tool`'s own records
   // (TOOL.json, TOOL-shard-I.json) are passed over (drive's "metric" is its own --metric: its
