@@ -17,7 +17,7 @@
 #   INTRINSICS  orb2colmap's intrinsics options, e.g. --kitti-calib calib.txt, or
 #               --camera "PINHOLE W H fx fy cx cy", or --orb-settings TUM1.yaml [--frames rgb.txt];
 #               with POSES -, optional: without them COLMAP self-calibrates a SIMPLE_RADIAL
-#               camera (CAMERA_MODEL to choose another, e.g. OPENCV)
+#               camera (CAMERA_MODEL to choose another, e.g. OPENCV), or CALIB gives them
 # environment: MVTM_BIN (default build/bin), HOLDOUT (every Nth frame scored, default 5),
 #              LATERAL (lane change for the final render in model units, default 1.5: metres
 #              for a metric model; a non-metric one needs 1.5 x its units per metre),
@@ -32,6 +32,9 @@
 #              times.txt), GPS_OFFSET (seconds from the log's first fix to the video's start,
 #              default 0), GPS_SEARCH (seconds either side of GPS_OFFSET to search, default 0),
 #              FRAME_SPACING (VIDEO: frames' --spacing, default 0.01 of the image width),
+#              CALIB (a folder of chessboard photos or a video of the board, taken with the same
+#              camera at the same size: calibrate's camera becomes the INTRINSICS; CALIB_PATTERN
+#              its inner corners, default 9x6),
 #              MESH (dense | corridor: the mesh where COLMAP has no CUDA, default dense),
 #              ROADMESH_FLAGS (extra roadmesh options, e.g. "--max-depth 80": fuse depths up to
 #              80 camera spacings instead of 40, for far roadside geometry on fast roads),
@@ -62,6 +65,11 @@ mkdir -p "$out"; out=$(cd "$out" && pwd); ws=$out/ws
 holdout=${HOLDOUT:-5}; lateral=${LATERAL:-1.5}
 log() { echo "== $*" >&2; }
 colmap_log() { "$@" > "$out/colmap.log" 2>&1 || { tail -20 "$out/colmap.log" >&2; exit 1; }; }
+if [ -n "${CALIB:-}" ]; then
+  log "0. calibrate: the camera from the chessboard views in $CALIB"
+  spec=$("$bin/calibrate" --pattern "${CALIB_PATTERN:-9x6}" --model "${CAMERA_MODEL:-OPENCV}" "$CALIB" "$out/calib")
+  set -- --camera "$spec"
+fi
 overlay=
 if [ -d "$input" ]; then
   images=$(cd "$input" && pwd)

@@ -136,6 +136,11 @@ std::string Span(double a, double b) { return FormatIsoTime(a) + " to " + Format
 
 }  // namespace
 
+int UtmZone::Epsg() const {
+  if (zone == 0) return north ? 32661 : 32761;  // UPS North / South
+  return (north ? 32600 : 32700) + zone;
+}
+
 std::string UtmZone::Name() const {
   return zone == 0 ? std::string(north ? "UPS N" : "UPS S")
                    : std::to_string(zone) + (north ? "N" : "S");
@@ -174,23 +179,35 @@ GpsAlignment AlignToGps(const std::vector<Eigen::Vector3d>& centres,
   // a wrong offset shifts every camera along the drive and the residuals grow with speed.
   double offset = o.offset;
   if (o.search > 0) {
-    double best_score = std::numeric_limits<double>::infinity();
+    // Candidate offsets, a coarse pass (0.1 s) then around its best (0.01 s). Only offsets that
+    // pair nearly as many fixes as the best-covered one compete: at the edge of the overlap a
+    // handful of pairs fits anything (three pairs give a zero median).
+    auto score = [&](double off, size_t& count) {
+      std::vector<double> t(times.size());
+      for (size_t i = 0; i < times.size(); ++i) t[i] = gps_time(times[i], off);
+      const Pairs pr = PairFixes(centres, t, log, out.zone, o.max_gap);
+      count = pr.cam.size();
+      if (count < 3) return std::numeric_limits<double>::infinity();
+      return LeastMedian(Plane(pr.cam, Eigen::Vector3d::Zero()), Plane(pr.fix, pr.fix[0])).med;
+    };
     const double centre = o.offset;
-    for (double step : {0.1, 0.01}) {  // a coarse pass, then around its best
+    for (double step : {0.1, 0.01}) {
       const double from = step == 0.1 ? centre - o.search : offset - 0.1,
                    to = step == 0.1 ? centre + o.search : offset + 0.1;
+      std::vector<std::pair<double, std::pair<double, size_t>>> cand;  // offset, (median, pairs)
+      size_t most = 0;
       for (double off = from; off <= to + 1e-9; off += step) {
-        std::vector<double> t(times.size());
-        for (size_t i = 0; i < times.size(); ++i) t[i] = gps_time(times[i], off);
-        const Pairs pr = PairFixes(centres, t, log, out.zone, o.max_gap);
-        if (pr.cam.size() < 3) continue;
-        const Lmeds l =
-            LeastMedian(Plane(pr.cam, Eigen::Vector3d::Zero()), Plane(pr.fix, pr.fix[0]));
-        if (l.med < best_score) {
-          best_score = l.med;
+        size_t count = 0;
+        const double med = score(off, count);
+        cand.push_back({off, {med, count}});
+        most = std::max(most, count);
+      }
+      double best_score = std::numeric_limits<double>::infinity();
+      for (const auto& [off, sc] : cand)
+        if (sc.second >= std::max<size_t>(5, (most * 9 + 9) / 10) && sc.first < best_score) {
+          best_score = sc.first;
           offset = off;
         }
-      }
       if (!std::isfinite(best_score)) break;
     }
   }
@@ -225,8 +242,10 @@ GpsAlignment AlignToGps(const std::vector<Eigen::Vector3d>& centres,
   std::vector<size_t> in;
   for (size_t k = 0; k < n; ++k)
     if (std::abs(best_a * p[k] + best_b - q[k]) <= std::max(2.5 * sigma, 1e-9)) in.push_back(k);
-  if (in.size() < 3)
+  if (in.size() < 3) {
+    in.clear();
     for (size_t k = 0; k < n; ++k) in.push_back(k);
+  }
   C a, b;
   FitSimilarity(p, q, in, a, b);
   double ss = 0, spread = 0;

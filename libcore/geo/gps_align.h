@@ -48,7 +48,7 @@ namespace mvtm {
 struct UtmZone {
   int zone = 0;  // 1..60 (0: UPS, polar)
   bool north = true;
-  int Epsg() const { return (north ? 32600 : 32700) + zone; }
+  int Epsg() const;          // WGS 84 / UTM zone, or UPS North (32661) / South (32761)
   std::string Name() const;  // "32N"
 };
 

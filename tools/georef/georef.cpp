@@ -59,12 +59,13 @@ OptionTable DeclareOptions(GeorefOptions& o) {
          "the log best (0: use --gps-offset as it is)")
       .Range(0, 3600);
   t.Real("--gps-max-gap", &o.gps_max_gap,
-         "Longest gap between fixes, in seconds, across which a frame's position is interpolated")
-      .Range(0, 1e6, false);
+         "Longest gap, in seconds, between the two frames around a fix across which the camera's "
+         "position at the fix is interpolated")
+      .Range(0, 1e6, true);
   t.Real("--height-sigma", &o.height_sigma,
          "Relative standard error of the camera-height scale, weighing it against GPS's when "
          "both are given")
-      .Range(0, 1, false);
+      .Range(0, 1, true);
   t.Flag("--binary", &o.binary, "Write cameras.bin, images.bin, points3D.bin");
   t.Flag("--force", &o.force, "Rewrite the model even when it is up to date").Cosmetic();
   DeclareQuietOption(t, o.quiet);

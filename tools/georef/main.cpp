@@ -10,7 +10,8 @@ namespace {
 constexpr const char* kAbout =
     "Make a structure-from-motion model upright and metric: up from the road under the "
     "cameras (z up, x the first camera's heading, origin below it), metres from the camera's "
-    "height above the road; optionally score it against a reference trajectory.";
+    "height above the road, or placed in UTM by a GPS log (GPX or NMEA); optionally score it "
+    "against a reference trajectory.";
 
 void PrintSummary(const mvtm::GeorefOptions& o, const mvtm::GeorefReport& r) {
   if (r.up_to_date)

@@ -23,6 +23,8 @@ TEST(Utm, CentralMeridians) {
   EXPECT_NEAR(e.x(), 500000, 1e-6);
   EXPECT_NEAR(e.y(), 0, 1e-6);
   EXPECT_EQ(ZoneOf(-33.9, 18.4).Epsg(), 32734);  // Cape Town: zone 34 south
+  EXPECT_EQ(ZoneOf(85.0, 10.0).Epsg(), 32661);   // beyond 84° N: UPS North
+  EXPECT_EQ(ZoneOf(-81.0, 10.0).Epsg(), 32761);  // beyond 80° S: UPS South
   // Forced into zone 32, a point just across the border in zone 33 keeps going east (> 500 km).
   EXPECT_GT(ToUtm(z32, 49.0, 12.01).x(), ToUtm(z32, 49.0, 11.99).x());
 }
