@@ -103,15 +103,39 @@ if [ "$poses" = - ]; then
     # Given intrinsics stay as they are; without them the mapper refines focal length and
     # distortion of the one shared camera.
     fixed=(); [ $# -ge 1 ] && fixed=(--Mapper.ba_refine_focal_length 0 --Mapper.ba_refine_extra_params 0)
-    rm -rf "$out/sfm"; mkdir -p "$out/sfm"
-    colmap_log colmap mapper --database_path "$out/db.db" --image_path "$images" \
-      --output_path "$out/sfm" "${fixed[@]}"
+    # Forward motion gives small triangulation angles: when COLMAP's defaults find no initial
+    # pair (or register under half the images), the mapper runs again as for a dashcam (initial
+    # pairs from 2 degrees, forward-moving pairs allowed) and the better run is kept.
+    map_run() {  # OUTDIR [mapper options...]; succeeds even when the mapper fails
+      rm -rf "$1"; mkdir -p "$1"; local d=$1; shift
+      colmap mapper --database_path "$out/db.db" --image_path "$images" --output_path "$d" \
+        "${fixed[@]}" "$@" >> "$out/colmap.log" 2>&1 || true
+    }
+    largest() {  # SFM_DIR → "count path" of its largest model ("0 " when none)
+      local b= n=0 k m
+      for m in "$1"/*/; do
+        [ -d "$m" ] || continue
+        k=$(colmap model_analyzer --path "$m" 2>&1 | sed -n 's/.*Registered images: *\([0-9]*\).*/\1/p')
+        if [ "${k:-0}" -gt "$n" ]; then b=$m; n=$k; fi
+      done
+      echo "$n $b"
+    }
+    total=$(ls "$images" | wc -l)
+    : > "$out/colmap.log"
+    map_run "$out/sfm"
+    read -r best_n best <<< "$(largest "$out/sfm")"
+    if [ "$best_n" -lt $(( (total + 1) / 2 )) ]; then
+      echo "SfM with COLMAP's defaults registered $best_n of $total images: again as forward motion" >&2
+      map_run "$out/sfm_forward" --Mapper.init_min_tri_angle 2 --Mapper.init_max_forward_motion 1.0
+      read -r fwd_n fwd <<< "$(largest "$out/sfm_forward")"
+      if [ "$fwd_n" -gt "$best_n" ]; then rm -rf "$out/sfm"; mv "$out/sfm_forward" "$out/sfm"; fi
+      read -r best_n best <<< "$(largest "$out/sfm")"
+    fi
     # Several models when the chain of matches breaks: the largest is built, the rest reported.
-    best=; best_n=0; total=$(ls "$images" | wc -l)
     for m in "$out"/sfm/*/; do
+      [ -d "$m" ] || continue
       k=$(colmap model_analyzer --path "$m" 2>&1 | sed -n 's/.*Registered images: *\([0-9]*\).*/\1/p')
       echo "SfM model $(basename "$m"): ${k:-0} of $total images registered" >&2
-      if [ "${k:-0}" -gt "$best_n" ]; then best=$m; best_n=$k; fi
     done
     [ -n "$best" ] || { echo "$0: error: COLMAP registered no image (see $out/colmap.log)" >&2; exit 1; }
     [ "$best_n" -lt "$total" ] && echo "warning: $((total - best_n)) of $total images not in the model built (the others above, or unregistered)" >&2

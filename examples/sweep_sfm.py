@@ -1,0 +1,125 @@
+#!/usr/bin/env python3
+"""What photos-only SfM accuracy costs: the knobs of examples/road-build.sh's POSES - path (COLMAP
+CPU SfM + georef), scored against KITTI's ground-truth poses.
+
+usage: /usr/bin/python3 examples/sweep_sfm.py [--bin build/bin] [--out out/sweep_sfm]
+                                              [--data ../shared/data] [--seq kitti_odom01_f000-050]
+
+For each setting, the sequence's left photos go through COLMAP feature_extractor (one shared
+PINHOLE camera from calib.txt), sequential_matcher and mapper (intrinsics fixed; as road-build.sh,
+again as forward motion when the defaults register under half the images), then georef
+--camera-height 1.65 --compare poses.txt: registered images, the trajectory's RMS error after a
+similarity fit as a share of the path length, and the scale error of the camera-height metric,
+against the whole SfM's wall-clock seconds per frame (2 cores; run it on an idle machine).
+
+Knobs: matching overlap (5, 10, 20), SIFT image size (--SiftExtraction.max_image_size 1241 = full,
+800, 500), and frame spacing (every 1st, 2nd, 3rd photo: what frames --spacing chooses on a
+faster drive). Writes OUT/sfm.csv, OUT/sfm.png and OUT/index.html.
+"""
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+import sweeplib as sl  # noqa: E402
+
+ap = argparse.ArgumentParser()
+ap.add_argument("--bin", default=os.path.join(HERE, "..", "build", "bin"))
+ap.add_argument("--out", default="out/sweep_sfm")
+ap.add_argument("--data", default=os.environ.get("MVTM_DATA", os.path.join(HERE, "..", "..", "shared", "data")))
+ap.add_argument("--seq", default="kitti_odom01_f000-050")
+a = ap.parse_args()
+seq = os.path.join(a.data, a.seq)
+os.makedirs(a.out, exist_ok=True)
+work = os.path.join(a.out, "work")
+
+
+def camera():
+    P0 = [l for l in open(os.path.join(seq, "calib.txt")) if l.startswith("P0:")][0].split()[1:]
+    return float(P0[0]), float(P0[5]), float(P0[2]), float(P0[6])
+
+
+def run(cmd, log):
+    with open(log, "a") as f:
+        return subprocess.run(cmd, stdout=f, stderr=subprocess.STDOUT).returncode
+
+
+def registered(model):
+    r = subprocess.run(["colmap", "model_analyzer", "--path", model], capture_output=True, text=True)
+    m = re.search(r"Registered images: *(\d+)", r.stdout + r.stderr)
+    return int(m.group(1)) if m else 0
+
+
+def sfm(name, every=1, overlap=10, max_size=1241):
+    d = os.path.join(work, name)
+    shutil.rmtree(d, ignore_errors=True)
+    imgs = os.path.join(d, "images")
+    os.makedirs(imgs)
+    names = sorted(os.listdir(os.path.join(seq, "image_0")))[::every]
+    for n in names:
+        os.symlink(os.path.join(seq, "image_0", n), os.path.join(imgs, n))
+    fx, fy, cx, cy = camera()
+    db, log = os.path.join(d, "db.db"), os.path.join(d, "colmap.log")
+    t0 = time.time()
+    run(["colmap", "feature_extractor", "--database_path", db, "--image_path", imgs,
+         "--SiftExtraction.use_gpu", "0", "--SiftExtraction.max_image_size", str(max_size),
+         "--ImageReader.single_camera", "1", "--ImageReader.camera_model", "PINHOLE",
+         "--ImageReader.camera_params", f"{fx},{fy},{cx},{cy}"], log)
+    run(["colmap", "sequential_matcher", "--database_path", db, "--SiftMatching.use_gpu", "0",
+         "--SequentialMatching.overlap", str(overlap)], log)
+    best, best_n = None, 0
+    for extra in ([], ["--Mapper.init_min_tri_angle", "2", "--Mapper.init_max_forward_motion", "1.0"]):
+        sdir = os.path.join(d, "sfm" if not extra else "sfm_forward")
+        os.makedirs(sdir)
+        run(["colmap", "mapper", "--database_path", db, "--image_path", imgs, "--output_path", sdir,
+             "--Mapper.ba_refine_focal_length", "0", "--Mapper.ba_refine_extra_params", "0",
+             "--Mapper.ba_refine_principal_point", "0"] + extra, log)
+        for m in sorted(os.listdir(sdir)):
+            k = registered(os.path.join(sdir, m))
+            if k > best_n:
+                best, best_n = os.path.join(sdir, m), k
+        if best_n >= (len(names) + 1) // 2:
+            break
+    secs = time.time() - t0
+    row = {"group": "", "setting": name, "registered": best_n, "frames": len(names),
+           "s_per_frame": round(secs / len(names), 2)}
+    if best:
+        r = subprocess.run([os.path.join(a.bin, "georef"), "-q", "--force", "--camera-height",
+                            "1.65", "--compare", os.path.join(seq, "poses.txt"), best,
+                            os.path.join(d, "up")], capture_output=True, text=True)
+        m = dict(kv.split(" ") for kv in r.stdout.strip().split("\t")[1:]) if r.returncode == 0 else {}
+        row["ate_percent"] = float(m.get("ate_percent", "nan"))
+        row["scale_error_percent"] = round(100 * abs(float(m.get("reference_scale", "nan")) - 1), 2)
+    sl.log("sfm", name, f"{best_n}/{len(names)} registered  ATE {row.get('ate_percent')} %  "
+           f"scale {row.get('scale_error_percent')} %  {row['s_per_frame']} s/frame")
+    return row
+
+
+rows = []
+for ov in (5, 10, 20):
+    r = sfm(f"overlap {ov}", overlap=ov)
+    r["group"], r["default"] = "matching overlap", ov == 10
+    rows.append(r)
+for size in (800, 500):
+    r = sfm(f"SIFT size {size}", max_size=size)
+    r["group"] = "image size"
+    rows.append(r)
+for every in (2, 3):
+    r = sfm(f"every {every} frames", every=every)
+    r["group"] = "frame spacing"
+    rows.append(r)
+fields = ["group", "setting", "registered", "frames", "ate_percent", "scale_error_percent",
+          "s_per_frame"]
+sec = sl.Section("sfm", f"Photos-only SfM on {a.seq}: trajectory error against time", rows, fields,
+                 "Trajectory RMS error after a similarity fit, % of the path length (KITTI's "
+                 "poses), against COLMAP's wall-clock seconds per frame (feature extraction, "
+                 "sequential matching, mapping; 2 cores).")
+sl.emit(a.out, sec, "s_per_frame", "ate_percent", xlabel="seconds per frame",
+        ylabel="ATE, % of path", lines=[(0.5, "issue target 0.5 %")])
+print(sl.write_page(a.out, [sec], "Photos-only SfM: accuracy against time",
+                    "examples/sweep_sfm.py"))
