@@ -105,7 +105,8 @@ if [ "$poses" = - ]; then
     fixed=(); [ $# -ge 1 ] && fixed=(--Mapper.ba_refine_focal_length 0 --Mapper.ba_refine_extra_params 0)
     # Forward motion gives small triangulation angles: when COLMAP's defaults find no initial
     # pair (or register under half the images), the mapper runs again as for a dashcam (initial
-    # pairs from 2 degrees, forward-moving pairs allowed) and the better run is kept.
+    # pairs from 1 degree and 50 inliers, forward-moving pairs allowed; KITTI 06 and CamVid need
+    # it) and the better run is kept.
     map_run() {  # OUTDIR [mapper options...]; succeeds even when the mapper fails
       rm -rf "$1"; mkdir -p "$1"; local d=$1; shift
       colmap mapper --database_path "$out/db.db" --image_path "$images" --output_path "$d" \
@@ -126,7 +127,8 @@ if [ "$poses" = - ]; then
     read -r best_n best <<< "$(largest "$out/sfm")"
     if [ "$best_n" -lt $(( (total + 1) / 2 )) ]; then
       echo "SfM with COLMAP's defaults registered $best_n of $total images: again as forward motion" >&2
-      map_run "$out/sfm_forward" --Mapper.init_min_tri_angle 2 --Mapper.init_max_forward_motion 1.0
+      map_run "$out/sfm_forward" --Mapper.init_min_tri_angle 1 --Mapper.init_min_num_inliers 50 \
+        --Mapper.init_max_forward_motion 1.0
       read -r fwd_n fwd <<< "$(largest "$out/sfm_forward")"
       if [ "$fwd_n" -gt "$best_n" ]; then rm -rf "$out/sfm"; mv "$out/sfm_forward" "$out/sfm"; fi
       read -r best_n best <<< "$(largest "$out/sfm")"

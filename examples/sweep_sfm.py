@@ -73,7 +73,8 @@ def sfm(name, every=1, overlap=10, max_size=1241):
     run(["colmap", "sequential_matcher", "--database_path", db, "--SiftMatching.use_gpu", "0",
          "--SequentialMatching.overlap", str(overlap)], log)
     best, best_n = None, 0
-    for extra in ([], ["--Mapper.init_min_tri_angle", "2", "--Mapper.init_max_forward_motion", "1.0"]):
+    for extra in ([], ["--Mapper.init_min_tri_angle", "1", "--Mapper.init_min_num_inliers", "50",
+                      "--Mapper.init_max_forward_motion", "1.0"]):
         sdir = os.path.join(d, "sfm" if not extra else "sfm_forward")
         os.makedirs(sdir)
         run(["colmap", "mapper", "--database_path", db, "--image_path", imgs, "--output_path", sdir,
