@@ -17,7 +17,9 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kMinDepression = 2.0 * kPi / 180;  // below the optical axis
 constexpr double kMaxDepression = 60.0 * kPi / 180;
-constexpr double kMaxLateral = 2.0;            // |x| ≤ 2·y (camera frame)
+constexpr double kMaxLateral = 2.0;  // |x| ≤ 2·y (camera frame): the plane's support
+constexpr double kOwnLane = 1.0;     // |x| ≤ y: the lane under the car, for the height
+constexpr size_t kMinOwnLane = 8;
 constexpr double kMaxTilt = 25.0 * kPi / 180;  // ground normal from the camera's up
 constexpr double kInlierFraction = 0.05;       // of the plane's height below the camera
 constexpr size_t kMinInliers = 12;
@@ -116,6 +118,15 @@ CameraGround GroundUnder(const std::vector<Eigen::Vector3d>& pts, uint32_t seed)
   if (in.size() < kMinInliers ||
       static_cast<double>(in.size()) < kMinInlierShare * static_cast<double>(pts.size()))
     return g;
+  // The height from the lane under the car alone, along the plane's normal: the wide plane's
+  // normal is well supported, but kerbs and pavements beside the road (10–15 cm up) pull its
+  // height; the camera height is defined over the asphalt below the camera.
+  std::vector<double> lane;
+  for (const auto& p : pts) {
+    const double h = -pl.n.dot(p);
+    if (std::abs(p.x()) <= kOwnLane * p.y() && h > 0.8 * pl.h && h < 1.25 * pl.h) lane.push_back(h);
+  }
+  if (lane.size() >= kMinOwnLane) pl.h = Median(lane);
   g.ok = true;
   g.plane = pl;
   g.inliers = in.size();

@@ -11,6 +11,10 @@
 //    squares on the inliers. The inlier threshold is relative (5 % of the candidate plane's height
 //    below the camera), so the fit is the same in any unit. Cameras with fewer than 12
 //    inliers (or under 30 % inliers) have no ground.
+//    The camera's height above it is then taken from the lane under the car alone: the median
+//    of the heights, along the plane's normal, of the candidates with |x| ≤ y within −20 %/+25 %
+//    of the plane's (at least 8; else the plane's own): the wide support gives the normal, but
+//    kerbs and pavements beside the road pull the plane's height up.
 //  * Up: the inlier-weighted mean of the ground normals (the road's mean normal over the drive
 //    estimates gravity; a camera's own axis is tilted by its mounting), else the cameras' mean up
 //    when no camera has ground.

@@ -106,12 +106,19 @@ std::vector<View> ReadViews(const CalibrateOptions& o, cv::Size pattern, cv::Siz
     if (FindBoard(grey, pattern, v.corners)) views.push_back(std::move(v));
   };
   if (fs::is_directory(o.input)) {
-    for (const std::string& f : ListImageFiles(o.input)) {
+    const std::vector<std::string> files = ListImageFiles(o.input);
+    if (files.empty()) throw Error(o.input, 0, "no images in the folder");
+    for (const std::string& f : files) {
       const std::string path = (fs::path(o.input) / f).string();
       const cv::Mat img = cv::imread(path, cv::IMREAD_UNCHANGED);
       if (img.empty()) throw Error(path, 0, "cannot read the image");
       cv::Mat img8 = img;
-      if (img.depth() != CV_8U) img.convertTo(img8, CV_8U, 255.0 / 65535.0);
+      if (img.depth() == CV_16U)
+        img.convertTo(img8, CV_8U, 255.0 / 65535.0);
+      else if (img.depth() == CV_32F || img.depth() == CV_64F)  // linear [0, 1] (EXR, HDR)
+        img.convertTo(img8, CV_8U, 255.0);
+      else if (img.depth() != CV_8U)
+        img.convertTo(img8, CV_8U);
       take(img8, f);
     }
     return views;
@@ -122,11 +129,14 @@ std::vector<View> ReadViews(const CalibrateOptions& o, cv::Size pattern, cv::Siz
     throw Error(o.input, 0, "neither a folder of photos nor a video FFmpeg can read");
   const double fps = cap.get(cv::CAP_PROP_FPS) > 0 ? cap.get(cv::CAP_PROP_FPS) : 30;
   cv::Mat frame;
+  long used = 0;  // frames within [start, end], counted for --every
   for (long i = 0; cap.read(frame); ++i) {
-    const double t = static_cast<double>(i) / fps;
+    // The decoder's timestamp (variable frame rates), else the index over the frame rate.
+    const double ms = cap.get(cv::CAP_PROP_POS_MSEC);
+    const double t = ms > 0 || i == 0 ? ms / 1000 : static_cast<double>(i) / fps;
     if (t < o.start) continue;
     if (o.end > 0 && t > o.end) break;
-    if ((i - static_cast<long>(std::ceil(o.start * fps))) % o.every != 0) continue;
+    if (used++ % o.every != 0) continue;
     take(frame, "frame " + std::to_string(i));
   }
   if (seen == 0) throw Error(o.input, 0, "no frame decoded in the time range");
