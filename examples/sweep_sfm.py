@@ -6,8 +6,9 @@ usage: /usr/bin/python3 examples/sweep_sfm.py [--bin build/bin] [--out out/sweep
                                               [--data ../shared/data] [--seq kitti_odom01_f000-050]
 
 For each setting, the sequence's left photos go through COLMAP feature_extractor (one shared
-PINHOLE camera from calib.txt), sequential_matcher and mapper (intrinsics fixed; as road-build.sh,
-again as forward motion when the defaults register under half the images), then georef
+PINHOLE camera from calib.txt), sequential_matcher and mapper (intrinsics fixed, COLMAP's default
+4 px outlier threshold where road-build.sh uses 2; as road-build.sh, again as forward motion when
+the defaults register under half the images), then georef
 --camera-height 1.65 --compare poses.txt: registered images, the trajectory's RMS error after a
 similarity fit as a share of the path length, and the scale error of the camera-height metric,
 against the whole SfM's wall-clock seconds per frame (2 cores; run it on an idle machine).

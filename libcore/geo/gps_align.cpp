@@ -134,6 +134,66 @@ Lmeds LeastMedian(const std::vector<C>& p, const std::vector<C>& q) {
 
 std::string Span(double a, double b) { return FormatIsoTime(a) + " to " + FormatIsoTime(b); }
 
+// The frames' GPS times at `offset` (see the header: relative or absolute frame times).
+std::vector<double> GpsTimes(const std::vector<double>& times, double log_start, double offset) {
+  std::vector<double> t(times.size());
+  for (size_t i = 0; i < times.size(); ++i)
+    t[i] = times[i] > 1e8 ? times[i] + offset : log_start + offset + times[i];
+  return t;
+}
+
+// The offset in [o.offset − o.search, o.offset + o.search] whose pairs fit best (least median of
+// squares, metres²): a coarse pass (0.1 s), then around its best (0.01 s). Only offsets that pair
+// nearly as many fixes as the best-covered one compete: at the edge of the overlap a handful of
+// pairs fits anything (three pairs give a zero median).
+double SearchOffset(const std::vector<Eigen::Vector3d>& centres, const std::vector<double>& times,
+                    const GpsLog& log, const UtmZone& zone, const GpsAlignOptions& o) {
+  auto score = [&](double off, size_t& count) {
+    const Pairs pr =
+        PairFixes(centres, GpsTimes(times, log.fixes.front().time, off), log, zone, o.max_gap);
+    count = pr.cam.size();
+    if (count < 3) return std::numeric_limits<double>::infinity();
+    return LeastMedian(Plane(pr.cam, Eigen::Vector3d::Zero()), Plane(pr.fix, pr.fix[0])).med;
+  };
+  double offset = o.offset;
+  for (double step : {0.1, 0.01}) {
+    const double from = step == 0.1 ? o.offset - o.search : offset - 0.1,
+                 to = step == 0.1 ? o.offset + o.search : offset + 0.1;
+    std::vector<std::pair<double, std::pair<double, size_t>>> cand;  // offset, (median, pairs)
+    size_t most = 0;
+    for (double off = from; off <= to + 1e-9; off += step) {
+      size_t count = 0;
+      const double med = score(off, count);
+      cand.push_back({off, {med, count}});
+      most = std::max(most, count);
+    }
+    double best_score = std::numeric_limits<double>::infinity();
+    for (const auto& [off, sc] : cand)
+      if (sc.second >= std::max<size_t>(5, (most * 9 + 9) / 10) && sc.first < best_score) {
+        best_score = sc.first;
+        offset = off;
+      }
+    if (!std::isfinite(best_score)) break;
+  }
+  return offset;
+}
+
+// The pairs within 2.5 robust sigmas (Rousseeuw's, from the least median of squares) of `lm`;
+// every pair when fewer than 3 are.
+std::vector<size_t> Inliers(const std::vector<C>& p, const std::vector<C>& q, const Lmeds& lm) {
+  const size_t n = p.size();
+  const double sigma =
+      1.4826 * (1 + 5.0 / std::max<double>(1, static_cast<double>(n) - 2)) * std::sqrt(lm.med);
+  std::vector<size_t> in;
+  for (size_t k = 0; k < n; ++k)
+    if (std::abs(lm.a * p[k] + lm.b - q[k]) <= std::max(2.5 * sigma, 1e-9)) in.push_back(k);
+  if (in.size() < 3) {
+    in.clear();
+    for (size_t k = 0; k < n; ++k) in.push_back(k);
+  }
+  return in;
+}
+
 }  // namespace
 
 int UtmZone::Epsg() const {
@@ -172,48 +232,9 @@ GpsAlignment AlignToGps(const std::vector<Eigen::Vector3d>& centres,
   out.log_start = log.fixes.front().time;
   out.log_end = log.fixes.back().time;
   out.zone = ZoneOf(log.fixes.front().lat, log.fixes.front().lon);
-  auto gps_time = [&](double t, double offset) {
-    return t > 1e8 ? t + offset : out.log_start + offset + t;
-  };
-  // With a search window, the offset whose pairs fit best (least median of squares, metres²):
-  // a wrong offset shifts every camera along the drive and the residuals grow with speed.
-  double offset = o.offset;
-  if (o.search > 0) {
-    // Candidate offsets, a coarse pass (0.1 s) then around its best (0.01 s). Only offsets that
-    // pair nearly as many fixes as the best-covered one compete: at the edge of the overlap a
-    // handful of pairs fits anything (three pairs give a zero median).
-    auto score = [&](double off, size_t& count) {
-      std::vector<double> t(times.size());
-      for (size_t i = 0; i < times.size(); ++i) t[i] = gps_time(times[i], off);
-      const Pairs pr = PairFixes(centres, t, log, out.zone, o.max_gap);
-      count = pr.cam.size();
-      if (count < 3) return std::numeric_limits<double>::infinity();
-      return LeastMedian(Plane(pr.cam, Eigen::Vector3d::Zero()), Plane(pr.fix, pr.fix[0])).med;
-    };
-    const double centre = o.offset;
-    for (double step : {0.1, 0.01}) {
-      const double from = step == 0.1 ? centre - o.search : offset - 0.1,
-                   to = step == 0.1 ? centre + o.search : offset + 0.1;
-      std::vector<std::pair<double, std::pair<double, size_t>>> cand;  // offset, (median, pairs)
-      size_t most = 0;
-      for (double off = from; off <= to + 1e-9; off += step) {
-        size_t count = 0;
-        const double med = score(off, count);
-        cand.push_back({off, {med, count}});
-        most = std::max(most, count);
-      }
-      double best_score = std::numeric_limits<double>::infinity();
-      for (const auto& [off, sc] : cand)
-        if (sc.second >= std::max<size_t>(5, (most * 9 + 9) / 10) && sc.first < best_score) {
-          best_score = sc.first;
-          offset = off;
-        }
-      if (!std::isfinite(best_score)) break;
-    }
-  }
+  const double offset = o.search > 0 ? SearchOffset(centres, times, log, out.zone, o) : o.offset;
   out.offset = offset;
-  std::vector<double> t(times.size());
-  for (size_t i = 0; i < times.size(); ++i) t[i] = gps_time(times[i], offset);
+  const std::vector<double> t = GpsTimes(times, out.log_start, offset);
   const double tmin = *std::min_element(t.begin(), t.end()),
                tmax = *std::max_element(t.begin(), t.end());
   for (double v : t) out.matched += v >= out.log_start && v <= out.log_end;
@@ -230,22 +251,10 @@ GpsAlignment AlignToGps(const std::vector<Eigen::Vector3d>& centres,
   out.has_altitude = pr.alt_all;
   out.origin = Eigen::Vector3d(std::round(fix[0].x()), std::round(fix[0].y()), 0);
   const std::vector<C> p = Plane(cam, Eigen::Vector3d::Zero()), q = Plane(fix, out.origin);
-  const size_t n = p.size();
   const Lmeds lm = LeastMedian(p, q);
-  const double best = lm.med;
-  const C best_a = lm.a, best_b = lm.b;
-  if (!std::isfinite(best))
+  if (!std::isfinite(lm.med))
     throw Error(log_name, 0, "the frames within the GPS log do not move: no horizontal extent");
-  // Rousseeuw's robust sigma from the median, then the inliers within 2.5 sigmas.
-  const double sigma =
-      1.4826 * (1 + 5.0 / std::max<double>(1, static_cast<double>(n) - 2)) * std::sqrt(best);
-  std::vector<size_t> in;
-  for (size_t k = 0; k < n; ++k)
-    if (std::abs(best_a * p[k] + best_b - q[k]) <= std::max(2.5 * sigma, 1e-9)) in.push_back(k);
-  if (in.size() < 3) {
-    in.clear();
-    for (size_t k = 0; k < n; ++k) in.push_back(k);
-  }
+  const std::vector<size_t> in = Inliers(p, q, lm);
   C a, b;
   FitSimilarity(p, q, in, a, b);
   double ss = 0, spread = 0;

@@ -195,6 +195,39 @@ bool ParseSentence(std::string raw, NmeaSentence& s, bool& bad) {
   return s.f.size() >= 1 && s.f[0].size() == 5;
 }
 
+struct Rmc {
+  double tod;  // seconds of the day
+  long days;   // since 1970-01-01
+  double lat, lon;
+};
+
+// The fixes of the RMC sentences in order, each with the altitude of the GGA sentence of its
+// time of day; a date that stays behind after midnight is carried on.
+std::vector<GpsFix> NmeaFixes(const std::vector<Rmc>& rmc, const std::map<long, double>& gga_alt) {
+  std::vector<GpsFix> fixes;
+  double prev = -1;
+  long day_carry = 0;
+  for (const Rmc& r : rmc) {
+    GpsFix fx;
+    fx.lat = r.lat;
+    fx.lon = r.lon;
+    fx.time = static_cast<double>(r.days + day_carry) * 86400 + r.tod;
+    // A receiver that reports the old date for a moment after midnight.
+    if (prev >= 0 && fx.time < prev - 43200) {
+      ++day_carry;
+      fx.time += 86400;
+    }
+    prev = fx.time;
+    auto it = gga_alt.find(std::lround(r.tod * 1000));
+    if (it != gga_alt.end()) {
+      fx.alt = it->second;
+      fx.has_alt = true;
+    }
+    fixes.push_back(fx);
+  }
+  return fixes;
+}
+
 GpsLog ReadNmea(const std::string& text, const std::string& name) {
   GpsLog log;
   log.format = "nmea";
@@ -202,11 +235,6 @@ GpsLog ReadNmea(const std::string& text, const std::string& name) {
   std::string raw;
   long line = 0;
   std::map<long, double> gga_alt;  // milliseconds of the day → altitude
-  struct Rmc {
-    double tod;
-    long days;
-    double lat, lon;
-  };
   std::vector<Rmc> rmc;
   while (std::getline(in, raw)) {
     ++line;
@@ -259,26 +287,7 @@ GpsLog ReadNmea(const std::string& text, const std::string& name) {
                 "no valid RMC sentence: the log has no date (GGA alone gives only the time of "
                 "day)");
   }
-  double prev = -1;
-  long day_carry = 0;
-  for (const Rmc& r : rmc) {
-    GpsFix fx;
-    fx.lat = r.lat;
-    fx.lon = r.lon;
-    fx.time = static_cast<double>(r.days + day_carry) * 86400 + r.tod;
-    // A receiver that reports the old date for a moment after midnight.
-    if (prev >= 0 && fx.time < prev - 43200) {
-      ++day_carry;
-      fx.time += 86400;
-    }
-    prev = fx.time;
-    auto it = gga_alt.find(std::lround(r.tod * 1000));
-    if (it != gga_alt.end()) {
-      fx.alt = it->second;
-      fx.has_alt = true;
-    }
-    log.fixes.push_back(fx);
-  }
+  log.fixes = NmeaFixes(rmc, gga_alt);
   SortAndMerge(log.fixes);
   return log;
 }

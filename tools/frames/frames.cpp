@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <memory>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 #include <set>
@@ -114,11 +115,62 @@ struct Kept {
 
 namespace {
 
+// Opens the video; FFmpeg's own log lines ("moov atom not found", decoder warnings) would break
+// the one-line error contract, so they are silenced (OpenCV reads the variable once, at its first
+// capture; a user's own setting wins).
+std::unique_ptr<cv::VideoCapture> OpenVideo(const std::string& video) {
+  setenv("OPENCV_FFMPEG_LOGLEVEL", "-8", 0);
+  auto cap = std::make_unique<cv::VideoCapture>(video, cv::CAP_FFMPEG);
+  if (!cap->isOpened())
+    throw Error(video, 0, "cannot open the video (not a video, or a container FFmpeg cannot read)");
+  return cap;
+}
+
+// Images of an earlier selection that this one does not keep.
+void RemoveUnkept(const fs::path& images, const std::set<std::string>& names, FramesReport& rep) {
+  if (!fs::is_directory(images)) return;
+  for (const auto& e : fs::directory_iterator(images)) {
+    const std::string n = e.path().filename().string();
+    if (e.is_regular_file() && n.size() == 10 && n.substr(6) == ".png" && !names.count(n)) {
+      fs::remove(e.path());
+      ++rep.removed;
+    }
+  }
+}
+
+// mask.png and colmap_mask.png: the overlay found and the user's mask; none when both are empty.
+void WriteMasks(cv::Mat mask, const cv::Mat& user_mask, const fs::path& out, Ledger& ledger,
+                FramesReport& rep) {
+  const fs::path mask_png = out / "mask.png", colmap_mask_png = out / "colmap_mask.png";
+  rep.overlay_pixels = mask.empty() ? 0 : static_cast<size_t>(cv::countNonZero(mask));
+  if (!user_mask.empty()) mask = mask.empty() ? user_mask : (mask | user_mask);
+  if (!mask.empty() && cv::countNonZero(mask) > 0) {
+    WriteImage(mask_png.string(), MaskImage(mask), PngCompression::kFastFlat);
+    WriteImage(colmap_mask_png.string(), MaskImage(mask, true), PngCompression::kFastFlat);
+    ledger.Done(mask_png);
+    ledger.Done(colmap_mask_png);
+  } else {  // an earlier run's: this selection masks nothing
+    fs::remove(mask_png);
+    fs::remove(colmap_mask_png);
+  }
+}
+
+void CheckSelection(const FramesOptions& o, const FramesReport& rep) {
+  if (rep.decoded == 0)
+    throw Error(o.video, 0,
+                "no frame could be decoded (an empty or truncated file, or a codec FFmpeg cannot "
+                "decode)");
+  if (rep.kept < 2)
+    throw Error(o.video, 0,
+                "the video never moves: " + std::to_string(rep.decoded) + " frames decoded, " +
+                    std::to_string(rep.kept) +
+                    " kept (a road build needs frames from different places; --spacing " +
+                    std::to_string(o.select.spacing) + ")");
+}
+
 FramesReport RunFramesInto(const FramesOptions& o) {
   FramesReport rep;
-  const fs::path out(o.outdir), images = out / "images", tsv = out / "frames.tsv",
-                                mask_png = out / "mask.png",
-                                colmap_mask_png = out / "colmap_mask.png";
+  const fs::path out(o.outdir), images = out / "images", tsv = out / "frames.tsv";
   FramesOptions resolved = o;
   const OptionTable table = DeclareOptions(resolved);
   std::vector<fs::path> inputs{o.video};
@@ -130,15 +182,8 @@ FramesReport RunFramesInto(const FramesOptions& o) {
     return rep;
   }
   rep.why = ledger.Summary();
-
-  // FFmpeg's own log lines ("moov atom not found", decoder warnings) would break the one-line
-  // error contract; OpenCV reads this variable once, at its first capture. A user's own setting
-  // wins.
-  setenv("OPENCV_FFMPEG_LOGLEVEL", "-8", 0);
-  cv::VideoCapture cap(o.video, cv::CAP_FFMPEG);
-  if (!cap.isOpened())
-    throw Error(o.video, 0,
-                "cannot open the video (not a video, or a container FFmpeg cannot read)");
+  const std::unique_ptr<cv::VideoCapture> video = OpenVideo(o.video);
+  cv::VideoCapture& cap = *video;
   const double fps = cap.get(cv::CAP_PROP_FPS);
   const double announced = cap.get(cv::CAP_PROP_FRAME_COUNT);
   rep.expected = announced > 0 && std::isfinite(announced) ? static_cast<size_t>(announced) : 0;
@@ -189,38 +234,10 @@ FramesReport RunFramesInto(const FramesOptions& o) {
     ledger.Done(path);
     ++rep.written;
   }
-  if (rep.decoded == 0)
-    throw Error(o.video, 0,
-                "no frame could be decoded (an empty or truncated file, or a codec FFmpeg cannot "
-                "decode)");
   rep.kept = kept.size();
-  if (kept.size() < 2)
-    throw Error(o.video, 0,
-                "the video never moves: " + std::to_string(rep.decoded) + " frames decoded, " +
-                    std::to_string(kept.size()) +
-                    " kept (a road build needs frames from different places; --spacing " +
-                    std::to_string(o.select.spacing) + ")");
-  // Images of an earlier selection that this one does not keep.
-  if (fs::is_directory(images))
-    for (const auto& e : fs::directory_iterator(images)) {
-      const std::string n = e.path().filename().string();
-      if (e.is_regular_file() && n.size() == 10 && n.substr(6) == ".png" && !names.count(n)) {
-        fs::remove(e.path());
-        ++rep.removed;
-      }
-    }
-  cv::Mat mask = selector->Overlay();
-  rep.overlay_pixels = mask.empty() ? 0 : static_cast<size_t>(cv::countNonZero(mask));
-  if (!user_mask.empty()) mask = mask.empty() ? user_mask : (mask | user_mask);
-  if (!mask.empty() && cv::countNonZero(mask) > 0) {
-    WriteImage(mask_png.string(), MaskImage(mask), PngCompression::kFastFlat);
-    WriteImage(colmap_mask_png.string(), MaskImage(mask, true), PngCompression::kFastFlat);
-    ledger.Done(mask_png);
-    ledger.Done(colmap_mask_png);
-  } else {  // an earlier run's: this selection masks nothing
-    fs::remove(mask_png);
-    fs::remove(colmap_mask_png);
-  }
+  CheckSelection(o, rep);
+  RemoveUnkept(images, names, rep);
+  WriteMasks(selector->Overlay(), user_mask, out, ledger, rep);
   WriteTextAtomic(tsv, [&](std::ostream& os) {
     os << "name\tframe\ttime\tsharpness\tmotion\n";
     for (const Kept& k : kept)
