@@ -9,6 +9,7 @@
 #include <random>
 
 #include "base/error.h"
+#include "base/stats.h"
 
 namespace mvtm {
 
@@ -16,15 +17,10 @@ namespace {
 
 using C = std::complex<double>;
 
-double Median(std::vector<double> v) {
-  const size_t m = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + static_cast<ptrdiff_t>(m), v.end());
-  return v[m];
-}
-
-// q ≈ a·p + b by least squares over `idx` (a complex: scale and rotation).
+// q ≈ a·p + b by least squares over `idx` (a complex: scale and rotation); with `scale` > 0 the
+// scale is held at it and only the rotation and translation are fitted.
 void FitSimilarity(const std::vector<C>& p, const std::vector<C>& q, const std::vector<size_t>& idx,
-                   C& a, C& b) {
+                   C& a, C& b, double scale = 0) {
   C pm = 0, qm = 0;
   for (size_t i : idx) {
     pm += p[i];
@@ -38,23 +34,10 @@ void FitSimilarity(const std::vector<C>& p, const std::vector<C>& q, const std::
     num += std::conj(p[i] - pm) * (q[i] - qm);
     den += std::norm(p[i] - pm);
   }
-  a = den > 0 ? num / den : C(0);
-  b = qm - a * pm;
-}
-
-// Rotation and translation at a fixed scale `s`.
-void FitRigidAtScale(const std::vector<C>& p, const std::vector<C>& q,
-                     const std::vector<size_t>& idx, double s, C& a, C& b) {
-  C pm = 0, qm = 0;
-  for (size_t i : idx) {
-    pm += p[i];
-    qm += q[i];
-  }
-  pm /= static_cast<double>(idx.size());
-  qm /= static_cast<double>(idx.size());
-  C num = 0;
-  for (size_t i : idx) num += std::conj(p[i] - pm) * (q[i] - qm);
-  a = std::abs(num) > 0 ? s * num / std::abs(num) : C(s);
+  if (scale > 0)
+    a = std::abs(num) > 0 ? scale * num / std::abs(num) : C(scale);
+  else
+    a = den > 0 ? num / den : C(0);
   b = qm - a * pm;
 }
 
@@ -275,7 +258,7 @@ GpsAlignment AlignToGps(const std::vector<Eigen::Vector3d>& centres,
                  vg = std::pow(out.scale_gps_sigma, 2);
     s = vg > 0 ? (out.scale_gps / vg + o.height_scale / vh) / (1 / vg + 1 / vh) : out.scale_gps;
     out.scale_source = "gps+camera-height";
-    FitRigidAtScale(p, q, in, s, a, b);
+    FitSimilarity(p, q, in, a, b, s);
   }
   double rss = 0;
   for (size_t k : in) rss += std::norm(a * p[k] + b - q[k]);

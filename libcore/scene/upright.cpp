@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "base/error.h"
+#include "base/stats.h"
 
 namespace mvtm {
 
@@ -28,13 +29,6 @@ constexpr int kRansacRounds = 300;
 constexpr size_t kNeighbours = 3;  // images before and after whose points count too
 
 double Sq(double v) { return v * v; }
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  const size_t m = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + m, v.end());
-  return v[m];
-}
 
 // A plane n·p + h = 0 in camera coordinates, n unit and pointing up (n·(0,−1,0) > 0), so h > 0
 // is the camera's height above it for a plane below the camera.

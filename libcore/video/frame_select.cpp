@@ -8,6 +8,8 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "base/stats.h"
+
 namespace mvtm {
 
 namespace {
@@ -30,13 +32,6 @@ cv::Mat Working(const cv::Mat& grey) {
   const double f = static_cast<double>(kWorkWidth) / grey.cols;
   cv::resize(grey, small, cv::Size(), f, f, cv::INTER_AREA);
   return small;
-}
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  const size_t m = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + m, v.end());
-  return v[m];
 }
 
 }  // namespace

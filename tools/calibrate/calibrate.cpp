@@ -6,7 +6,6 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <opencv2/calib3d.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 #include <sstream>
@@ -16,8 +15,10 @@
 #include "camera/camera.h"
 #include "cli/work.h"
 #include "image/folder.h"
+#include "image/image.h"
 #include "io/colmap_model.h"
 #include "run/ledger.h"
+#include "video/capture.h"
 
 namespace mvtm {
 
@@ -84,6 +85,21 @@ bool FindBoard(const cv::Mat& grey, cv::Size pattern, std::vector<cv::Point2f>& 
   return cv::findChessboardCornersSB(grey, pattern, corners, cv::CALIB_CB_ACCURACY);
 }
 
+// An image of any depth (image/image.h: 8 or 16 bits, or float in [0, 1]) as 8-bit grey: the
+// luma of RGB, else the first channel.
+cv::Mat Grey8(const Image& img) {
+  cv::Mat out(img.height, img.width, CV_8U);
+  const double to8 = 255.0 / img.MaxValue();
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      const double v = img.channels >= 3 ? 0.299 * img.at(x, y, 0) + 0.587 * img.at(x, y, 1) +
+                                               0.114 * img.at(x, y, 2)
+                                         : img.at(x, y, 0);
+      out.at<uchar>(y, x) = cv::saturate_cast<uchar>(v * to8);
+    }
+  return out;
+}
+
 std::vector<View> ReadViews(const CalibrateOptions& o, cv::Size pattern, cv::Size& size,
                             size_t& seen) {
   std::vector<View> views;
@@ -110,23 +126,12 @@ std::vector<View> ReadViews(const CalibrateOptions& o, cv::Size pattern, cv::Siz
     if (files.empty()) throw Error(o.input, 0, "no images in the folder");
     for (const std::string& f : files) {
       const std::string path = (fs::path(o.input) / f).string();
-      const cv::Mat img = cv::imread(path, cv::IMREAD_UNCHANGED);
-      if (img.empty()) throw Error(path, 0, "cannot read the image");
-      cv::Mat img8 = img;
-      if (img.depth() == CV_16U)
-        img.convertTo(img8, CV_8U, 255.0 / 65535.0);
-      else if (img.depth() == CV_32F || img.depth() == CV_64F)  // linear [0, 1] (EXR, HDR)
-        img.convertTo(img8, CV_8U, 255.0);
-      else if (img.depth() != CV_8U)
-        img.convertTo(img8, CV_8U);
-      take(img8, f);
+      take(Grey8(ReadImage(path)), f);
     }
     return views;
   }
-  setenv("OPENCV_FFMPEG_LOGLEVEL", "-8", 0);  // one-line errors, see frames
-  cv::VideoCapture cap(o.input, cv::CAP_FFMPEG);
-  if (!cap.isOpened())
-    throw Error(o.input, 0, "neither a folder of photos nor a video FFmpeg can read");
+  const std::unique_ptr<cv::VideoCapture> video = OpenVideo(o.input);
+  cv::VideoCapture& cap = *video;
   const double fps = cap.get(cv::CAP_PROP_FPS) > 0 ? cap.get(cv::CAP_PROP_FPS) : 30;
   cv::Mat frame;
   long used = 0;  // frames within [start, end], counted for --every

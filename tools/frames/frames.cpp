@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <limits>
 #include <memory>
@@ -16,7 +15,9 @@
 #include "cli/work.h"
 #include "image/folder.h"
 #include "image/image.h"
+#include "image/mask.h"
 #include "run/ledger.h"
+#include "video/capture.h"
 
 namespace mvtm {
 
@@ -96,12 +97,13 @@ Image MaskImage(const cv::Mat& m, bool keep = false) {
   return img;
 }
 
-cv::Mat ReadMask(const std::string& path, int w, int h) {
-  const Image m = ReadImage(path);
+// --mask at the video's size, as a cv::Mat (image/mask.h: any non-zero channel is masked).
+cv::Mat ReadMaskMat(const std::string& path, int w, int h) {
+  const Image m = ReadMask(path);
   RequireImageSize(m, path, static_cast<uint64_t>(w), static_cast<uint64_t>(h));
   cv::Mat out(h, w, CV_8U);
   for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) out.at<uchar>(y, x) = m.at(x, y, 0) > 0 ? 255 : 0;
+    for (int x = 0; x < w; ++x) out.at<uchar>(y, x) = m.at(x, y) > 0 ? 255 : 0;
   return out;
 }
 
@@ -114,17 +116,6 @@ struct Kept {
 }  // namespace
 
 namespace {
-
-// Opens the video; FFmpeg's own log lines ("moov atom not found", decoder warnings) would break
-// the one-line error contract, so they are silenced (OpenCV reads the variable once, at its first
-// capture; a user's own setting wins).
-std::unique_ptr<cv::VideoCapture> OpenVideo(const std::string& video) {
-  setenv("OPENCV_FFMPEG_LOGLEVEL", "-8", 0);
-  auto cap = std::make_unique<cv::VideoCapture>(video, cv::CAP_FFMPEG);
-  if (!cap->isOpened())
-    throw Error(video, 0, "cannot open the video (not a video, or a container FFmpeg cannot read)");
-  return cap;
-}
 
 // Images of an earlier selection that this one does not keep.
 void RemoveUnkept(const fs::path& images, const std::set<std::string>& names, FramesReport& rep) {
@@ -207,7 +198,7 @@ FramesReport RunFramesInto(const FramesOptions& o) {
         throw UsageError("--crop " + o.crop + " reaches outside the " + std::to_string(frame.cols) +
                          "x" + std::to_string(frame.rows) + " frames");
       if (!o.mask.empty()) {
-        user_mask = ReadMask(o.mask, frame.cols, frame.rows);
+        user_mask = ReadMaskMat(o.mask, frame.cols, frame.rows);
         if (!crop.empty()) user_mask = user_mask(cv::Rect(crop.x, crop.y, crop.w, crop.h)).clone();
       }
       selector = std::make_unique<FrameSelector>(o.select, user_mask);
