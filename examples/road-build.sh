@@ -23,6 +23,8 @@
 #              for a metric model; a non-metric one needs 1.5 x its units per metre),
 #              MATCH_OVERLAP (COLMAP sequential matching overlap, default 5; 10 with POSES -),
 #              SFM_MAX_REPROJ (POSES -: the mapper's outlier threshold in pixels, default 2),
+#              SFM_THREADS (POSES -: threads of COLMAP's extraction, matching and mapping; 1 makes
+#              a run repeatable, as COLMAP's RANSAC draws from per-thread generators),
 #              LOOP_DETECTION (1: with POSES -, also match each frame against the frames most
 #              alike in a vocabulary tree built from the photos, for drives that revisit a place),
 #              CAMERA_HEIGHT (with POSES -: the camera's height above the road in metres, e.g.
@@ -43,6 +45,8 @@
 #              METRIC (1: the poses are in metres, e.g. ground truth or GPS-aligned: roadmesh
 #              takes lengths as metres instead of deriving its unit from the scene's camera
 #              height, which a road without sparse points on the asphalt cannot give),
+#              DYNAMIC (0: no label-free masks when OUT/ws/labels is missing; default 1: dynmask),
+#              DYNMASK_FLAGS (extra dynmask options, e.g. "--threshold 0.08"),
 #              HOLDOUT_STRICT (1: also score a strict hold-out: a second workspace without the
 #              held-out photos builds the mesh, its colours and the projectors; they take part in
 #              nothing that is scored, as in novel-view benchmarks)
@@ -50,7 +54,8 @@
 # Steps: [frames (VIDEO)] → orb2colmap (poses as priors, or the camera alone with POSES -) →
 # COLMAP feature_extractor / sequential_matcher / point_triangulator / bundle_adjuster (poses of
 # record) or mapper + georef (POSES -) / image_undistorter (CPU) → mesh (COLMAP dense MVS +
-# poisson_mesher when COLMAP has CUDA, else densify + roadmesh --dense, or roadmesh alone) → segtrack (when OUT/ws/labels exists) →
+# poisson_mesher when COLMAP has CUDA, else densify + roadmesh --dense, or roadmesh alone) → segtrack (when OUT/ws/labels exists;
+# else dynmask, label-free, and the mesh again without the masked pixels) →
 # pickview --partners (when the names carry several passes, A_0000.png …) → bakedepth →
 # inpaint3d (when there are masks) → ptmrender (held-out poses and a lane change) → ssim.
 set -euo pipefail
@@ -93,7 +98,8 @@ if [ "$poses" = - ]; then
     mask_opt=(); [ -n "$overlay" ] && mask_opt=(--ImageReader.camera_mask_path "$overlay/colmap_mask.png")
     colmap_log colmap feature_extractor --database_path "$out/db.db" --image_path "$images" \
       --SiftExtraction.use_gpu 0 --ImageReader.single_camera 1 \
-      --ImageReader.camera_model "${CAMERA_MODEL:-SIMPLE_RADIAL}" "${mask_opt[@]}"
+      --ImageReader.camera_model "${CAMERA_MODEL:-SIMPLE_RADIAL}" "${mask_opt[@]}" \
+      ${SFM_THREADS:+--SiftExtraction.num_threads "$SFM_THREADS"}
     loop_opt=()
     if [ "${LOOP_DETECTION:-0}" = 1 ]; then
       [ -f "$out/vocab_tree.bin" ] || colmap_log colmap vocab_tree_builder \
@@ -101,13 +107,15 @@ if [ "$poses" = - ]; then
       loop_opt=(--SequentialMatching.loop_detection 1 --SequentialMatching.vocab_tree_path "$out/vocab_tree.bin")
     fi
     colmap_log colmap sequential_matcher --database_path "$out/db.db" --SiftMatching.use_gpu 0 \
-      --SequentialMatching.overlap "${MATCH_OVERLAP:-10}" "${loop_opt[@]}"
+      --SequentialMatching.overlap "${MATCH_OVERLAP:-10}" "${loop_opt[@]}" \
+      ${SFM_THREADS:+--SiftMatching.num_threads "$SFM_THREADS"}
     # Given intrinsics stay as they are; without them the mapper refines focal length and
     # distortion of the one shared camera. Observations over SFM_MAX_REPROJ px (default 2) are
     # outliers: COLMAP's default 4 keeps wrong matches on repetitive facades and lane dashes (the
     # CI fixture's video drifts to 3 % of its path with 4, 0.05 % with 2; KITTI 01: 0.59 % and
     # 0.64 %).
     fixed=(--Mapper.filter_max_reproj_error "${SFM_MAX_REPROJ:-2}")
+    [ -n "${SFM_THREADS:-}" ] && fixed+=(--Mapper.num_threads "$SFM_THREADS")
     [ $# -ge 1 ] && fixed+=(--Mapper.ba_refine_focal_length 0 --Mapper.ba_refine_extra_params 0)
     # Forward motion gives small triangulation angles: when COLMAP's defaults find no initial
     # pair (or register under half the images), the mapper runs again as for a dashcam (initial
@@ -185,13 +193,19 @@ if [ ! -d "$ws/sparse" ]; then
 fi
 [ -f "$out/ba/georef.json" ] && cp "$out/ba/georef.json" "$ws/georef.json"
 # A video's burned-in overlay: undistorted like the photos, one mask per image, so that fusion,
-# vertex colours and projection leave those pixels out (ptmrender fills them from other photos).
-if [ -n "$overlay" ] && [ ! -d "$ws/masks" ]; then
-  rm -rf "$out/overlay"; mkdir -p "$out/overlay/in"
-  for f in "$images"/*; do ln -s "$overlay/mask.png" "$out/overlay/in/$(basename "$f")"; done
-  colmap_log colmap image_undistorter --image_path "$out/overlay/in" --input_path "$out/ba" \
-    --output_path "$out/overlay/out" --output_type COLMAP
-  mv "$out/overlay/out/images" "$ws/masks"
+# vertex colours and projection leave those pixels out (ptmrender fills them from other photos);
+# dynmask ORs them into its masks.
+overlay_masks=
+if [ -n "$overlay" ]; then
+  overlay_masks=$out/overlay_masks
+  if [ ! -d "$overlay_masks" ]; then
+    rm -rf "$out/overlay"; mkdir -p "$out/overlay/in"
+    for f in "$images"/*; do ln -s "$overlay/mask.png" "$out/overlay/in/$(basename "$f")"; done
+    colmap_log colmap image_undistorter --image_path "$out/overlay/in" --input_path "$out/ba" \
+      --output_path "$out/overlay/out" --output_type COLMAP
+    mv "$out/overlay/out/images" "$overlay_masks"
+  fi
+  [ -d "$ws/masks" ] || cp -r "$overlay_masks" "$ws/masks"
 fi
 colmap model_analyzer --path "$ws/sparse" 2>&1 | grep -E "Registered images|Points:|Mean reprojection" >&2 || true
 
@@ -224,7 +238,17 @@ log "3b. exposure: a gain and an offset per photo, so that projectors blend at o
 "$bin/exposure" -q "$ws"
 
 log "4. vehicle masks and partners"
-if [ -d "$ws/labels" ] && [ ! -f "$ws/tracks.tsv" ]; then "$bin/segtrack" "$ws/labels" "$ws"; fi
+read -r -a dynmask_opts <<< "${DYNMASK_FLAGS:-}"
+[ -n "$overlay_masks" ] && dynmask_opts+=(--also "$overlay_masks")
+if [ -d "$ws/labels" ]; then
+  [ -f "$ws/tracks.tsv" ] || "$bin/segtrack" "$ws/labels" "$ws"
+elif [ "${DYNAMIC:-1}" = 1 ]; then
+  # No labels: label-free masks from the photos checked against each other through the first
+  # mesh (dynmask), then the mesh again without the masked pixels (roadmesh's inputs include the
+  # masks, so it redoes the mesh when they changed; COLMAP's Poisson mesh is kept as it is).
+  "$bin/dynmask" -q "${dynmask_opts[@]}" "$ws"
+  [ -f "$ws/meshed-poisson.ply" ] || cpu_mesh "$ws"
+fi
 passes=$(ls "$ws/images" | sed -n 's/^\([^_]*\)_.*/\1/p' | sort -u | wc -l)
 if [ "$passes" -ge 2 ] && [ ! -f "$ws/partners.tsv" ]; then "$bin/pickview" --partners "$ws" > /dev/null; fi
 
@@ -265,6 +289,7 @@ if [ "${HOLDOUT_STRICT:-0}" = 1 ]; then
     colmap_log colmap image_deleter --input_path "$ws/sparse" --output_path "$train/sparse" \
       --image_names_path "$out/heldout_names.txt"
     ln -s "$ws/images" "$train/images"
+    [ -d "$ws/masks" ] && ln -s "$ws/masks" "$train/masks"
   fi
   # The held-out poses of record (images.txt lines of the full model) as ptmrender's trajectory.
   colmap_log colmap model_converter --input_path "$ws/sparse" --output_path "$out/full_txt" --output_type TXT

@@ -52,9 +52,11 @@ VertexColourBaker::VertexColourBaker(const Mesh& mesh) : mesh_(mesh) {
 
 VertexColourBaker::~VertexColourBaker() = default;
 
-void VertexColourBaker::Add(const Camera& camera, const Rigid3d& world_to_camera,
-                            const Image& img) {
+void VertexColourBaker::Add(const Camera& camera, const Rigid3d& world_to_camera, const Image& img,
+                            const Image& mask) {
   camera.RequireUndistorted();
+  if (!mask.data.empty() && (mask.width != img.width || mask.height != img.height))
+    throw Error("vertex colours: the mask is not of the image's size");
   Camera cam = camera;
   if (uint64_t(img.width) != cam.width || uint64_t(img.height) != cam.height)
     cam = cam.Scaled(uint64_t(img.width), uint64_t(img.height));
@@ -68,6 +70,9 @@ void VertexColourBaker::Add(const Camera& camera, const Rigid3d& world_to_camera
     const Eigen::Vector2d px = cam.Project(x);
     const int ix = static_cast<int>(std::floor(px.x())), iy = static_cast<int>(std::floor(px.y()));
     if (ix < 0 || iy < 0 || ix >= img.width || iy >= img.height) continue;
+    if (!mask.data.empty() &&
+        mask.data[(size_t(iy) * size_t(mask.width) + size_t(ix)) * size_t(mask.channels)] != 0)
+      continue;
     if (!Visible(depth, ix, iy, x.z())) continue;
     const Eigen::Vector3d to_cam = centre - mesh_.vertices[v];
     const double dist = to_cam.norm();

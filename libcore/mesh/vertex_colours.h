@@ -42,9 +42,11 @@ class VertexColourBaker {
   VertexColourBaker(const VertexColourBaker&) = delete;
   VertexColourBaker& operator=(const VertexColourBaker&) = delete;
 
-  // Adds one photograph taken by `camera` at `world_to_camera`. Throws Error for a distorted
-  // camera model.
-  void Add(const Camera& camera, const Rigid3d& world_to_camera, const Image& image);
+  // Adds one photograph taken by `camera` at `world_to_camera`. `mask` (empty, or 1 channel of
+  // the image's size, non-zero = leave out: a vehicle, an overlay) takes its pixels out of the
+  // colours. Throws Error for a distorted camera model or a mask of another size.
+  void Add(const Camera& camera, const Rigid3d& world_to_camera, const Image& image,
+           const Image& mask = Image());
 
   // Writes the colours into `mesh` (same vertices as the baker's); returns the number of vertices
   // seen by at least one image.

@@ -45,6 +45,10 @@ fs::path Workspace::MasksDir() const { return root_ / "masks"; }
 fs::path Workspace::MaskPath(const std::string& name) const {
   return Derived(MasksDir(), name, ".png");
 }
+fs::path Workspace::DynamicDir() const { return root_ / "dynamic"; }
+fs::path Workspace::DynamicPath(const std::string& name) const {
+  return Derived(DynamicDir(), name, ".png");
+}
 fs::path Workspace::DepthDir() const { return root_ / "depth"; }
 fs::path Workspace::DepthPath(const std::string& name) const {
   return Derived(DepthDir(), name, ".exr");

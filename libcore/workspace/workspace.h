@@ -5,8 +5,9 @@
 //   images/NAME           undistorted source images, named as in images.txt
 //   mesh.ply              (or meshed-poisson.ply, meshed-delaunay.ply) — first found wins
 //   labels/NAME.png       semantic labels (segtrack input)
-//   masks/NAME.png        8-bit masks, 255 = remove (segtrack output)
-//   tracks.tsv            segtrack's tracks
+//   masks/NAME.png        8-bit masks, 255 = remove (segtrack or dynmask output)
+//   dynamic/NAME.png      8-bit probability of "not static", 255 = surely not (dynmask)
+//   tracks.tsv            segtrack's (or dynmask's) tracks
 //   partners.tsv          pickview's view selection
 //   exposure.tsv          gain and offset per image (exposure)
 //   depth/NAME.exr        float32 linear camera-space depth, +inf = no surface (bakedepth)
@@ -61,6 +62,9 @@ class Workspace {
   fs::path LabelsDir() const;
   fs::path MaskPath(const std::string& name) const;
   fs::path MasksDir() const;
+  // dynamic/NAME.png: 8-bit probability that a pixel is not the static scene (dynmask).
+  fs::path DynamicPath(const std::string& name) const;
+  fs::path DynamicDir() const;
   fs::path DepthPath(const std::string& name) const;
   fs::path DepthDir() const;
   // stereo/NAME.exr and stereo/NAME.conf.exr: dense depth from the photos and its confidence

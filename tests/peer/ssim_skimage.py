@@ -254,14 +254,16 @@ def real_cases(c, data, tmp):
     if len(kitti) < 2 or len(camvid) < 2:
         print(f"SKIP: real data not found under {data}")
         sys.exit(77)
-    da, db = linked_folders("kitti06", kitti[:-1], kitti[1:], ".png")
+    # Every 5th consecutive pair across each sequence: the same variety of content at a fifth of
+    # scikit-image's time (CI budget).
+    da, db = linked_folders("kitti06", kitti[:-1:5], kitti[1::5], ".png")
     c.folder("kitti06 grey consecutive frames", da, db)
-    da, db = linked_folders("camvid", camvid[:-1], camvid[1:], ".png")
+    da, db = linked_folders("camvid", camvid[:-1:5], camvid[1::5], ".png")
     c.folder("camvid colour consecutive frames", da, db)
     # Vehicle masks from the CamVid labels (class 8 = Car), on the pair (frame i, frame i+1).
     dm = os.path.join(tmp, "camvid_masks")
     os.makedirs(dm)
-    for i, f in enumerate(labels[:-1]):
+    for i, f in enumerate(labels[:-1:5]):
         io.imsave(os.path.join(dm, f"{i:04d}.png"),
                   ((io.imread(f) == 8) * 255).astype(np.uint8), check_contrast=False)
     c.folder("camvid colour, car masks", da, db, mask=dm)

@@ -28,11 +28,14 @@ namespace {
 
 cv::Size ParsePattern(const std::string& s) {
   const size_t x = s.find('x');
+  const std::string cols = x == std::string::npos ? "" : s.substr(0, x);
+  const std::string rows = x == std::string::npos ? "" : s.substr(x + 1);
   char* e1 = nullptr;
   char* e2 = nullptr;
-  const long c = x == std::string::npos ? 0 : std::strtol(s.substr(0, x).c_str(), &e1, 10);
-  const long r = x == std::string::npos ? 0 : std::strtol(s.substr(x + 1).c_str(), &e2, 10);
-  if (x == std::string::npos || !e1 || *e1 || !e2 || *e2 || c < 3 || r < 3 || c > 100 || r > 100)
+  const long c = std::strtol(cols.c_str(), &e1, 10);
+  const long r = std::strtol(rows.c_str(), &e2, 10);
+  if (x == std::string::npos || cols.empty() || rows.empty() || *e1 || *e2 || c < 3 || r < 3 ||
+      c > 100 || r > 100)
     throw FieldError("pattern", "expected COLSxROWS inner corners, each 3..100, got '" + s + "'");
   return {static_cast<int>(c), static_cast<int>(r)};
 }

@@ -21,6 +21,7 @@
 #include "render/context.h"
 #include "run/ledger.h"
 #include "stereo/neighbours.h"
+#include "workspace/assets.h"
 #include "workspace/workspace.h"
 
 namespace mvtm {
@@ -90,6 +91,9 @@ std::vector<fs::path> MeshInputs(const Workspace& ws, const Reconstruction& rec,
   std::vector<fs::path> in = ws.SparseModelFiles();
   for (const ImageRecord* im : rec.ImagesByName()) {
     if (!o.no_colours) in.push_back(ws.SourceImagePath(im->name));
+    // Masked pixels (vehicles: segtrack or dynmask; a video's overlay) are left out of the
+    // colours and of fusion: a mask that appears or changes makes the mesh stale.
+    if (fs::exists(ws.MaskPath(im->name))) in.push_back(ws.MaskPath(im->name));
     if (o.dense) {
       in.push_back(ws.StereoDepthPath(im->name));
       in.push_back(ws.StereoConfidencePath(im->name));
@@ -123,10 +127,19 @@ void BakeColours(const Workspace& ws, const Reconstruction& rec, const RoadMeshO
     const std::string path = ws.SourceImagePath(im->name).string();
     Image img = ReadImage(path);
     RequireImageSize(img, path, cam.width, cam.height);
-    baker.Add(cam, im->world_to_camera, img);
+    baker.Add(cam, im->world_to_camera, img, ReadMaskAtCamera(ws, im->name, cam));
     bar.Step();
   }
   rep.coloured = baker.Finish(mesh);
+}
+
+// Sets the depth of masked pixels (mask at the image's size, depth at any size) to +inf: what
+// moved is not fused.
+void LeaveOutMasked(const Image& mask, Image& depth) {
+  if (mask.data.empty()) return;
+  const Image m = ResizeNearest(mask, depth.width, depth.height);
+  for (size_t k = 0; k < depth.data.size(); ++k)
+    if (m.data[k * size_t(m.channels)] != 0) depth.data[k] = std::numeric_limits<float>::infinity();
 }
 
 // densify's depth maps with the cameras scaled to their size, in name order.
@@ -142,6 +155,7 @@ std::vector<DepthView> LoadStereoViews(const Workspace& ws, const Reconstruction
     cam.RequireUndistorted();
     v.camera = cam.Scaled(uint64_t(v.depth.width), uint64_t(v.depth.height));
     v.world_to_camera = im->world_to_camera;
+    LeaveOutMasked(ReadMaskAtCamera(ws, im->name, cam), v.depth);
     CheckDepthView(v, views.size());
     views.push_back(std::move(v));
   }

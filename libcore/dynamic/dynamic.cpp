@@ -1,0 +1,312 @@
+#include "dynamic/dynamic.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
+#include <opencv2/ximgproc/segmentation.hpp>
+#include <string>
+
+#include "base/error.h"
+
+namespace mvtm {
+
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+void CheckView(const DynamicView& v, const char* what) {
+  v.camera.RequireUndistorted();
+  const int w = static_cast<int>(v.camera.width), h = static_cast<int>(v.camera.height);
+  const auto ok = [&](const cv::Mat& m) {
+    return m.type() == CV_32F && m.cols == w && m.rows == h;
+  };
+  if (!ok(v.grey) || !ok(v.depth))
+    throw Error(std::string(what) + ": luma and depth must be float images of the camera's size " +
+                std::to_string(w) + "x" + std::to_string(h));
+  if (!v.colour.empty() && (v.colour.type() != CV_8UC3 || v.colour.size() != v.grey.size()))
+    throw Error(std::string(what) + ": the colour image must be 8-bit RGB of the luma's size");
+  if (!v.dynamic.empty() && !ok(v.dynamic))
+    throw Error(std::string(what) +
+                ": the first-pass probability must be float of the luma's size");
+}
+
+// Where each target pixel lands in `nb` (map_x, map_y; NaN when not valid there).
+void WarpMaps(const DynamicView& t, const DynamicView& nb, double tol, cv::Mat& mx, cv::Mat& my) {
+  const Rigid3d t2n = nb.world_to_camera * t.world_to_camera.Inverse();
+  const Eigen::Matrix3d R = t2n.R();
+  const Eigen::Vector3d tr = t2n.t;
+  const double fx = t.camera.fx(), fy = t.camera.fy(), cx = t.camera.cx(), cy = t.camera.cy();
+  const double gx = nb.camera.fx(), gy = nb.camera.fy(), hx = nb.camera.cx(), hy = nb.camera.cy();
+  const int nw = nb.depth.cols, nh = nb.depth.rows;
+  mx.create(t.depth.size(), CV_32F);
+  my.create(t.depth.size(), CV_32F);
+  cv::parallel_for_(cv::Range(0, t.depth.rows), [&](const cv::Range& rows) {
+    for (int y = rows.start; y < rows.end; ++y) {
+      const float* z = t.depth.ptr<float>(y);
+      float* ox = mx.ptr<float>(y);
+      float* oy = my.ptr<float>(y);
+      for (int x = 0; x < t.depth.cols; ++x) {
+        ox[x] = oy[x] = kNaN;
+        const double d = z[x];
+        if (!(d > 0) || !std::isfinite(d)) continue;
+        const Eigen::Vector3d pc((x + 0.5 - cx) / fx * d, (y + 0.5 - cy) / fy * d, d);
+        const Eigen::Vector3d q = R * pc + tr;
+        if (!(q.z() > 0)) continue;
+        const double u = gx * q.x() / q.z() + hx, v = gy * q.y() / q.z() + hy;
+        if (!(u >= 0.5 && v >= 0.5 && u <= nw - 0.5 && v <= nh - 0.5)) continue;
+        const float dn = nb.depth.at<float>(std::min(nh - 1, static_cast<int>(v)),
+                                            std::min(nw - 1, static_cast<int>(u)));
+        if (dn > 0 && std::isfinite(dn) && dn < q.z() * (1 - tol)) continue;  // hidden in nb
+        if (!nb.dynamic.empty() &&
+            nb.dynamic.at<float>(std::min(nh - 1, static_cast<int>(v)),
+                                 std::min(nw - 1, static_cast<int>(u))) >= 0.5f)
+          continue;                           // hidden in nb by something that moves
+        ox[x] = static_cast<float>(u - 0.5);  // remap's pixel centres are integers
+        oy[x] = static_cast<float>(v - 0.5);
+      }
+    }
+  });
+}
+
+// The gain that brings `warp` to the target's exposure: exp(median log ratio) over valid pixels
+// that are neither black nor saturated in both.
+double ExposureGain(const cv::Mat& target, const cv::Mat& warp) {
+  std::vector<float> r;
+  r.reserve(target.total() / 4);
+  for (int y = 0; y < target.rows; y += 2) {
+    const float* a = target.ptr<float>(y);
+    const float* b = warp.ptr<float>(y);
+    for (int x = 0; x < target.cols; x += 2)
+      if (a[x] > 0.02f && b[x] > 0.02f && a[x] < 0.98f && b[x] < 0.98f)
+        r.push_back(std::log(a[x] / b[x]));
+  }
+  if (r.size() < 16) return 1;
+  std::nth_element(r.begin(), r.begin() + static_cast<long>(r.size() / 2), r.end());
+  return std::exp(static_cast<double>(r[r.size() / 2]));
+}
+
+// Photometric residual of one neighbour (NaN where not valid), see the header.
+cv::Mat Photometric(const cv::Mat& target, const cv::Mat& warp, const cv::Mat& valid,
+                    const DynamicOptions& o) {
+  const cv::Mat k = cv::getStructuringElement(cv::MORPH_RECT, {2 * o.slack + 1, 2 * o.slack + 1});
+  cv::Mat lo_in = warp.clone(), hi_in = warp.clone();
+  lo_in.setTo(2.0, ~valid);  // invalid pixels never set a bound
+  hi_in.setTo(-1.0, ~valid);
+  cv::Mat lo, hi;
+  cv::erode(lo_in, lo, k);
+  cv::dilate(hi_in, hi, k);
+  const cv::Mat above = target - hi, below = lo - target;
+  cv::Mat d;
+  cv::max(above, below, d);
+  d = cv::max(d, 0.0);
+  d.setTo(0, ~valid);
+  cv::Mat vf, sum, cnt;
+  valid.convertTo(vf, CV_32F, 1.0 / 255);
+  const cv::Size box(o.window, o.window);
+  cv::boxFilter(d, sum, CV_32F, box, {-1, -1}, false);
+  cv::boxFilter(vf, cnt, CV_32F, box, {-1, -1}, false);
+  cv::Mat out(target.size(), CV_32F, kNaN);
+  const float need = 0.5f * static_cast<float>(o.window * o.window);
+  for (int y = 0; y < out.rows; ++y)
+    for (int x = 0; x < out.cols; ++x)
+      if (valid.at<uint8_t>(y, x) && cnt.at<float>(y, x) >= need)
+        out.at<float>(y, x) = sum.at<float>(y, x) / cnt.at<float>(y, x);
+  return out;
+}
+
+// Length of the DIS flow from the target to the warp (invalid pixels: the target's own).
+cv::Mat FlowResidual(const cv::Mat& target, const cv::Mat& warp, const cv::Mat& valid) {
+  cv::Mat filled = warp.clone();
+  target.copyTo(filled, ~valid);
+  cv::Mat a8, b8, flow;
+  target.convertTo(a8, CV_8U, 255);
+  filled.convertTo(b8, CV_8U, 255);
+  cv::Ptr<cv::DISOpticalFlow> dis = cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_FAST);
+  dis->calc(a8, b8, flow);
+  cv::Mat parts[2], mag;
+  cv::split(flow, parts);
+  cv::magnitude(parts[0], parts[1], mag);
+  mag.setTo(kNaN, ~valid);
+  return mag;
+}
+
+// Per pixel, the `quantile` of the finite values across `maps` (NaN when none).
+cv::Mat Reduce(const std::vector<cv::Mat>& maps, double quantile, cv::Size size) {
+  cv::Mat out(size, CV_32F, kNaN);
+  cv::parallel_for_(cv::Range(0, size.height), [&](const cv::Range& rows) {
+    std::vector<float> v;
+    for (int y = rows.start; y < rows.end; ++y)
+      for (int x = 0; x < size.width; ++x) {
+        v.clear();
+        for (const cv::Mat& m : maps) {
+          const float f = m.at<float>(y, x);
+          if (std::isfinite(f)) v.push_back(f);
+        }
+        if (v.empty()) continue;
+        std::sort(v.begin(), v.end());
+        const double pos = quantile * static_cast<double>(v.size() - 1);
+        const size_t i = static_cast<size_t>(pos);
+        const double f = pos - static_cast<double>(i);
+        out.at<float>(y, x) =
+            static_cast<float>(i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v[i]);
+      }
+  });
+  return out;
+}
+
+// Logistic in r / threshold: 0.5 at 1, 0.05 at 0.4, 0.95 at 1.6; 0 for NaN.
+float Logistic(float r, double threshold) {
+  if (!std::isfinite(r)) return 0;
+  const double s = (r / threshold - 1.0) / (0.6 / std::log(19.0));
+  return static_cast<float>(1.0 / (1.0 + std::exp(-s)));
+}
+
+// Per pixel, the texture weight: local mean gradient magnitude of the luma / `scale`, at most 1.
+cv::Mat TextureWeight(const cv::Mat& grey, int window, double scale) {
+  cv::Mat gx, gy, mag;
+  cv::Sobel(grey, gx, CV_32F, 1, 0, 3, 1.0 / 8);
+  cv::Sobel(grey, gy, CV_32F, 0, 1, 3, 1.0 / 8);
+  cv::magnitude(gx, gy, mag);
+  cv::boxFilter(mag, mag, CV_32F, {window, window});
+  cv::Mat w = mag / scale;
+  return cv::min(w, 1.0);
+}
+
+// Spreads the pixel probabilities over the target's regions (see the header).
+void SpreadOverRegions(const DynamicView& t, const cv::Mat& has_depth, const DynamicOptions& o,
+                       cv::Mat& p) {
+  cv::Mat src;
+  if (!t.colour.empty())
+    src = t.colour;
+  else
+    t.grey.convertTo(src, CV_8U, 255);
+  const int min_size = std::max(16, static_cast<int>(t.grey.total() / 2000));
+  auto gs = cv::ximgproc::segmentation::createGraphSegmentation(0.5, float(o.segments), min_size);
+  cv::Mat seg;
+  gs->processImage(src, seg);
+  double max_label = 0;
+  cv::minMaxLoc(seg, nullptr, &max_label);
+  const size_t n = static_cast<size_t>(max_label) + 1;
+  const cv::Mat w = TextureWeight(t.grey, o.window, o.texture);
+  std::vector<double> sw(n, 0), swp(n, 0), area(n, 0);
+  for (int y = 0; y < p.rows; ++y)
+    for (int x = 0; x < p.cols; ++x) {
+      const size_t s = static_cast<size_t>(seg.at<int>(y, x));
+      area[s] += 1;
+      if (!has_depth.at<uint8_t>(y, x)) continue;
+      sw[s] += w.at<float>(y, x);
+      swp[s] += w.at<float>(y, x) * p.at<float>(y, x);
+    }
+  for (int y = 0; y < p.rows; ++y)
+    for (int x = 0; x < p.cols; ++x) {
+      const size_t s = static_cast<size_t>(seg.at<int>(y, x));
+      if (!has_depth.at<uint8_t>(y, x) || sw[s] < 0.05 * area[s]) continue;
+      const float wp = w.at<float>(y, x);
+      p.at<float>(y, x) = wp * p.at<float>(y, x) + (1 - wp) * static_cast<float>(swp[s] / sw[s]);
+    }
+}
+
+}  // namespace
+
+void DynamicOptions::Check() const {
+  if (!(threshold > 0) || !std::isfinite(threshold))
+    throw UsageError("--threshold must be above 0, got " + std::to_string(threshold));
+  if (!(flow_threshold > 0) || !std::isfinite(flow_threshold))
+    throw UsageError("--flow-threshold must be above 0, got " + std::to_string(flow_threshold));
+  if (!(quantile >= 0 && quantile <= 1))
+    throw UsageError("--quantile must be in [0, 1], got " + std::to_string(quantile));
+  if (!(depth_tolerance > 0 && depth_tolerance < 1))
+    throw UsageError("--depth-tolerance must be in (0, 1), got " + std::to_string(depth_tolerance));
+  if (slack < 0 || slack > 5)
+    throw UsageError("--slack must be 0..5, got " + std::to_string(slack));
+  if (window < 1 || window > 31 || window % 2 == 0)
+    throw UsageError("--window must be odd, 1..31, got " + std::to_string(window));
+  if (!(segments >= 0) || !std::isfinite(segments))
+    throw UsageError("--segments must be at least 0, got " + std::to_string(segments));
+  if (!(texture > 0) || !std::isfinite(texture))
+    throw UsageError("--texture must be above 0, got " + std::to_string(texture));
+}
+
+void MaskOptions::Check() const {
+  if (!(probability > 0 && probability < 1))
+    throw UsageError("--probability must be in (0, 1), got " + std::to_string(probability));
+  if (open < 0 || open > 50) throw UsageError("--open must be 0..50, got " + std::to_string(open));
+  if (close < 0 || close > 50)
+    throw UsageError("--close must be 0..50, got " + std::to_string(close));
+  if (!(min_area >= 0 && min_area < 1))
+    throw UsageError("--min-area must be in [0, 1), got " + std::to_string(min_area));
+}
+
+DynamicEvidence EstimateDynamic(const DynamicView& t,
+                                const std::vector<const DynamicView*>& neighbours,
+                                const DynamicOptions& o) {
+  o.Check();
+  CheckView(t, "target view");
+  std::vector<cv::Mat> photo, flow;
+  DynamicEvidence ev;
+  for (const DynamicView* nb : neighbours) {
+    CheckView(*nb, "neighbour view");
+    cv::Mat mx, my, warp;
+    WarpMaps(t, *nb, o.depth_tolerance, mx, my);
+    const cv::Mat valid = mx == mx;  // not NaN
+    if (cv::countNonZero(valid) == 0) continue;
+    ++ev.neighbours;
+    cv::remap(nb->grey, warp, mx, my, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+    warp.setTo(0, ~valid);
+    warp *= ExposureGain(t.grey, warp);
+    photo.push_back(Photometric(t.grey, warp, valid, o));
+    if (o.flow) flow.push_back(FlowResidual(t.grey, warp, valid));
+  }
+  ev.photometric = Reduce(photo, o.quantile, t.grey.size());
+  if (o.flow) ev.flow = Reduce(flow, o.quantile, t.grey.size());
+  ev.probability.create(t.grey.size(), CV_32F);
+  for (int y = 0; y < t.grey.rows; ++y)
+    for (int x = 0; x < t.grey.cols; ++x) {
+      float p = Logistic(ev.photometric.at<float>(y, x), o.threshold);
+      if (o.flow) p = std::max(p, Logistic(ev.flow.at<float>(y, x), o.flow_threshold));
+      ev.probability.at<float>(y, x) = p;
+    }
+  if (o.segments > 0 && ev.neighbours > 0) {
+    const cv::Mat has_depth = (t.depth > 0) & (t.depth < std::numeric_limits<float>::infinity());
+    SpreadOverRegions(t, has_depth, o, ev.probability);
+  }
+  return ev;
+}
+
+cv::Mat MaskFromProbability(const cv::Mat& probability, const MaskOptions& o) {
+  o.Check();
+  cv::Mat m = probability >= o.probability;
+  const auto disk = [](int r) {
+    return cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * r + 1, 2 * r + 1});
+  };
+  if (o.open > 0) cv::morphologyEx(m, m, cv::MORPH_OPEN, disk(o.open));
+  if (o.close > 0) cv::morphologyEx(m, m, cv::MORPH_CLOSE, disk(o.close));
+  // Holes: background components that do not touch the border.
+  cv::Mat bg = ~m, labels;
+  const int n = cv::connectedComponents(bg, labels, 4, CV_32S);
+  std::vector<uint8_t> border(static_cast<size_t>(n), 0);
+  for (int x = 0; x < labels.cols; ++x)
+    border[static_cast<size_t>(labels.at<int>(0, x))] =
+        border[static_cast<size_t>(labels.at<int>(labels.rows - 1, x))] = 1;
+  for (int y = 0; y < labels.rows; ++y)
+    border[static_cast<size_t>(labels.at<int>(y, 0))] =
+        border[static_cast<size_t>(labels.at<int>(y, labels.cols - 1))] = 1;
+  for (int y = 0; y < m.rows; ++y)
+    for (int x = 0; x < m.cols; ++x)
+      if (!m.at<uint8_t>(y, x) && !border[static_cast<size_t>(labels.at<int>(y, x))])
+        m.at<uint8_t>(y, x) = 255;
+  // Small blobs.
+  cv::Mat stats, cents;
+  const int k = cv::connectedComponentsWithStats(m, labels, stats, cents, 8, CV_32S);
+  const double min_px = o.min_area * static_cast<double>(m.total());
+  for (int y = 0; y < m.rows; ++y)
+    for (int x = 0; x < m.cols; ++x) {
+      const int l = labels.at<int>(y, x);
+      if (l > 0 && l < k && stats.at<int>(l, cv::CC_STAT_AREA) < min_px) m.at<uint8_t>(y, x) = 0;
+    }
+  return m;
+}
+
+}  // namespace mvtm

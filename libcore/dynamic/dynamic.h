@@ -1,0 +1,106 @@
+// mvtm — what is not the static road, without labels: per-pixel evidence from the photographs
+// of one drive and the static reconstruction (issue 21; dynmask).
+//
+// The method. A static surface point seen by the target photo at pixel p with the
+// reconstruction's depth z(p) projects into a neighbouring photo j at q = π_j(X(p)); for a static
+// scene, the photo's colour at p and j's at q agree (up to exposure and sampling), and the image
+// motion between the target and j, once j is warped into the target through the static depth, is
+// zero. A vehicle (or a cyclist, a pedestrian) moves between the exposures: at its pixels the
+// warped neighbour shows something else (the road it was covering, or another part of it), and
+// the residual motion is its own motion. Per neighbour j:
+//  * Warp: j's luma resampled at q (bilinear) for each target pixel with finite depth; a
+//    pixel is not valid for j when X is behind j, q falls outside j's image, or j's own static
+//    depth at q is nearer than X by more than depth_tolerance · z (X is hidden in j), or j's own
+//    first-pass probability at q is 0.5 or more (X is hidden in j by something that moves: the
+//    road a vehicle covers in j is not evidence against this photo's road).
+//  * Exposure: j's warped luma times the gain exp(median(log target − log warped)) over the
+//    valid pixels (a camera's auto exposure changes between photos).
+//  * Photometric residual: the distance of the target's luma to the interval [min, max] of the
+//    gained warp over (2·slack+1)² pixels around p (Birchfield–Tomasi: a misalignment of up to
+//    `slack` pixels, from pose or depth error, costs nothing at edges), averaged over a
+//    window × window box (valid pixels only).
+//  * Flow residual (optional): the length of DIS optical flow (OpenCV, coarse to fine) from the
+//    target to the warp (invalid warp pixels replaced by the target's own, so they do not move),
+//    in pixels: a vehicle moving with the camera keeps its place in the photos, but not in the
+//    warp through the static depth behind it.
+// Each pixel's residuals over its valid neighbours are reduced to their `quantile` (0: the
+// smallest, the default: a static pixel needs one neighbour that agrees, so a vehicle passing
+// over the road in some neighbours does not mask the road in this photo; a vehicle pixel must
+// disagree with every neighbour). The pixel's probability of "not static" is then max over the
+// cues of a logistic in residual / threshold (0.5 at the threshold, 0.05 at 0.4×, 0.95 at 1.6×);
+// a pixel without depth (sky, or no reconstruction there) or seen by no neighbour has no
+// evidence: probability 0.
+// Regions: a uniform vehicle body agrees with a warp that shows the same paint elsewhere, and
+// only its outline and windows disagree. So evidence is weighed by texture (the local mean luma
+// gradient / `texture`, at most 1: a textureless pixel tells nothing) and spread over the
+// target's regions (Felzenszwalb–Huttenlocher graph segmentation of the colour image, OpenCV
+// ximgproc, k = `segments`): a region's probability is the texture-weighted mean of its pixels'
+// when their weight sums to at least 5 % of its area, and each pixel with depth takes
+// weight·own + (1 − weight)·region's. Pixels without depth stay at 0 whatever their region.
+//
+// Conventions: cameras are undistorted (PINHOLE), of the image's size; poses COLMAP's
+// world-to-camera; luma float 0..1; depth float linear camera-space z, +inf/NaN/≤0 = none.
+// Pixel centres at +0.5 (COLMAP). Lengths are relative (depth tolerance) or in pixels of the
+// images given (slack, window): the caller picks the working resolution. Everything is invariant
+// under similarity transforms of the world.
+// Thread safety: pure functions (OpenCV's thread pool inside).
+#pragma once
+
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "camera/camera.h"
+#include "geometry/rigid.h"
+
+namespace mvtm {
+
+struct DynamicView {
+  Camera camera;            // undistorted, of grey's and depth's size
+  Rigid3d world_to_camera;  // pose of record
+  cv::Mat grey;             // CV_32F luma 0..1
+  cv::Mat depth;            // CV_32F linear z of the static reconstruction; inf/NaN/<=0: none
+  cv::Mat colour;           // CV_8UC3 of the same size for the segmentation, or empty (luma)
+  cv::Mat dynamic;          // CV_32F: this view's own probability from a first pass, or empty
+};
+
+struct DynamicOptions {
+  double threshold = 0.05;        // photometric residual (luma 0..1) at which p = 0.5, > 0
+  bool flow = true;               // also the flow residual
+  double flow_threshold = 2.5;    // flow residual in pixels (DIS's noise is ~1 px) at p = 0.5
+  double quantile = 0;            // of the residuals over the neighbours, in [0, 1]; 0: min
+  double depth_tolerance = 0.05;  // relative: occlusion test in the neighbour, in (0, 1)
+  int slack = 1;                  // pixels of misalignment forgiven, 0..5
+  int window = 5;                 // box averaging the photometric residual, odd, 1..31
+  double segments = 300;          // Felzenszwalb's k for the regions evidence spreads over; 0 off
+  double texture = 0.02;          // luma gradient (per pixel) at which a pixel's evidence is full
+
+  void Check() const;  // throws UsageError naming the option
+};
+
+struct DynamicEvidence {
+  cv::Mat probability;  // CV_32F 0..1: "not static"
+  cv::Mat photometric;  // CV_32F: the reduced photometric residual, NaN where no evidence
+  cv::Mat flow;         // CV_32F: the reduced flow residual in pixels (empty when flow is off)
+  int neighbours = 0;   // neighbours that saw any of the target's pixels
+};
+
+// The target's evidence against `neighbours` (any number, even none: then all zero). Throws
+// Error when a view's images are not of its camera's size or type, or a camera is distorted.
+DynamicEvidence EstimateDynamic(const DynamicView& target,
+                                const std::vector<const DynamicView*>& neighbours,
+                                const DynamicOptions& options);
+
+struct MaskOptions {
+  double probability = 0.4;  // pixels at or above are "not static", in (0, 1)
+  int open = 1;              // radius of the opening that removes specks (pixels), 0..50
+  int close = 12;            // radius of the closing that joins a vehicle's parts, 0..50
+  double min_area = 2e-4;    // blobs smaller than this share of the image are dropped, [0, 1)
+
+  void Check() const;
+};
+
+// Binary mask (CV_8U, 255 = not static) from a probability map: threshold, opening, closing,
+// holes filled (a region enclosed by the mask is the vehicle's body), small blobs dropped.
+cv::Mat MaskFromProbability(const cv::Mat& probability, const MaskOptions& options);
+
+}  // namespace mvtm

@@ -1,0 +1,494 @@
+#include "dynmask.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <memory>
+#include <opencv2/imgproc.hpp>
+
+#include "base/atomic_file.h"
+#include "base/error.h"
+#include "cli/progress.h"
+#include "image/image.h"
+#include "io/colmap_model.h"
+#include "io/mesh_io.h"
+#include "io/tracks.h"
+#include "raycast/mesh_raycaster.h"
+#include "run/ledger.h"
+#include "stereo/neighbours.h"
+#include "workspace/workspace.h"
+
+namespace mvtm {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// The options that turn probability maps into tracked masks.
+void DeclareMaskOptions(OptionTable& t, DynmaskOptions& o) {
+  t.Real("--probability", &o.mask.probability, "Probability at or above which a pixel is masked")
+      .Range(0, 1, true, true)
+      .Alternative("0.7");
+  t.Integer("--open", &o.mask.open, "Opening radius (working pixels): removes specks").Range(0, 50);
+  t.Integer("--close", &o.mask.close, "Closing radius (working pixels): joins a vehicle's parts")
+      .Range(0, 50);
+  t.Real("--min-area", &o.mask.min_area, "Blobs below this share of the image are dropped")
+      .Range(0, 1, false, true);
+  t.Real("--max-jump", &o.track.max_jump,
+         "Tracking: largest distance from a track's predicted centroid to its blob (pixels; "
+         "0: a quarter of the image width)")
+      .AtLeast(0);
+  t.Integer("--max-missed", &o.track.max_missed, "A track ends after N frames without a blob")
+      .AtLeast(1);
+  t.Integer("--max-gap", &o.track.max_gap, "Fill gaps of at most G missed frames").AtLeast(0);
+  t.Real("--smooth", &o.track.smooth, "Gaussian sigma in frames for centroid and size (0: off)")
+      .AtLeast(0);
+  t.Integer("--min-life", &o.track.min_life, "Reject tracks spanning fewer than N frames")
+      .AtLeast(1);
+  t.Real("--min-ratio", &o.track.min_ratio, "Reject tracks detected in less than this share")
+      .Range(0, 1);
+  t.Integer("--dilate", &o.track.dilate, "Dilate the masks by a disk of radius PX (full size)")
+      .Range(0, 1000);
+  t.Text("--also", &o.also, "Folder of masks (NAME.png) OR-ed into every output mask").Dir();
+}
+
+}  // namespace
+
+OptionTable DeclareOptions(DynmaskOptions& o) {
+  OptionTable t("dynmask");
+  t.Positional("WS", &o.workspace, "Workspace folder (sparse/, images/, mesh.ply or stereo/)")
+      .Dir();
+  t.Integer("--max-width", &o.max_width,
+            "Working resolution: images wider than W pixels are scaled down to W (64..16384)")
+      .Range(64, 16384)
+      .Alternative("1241");
+  t.Integer("--neighbours", &o.neighbours, "Photos of the same drive each photo is checked against")
+      .Range(1, 16)
+      .Alternative("2");
+  t.Real("--min-baseline", &o.min_baseline,
+         "Nearest neighbour allowed, in median camera spacings (larger: more parallax)")
+      .Range(0, 10)
+      .Alternative("1.5");
+  t.Integer("--passes", &o.passes,
+            "2: a second pass leaves out the neighbours' pixels their own first pass finds "
+            "moving (the road a vehicle covers there); 1: one pass")
+      .Range(1, 2);
+  t.Choice("--depth", &o.depth,
+           {{DepthSource::kAuto, "auto"},
+            {DepthSource::kMesh, "mesh"},
+            {DepthSource::kStereo, "stereo"}},
+           "Static depth: the mesh ray-cast, densify's maps, or auto (the mesh, else the maps)");
+  t.Real("--threshold", &o.evidence.threshold,
+         "Photometric residual (luma 0..1) at which a pixel is 50 % not static")
+      .Above(0)
+      .Alternative("0.08");
+  t.Flag("--no-flow", &o.no_flow, "Photometric evidence only (no optical flow against the warp)");
+  t.Real("--flow-threshold", &o.evidence.flow_threshold,
+         "Residual flow (working pixels) at which a pixel is 50 % not static")
+      .Above(0)
+      .Alternative("4");
+  t.Real("--quantile", &o.evidence.quantile,
+         "Quantile of the residuals over the neighbours (0: the smallest; 0.5: the median)")
+      .Range(0, 1)
+      .Alternative("0.25");
+  t.Real("--depth-tolerance", &o.evidence.depth_tolerance,
+         "Relative depth difference that hides a point in a neighbour")
+      .Range(0, 1, true, true);
+  t.Integer("--slack", &o.evidence.slack, "Misalignment forgiven, working pixels").Range(0, 5);
+  t.Integer("--window", &o.evidence.window, "Box averaging the photometric residual (odd)")
+      .Range(1, 31)
+      .Check([&o] {
+        if (o.evidence.window % 2 == 0) throw UsageError("--window: must be odd, 1..31");
+      });
+  t.Real("--segments", &o.evidence.segments,
+         "Regions evidence spreads over: Felzenszwalb's k (larger: larger regions; 0: off)")
+      .AtLeast(0)
+      .Alternative("0");
+  t.Real("--texture", &o.evidence.texture,
+         "Luma gradient per pixel at which a pixel's own evidence counts fully")
+      .Above(0);
+  DeclareMaskOptions(t, o);
+  DeclareWorkOptions(t, o, "images", "in name order",
+                     "Recompute probability maps and masks even when they are up to date");
+  return t;
+}
+
+void DynmaskOptions::Check() const {
+  CheckDeclared(*this);
+  evidence.Check();
+  mask.Check();
+  TrackOptions t = track;
+  if (t.max_jump == 0) t.max_jump = 1;  // resolved per drive from the image width
+  t.Check();
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// The model, its images by name, their drives (the name before the first '_') and working
+// cameras.
+struct Scene {
+  Reconstruction rec;
+  std::vector<const ImageRecord*> images;
+  std::vector<Camera> full, work;
+  std::vector<std::string> pass;
+};
+
+Scene LoadScene(const Workspace& ws, int max_width) {
+  Scene s;
+  s.rec = ReadColmapModel(ws.SparseDir().string());
+  s.images = s.rec.ImagesByName();
+  for (const ImageRecord* im : s.images) {
+    const Camera& c = s.rec.cameras.at(im->camera_id);
+    c.RequireUndistorted();
+    s.full.push_back(c);
+    const double f = std::min(1.0, double(max_width) / double(c.width));
+    s.work.push_back(f == 1.0
+                         ? c
+                         : c.Scaled(std::max<uint64_t>(8, uint64_t(std::lround(c.width * f))),
+                                    std::max<uint64_t>(8, uint64_t(std::lround(c.height * f)))));
+    const size_t u = im->name.find('_');
+    s.pass.push_back(u == std::string::npos ? std::string() : im->name.substr(0, u));
+  }
+  return s;
+}
+
+// Neighbours of every image among the images of its own drive (stereo/neighbours.h's choice:
+// nearest centres on both sides, enough baseline, similar viewing direction).
+std::vector<std::vector<size_t>> ChooseNeighbours(const Scene& s, int count, double min_base) {
+  std::map<std::string, std::vector<size_t>> drives;
+  for (size_t i = 0; i < s.images.size(); ++i) drives[s.pass[i]].push_back(i);
+  std::vector<std::vector<size_t>> out(s.images.size());
+  NeighbourOptions no;
+  no.count = count;
+  no.min_baseline = min_base;
+  for (const auto& [name, idx] : drives) {
+    std::vector<Rigid3d> w2c;
+    std::vector<Camera> cams;
+    for (size_t i : idx) w2c.push_back(s.images[i]->world_to_camera), cams.push_back(s.work[i]);
+    if (idx.size() < 2) continue;
+    const StereoNeighbourFinder finder(w2c, cams, no);
+    for (size_t k = 0; k < idx.size(); ++k)
+      for (size_t j : finder.Select(k, {})) out[idx[k]].push_back(idx[j]);
+  }
+  return out;
+}
+
+// Static depth of one image at its working size.
+class DepthProvider {
+ public:
+  DepthProvider(const Workspace& ws, DepthSource src) : ws_(ws) {
+    const bool mesh = fs::exists(ws.MeshPath()), stereo = fs::is_directory(ws.StereoDir());
+    use_mesh_ = src == DepthSource::kMesh || (src == DepthSource::kAuto && mesh);
+    if (use_mesh_) {
+      ws.Require("dynmask", {WsItem::kMesh});
+      caster_ = std::make_unique<MeshRaycaster>(ReadMesh(ws.MeshPath().string()));
+      return;
+    }
+    if (src == DepthSource::kAuto && !stereo)
+      throw Error(ws.root().string() +
+                  ": no static depth: neither a mesh (run roadmesh) nor stereo/ (run densify)");
+    ws.Require("dynmask", {WsItem::kStereo});
+  }
+  std::string Name() const { return use_mesh_ ? "mesh (ray-cast)" : "stereo/ (densify)"; }
+  fs::path Input(const std::string& name) const {
+    return use_mesh_ ? ws_.MeshPath() : ws_.StereoDepthPath(name);
+  }
+  cv::Mat Depth(const Camera& cam, const Rigid3d& w2c, const std::string& name) const;
+
+ private:
+  const Workspace& ws_;
+  bool use_mesh_ = false;
+  std::unique_ptr<MeshRaycaster> caster_;
+};
+
+cv::Mat DepthProvider::Depth(const Camera& cam, const Rigid3d& w2c, const std::string& name) const {
+  const int w = int(cam.width), h = int(cam.height);
+  cv::Mat z(h, w, CV_32F, std::numeric_limits<float>::infinity());
+  if (!use_mesh_) {
+    const fs::path p = ws_.StereoDepthPath(name);
+    if (!fs::exists(p)) return z;  // densify made no map for it: no evidence
+    const Image d = ReadImage(p.string());
+    if (d.channels != 1) throw Error(p.string() + ": depth must have one channel");
+    cv::Mat m(d.height, d.width, CV_32F, const_cast<float*>(d.data.data()));
+    cv::resize(m, z, {w, h}, 0, 0, cv::INTER_NEAREST);
+    return z;
+  }
+  const Eigen::Matrix3d Rt = w2c.R().transpose();
+  const Eigen::Vector3d c = w2c.Centre();
+  cv::parallel_for_(cv::Range(0, h), [&](const cv::Range& rows) {
+    for (int y = rows.start; y < rows.end; ++y)
+      for (int x = 0; x < w; ++x) {
+        const Eigen::Vector3d dir = Rt * Eigen::Vector3d((x + 0.5 - cam.cx()) / cam.fx(),
+                                                         (y + 0.5 - cam.cy()) / cam.fy(), 1);
+        if (auto hit = caster_->Closest(c, dir)) z.at<float>(y, x) = float(hit->t);  // t = z
+      }
+  });
+  return z;
+}
+
+// Luma 0..1 and 8-bit RGB at the working size.
+void LoadPhoto(const fs::path& path, const Camera& full, const Camera& work, cv::Mat& luma,
+               cv::Mat& rgb) {
+  const Image colour = ReadImage(path.string());
+  RequireImageSize(colour, path.string(), full.width, full.height);
+  const Image g = ToGrey(colour);
+  const cv::Size size(int(work.width), int(work.height));
+  cv::Mat(g.height, g.width, CV_32F, const_cast<float*>(g.data.data()))
+      .convertTo(luma, CV_32F, 1.0 / g.MaxValue());
+  if (luma.size() != size) cv::resize(luma, luma, size, 0, 0, cv::INTER_AREA);
+  const int c = colour.channels;
+  cv::Mat rgbf(colour.height, colour.width, CV_32FC3);
+  for (int y = 0; y < colour.height; ++y)
+    for (int x = 0; x < colour.width; ++x)
+      for (int k = 0; k < 3; ++k) rgbf.at<cv::Vec3f>(y, x)[k] = colour.at(x, y, c >= 3 ? k : 0);
+  rgbf.convertTo(rgb, CV_8UC3, 255.0 / colour.MaxValue());
+  if (rgb.size() != size) cv::resize(rgb, rgb, size, 0, 0, cv::INTER_AREA);
+}
+
+// The views one run needs, loaded once each (an image is the neighbour of several).
+class ViewCache {
+ public:
+  ViewCache(const Workspace& ws, const Scene& s, const DepthProvider& d) : ws_(ws), s_(s), d_(d) {}
+  const DynamicView& Get(size_t i) {
+    auto it = views_.find(i);
+    if (it != views_.end()) return it->second;
+    const std::string& name = s_.images[i]->name;
+    DynamicView v;
+    v.camera = s_.work[i];
+    v.world_to_camera = s_.images[i]->world_to_camera;
+    v.depth = d_.Depth(s_.work[i], s_.images[i]->world_to_camera, name);
+    LoadPhoto(ws_.ImagePath(name), s_.full[i], s_.work[i], v.grey, v.colour);
+    return views_.emplace(i, std::move(v)).first->second;
+  }
+  // Forgets views of images before `i` that no later image needs (images go in name order).
+  void Drop(size_t below) {
+    for (auto it = views_.begin(); it != views_.end();)
+      it = it->first + 32 < below ? views_.erase(it) : std::next(it);
+  }
+
+ private:
+  const Workspace& ws_;
+  const Scene& s_;
+  const DepthProvider& d_;
+  std::map<size_t, DynamicView> views_;
+};
+
+// Writes one probability map (8-bit, 255 = surely not static) atomically.
+void WriteProbability(const fs::path& path, const cv::Mat& p) {
+  Image out(p.cols, p.rows, 1, 8);
+  for (int y = 0; y < p.rows; ++y)
+    for (int x = 0; x < p.cols; ++x)
+      out.data[size_t(y) * size_t(p.cols) + size_t(x)] =
+          std::round(std::clamp(p.at<float>(y, x), 0.f, 1.f) * 255.f);
+  WriteImage(path.string(), out, PngCompression::kFast);
+}
+
+}  // namespace
+
+}  // namespace mvtm
+
+namespace mvtm {
+
+namespace {
+
+struct Job {
+  size_t i = 0;
+  std::vector<fs::path> in;  // the files its map is made from beyond the model
+};
+
+// The selected images whose probability map is stale.
+std::vector<Job> StaleMaps(const DynmaskOptions& o, const Workspace& ws, const Scene& s,
+                           const std::vector<std::vector<size_t>>& nbs, const DepthProvider& d,
+                           Ledger& ledger, DynmaskReport& rep) {
+  std::vector<Job> todo;
+  for (size_t i : o.Select().Apply(s.images.size())) {
+    Job job{i, {ws.ImagePath(s.images[i]->name), d.Input(s.images[i]->name)}};
+    for (size_t j : nbs[i]) {
+      job.in.push_back(ws.ImagePath(s.images[j]->name));
+      job.in.push_back(d.Input(s.images[j]->name));
+      if (o.passes == 2)  // the neighbour's first pass reads its own neighbours
+        for (size_t k : nbs[j]) {
+          job.in.push_back(ws.ImagePath(s.images[k]->name));
+          job.in.push_back(d.Input(s.images[k]->name));
+        }
+    }
+    std::sort(job.in.begin(), job.in.end());
+    job.in.erase(std::unique(job.in.begin(), job.in.end()), job.in.end());
+    if (ledger.Stale(ws.DynamicPath(s.images[i]->name), job.in, o.force).empty())
+      ++rep.skipped;
+    else
+      todo.push_back(std::move(job));
+  }
+  return todo;
+}
+
+void ComputeMaps(const DynmaskOptions& o, const Workspace& ws, const Scene& s,
+                 const std::vector<std::vector<size_t>>& nbs, const DepthProvider& d,
+                 const std::vector<Job>& todo, Ledger& ledger, DynmaskReport& rep) {
+  CreateFolder(ws.DynamicDir());
+  ViewCache cache(ws, s, d);
+  DynamicOptions ev = o.evidence;
+  ev.flow = !o.no_flow;
+  Progress bar("dynmask", todo.size(), o.quiet);
+  const auto t0 = Clock::now();
+  std::map<size_t, cv::Mat> first;  // first-pass probabilities of the neighbours
+  const auto first_pass = [&](size_t j) -> const cv::Mat& {
+    auto it = first.find(j);
+    if (it != first.end()) return it->second;
+    std::vector<const DynamicView*> views;
+    for (size_t k : nbs[j]) views.push_back(&cache.Get(k));
+    return first.emplace(j, EstimateDynamic(cache.Get(j), views, ev).probability).first->second;
+  };
+  for (const Job& job : todo) {
+    cache.Drop(job.i);
+    for (auto it = first.begin(); it != first.end();)
+      it = it->first + 32 < job.i ? first.erase(it) : std::next(it);
+    std::vector<DynamicView> nv;
+    for (size_t j : nbs[job.i]) {
+      nv.push_back(cache.Get(j));  // Mat headers: no pixel copies
+      if (o.passes == 2) nv.back().dynamic = first_pass(j);
+    }
+    std::vector<const DynamicView*> views;
+    for (const DynamicView& v : nv) views.push_back(&v);
+    const DynamicEvidence e = EstimateDynamic(cache.Get(job.i), views, ev);
+    if (e.neighbours == 0) ++rep.no_neighbours;
+    const fs::path out = ws.DynamicPath(s.images[job.i]->name);
+    CreateFolder(out.parent_path());
+    WriteProbability(out, e.probability);
+    ledger.Done(out, job.in);
+    ++rep.written;
+    bar.Step();
+  }
+  if (rep.written)
+    rep.ms_per_image =
+        std::chrono::duration<double, std::milli>(Clock::now() - t0).count() / double(rep.written);
+}
+
+// One image's mask from its probability map, at the image's full size.
+cv::Mat MaskOf(const Workspace& ws, const Scene& s, size_t i, const MaskOptions& mo) {
+  const fs::path p = ws.DynamicPath(s.images[i]->name);
+  const Image im = ReadImage(p.string());
+  RequireImageSize(im, p.string(), s.work[i].width, s.work[i].height);
+  cv::Mat prob(im.height, im.width, CV_32F);
+  for (int y = 0; y < im.height; ++y)
+    for (int x = 0; x < im.width; ++x)
+      prob.at<float>(y, x) =
+          float(im.data[(size_t(y) * size_t(im.width) + size_t(x)) * size_t(im.channels)] /
+                im.MaxValue());
+  cv::Mat m = MaskFromProbability(prob, mo), full;
+  cv::resize(m, full, cv::Size(int(s.full[i].width), int(s.full[i].height)), 0, 0,
+             cv::INTER_NEAREST);
+  return full;
+}
+
+// ORs the mask DIR/STEM.png (any non-zero channel) into `out` (w×h bytes).
+void OrAlso(const std::string& dir, const std::string& name, const Camera& cam,
+            std::vector<uint8_t>& out) {
+  const fs::path p = fs::path(dir) / (fs::path(name).replace_extension(".png"));
+  if (!fs::exists(p)) return;
+  const Image m = ReadImage(p.string());
+  RequireImageSize(m, p.string(), cam.width, cam.height);
+  for (size_t k = 0; k < out.size(); ++k)
+    for (int c = 0; c < m.channels; ++c)
+      if (m.data[k * size_t(m.channels) + size_t(c)] != 0) out[k] = 255;
+}
+
+// Tracks each drive's blobs and writes every mask and tracks.tsv.
+void WriteMasks(const DynmaskOptions& o, const Workspace& ws, const Scene& s, Ledger& ledger,
+                DynmaskReport& rep) {
+  std::map<std::string, std::vector<size_t>> drives;
+  for (size_t i = 0; i < s.images.size(); ++i) drives[s.pass[i]].push_back(i);
+  CreateFolder(ws.MasksDir());
+  std::vector<TracksTsvRow> rows;
+  Progress bar("dynmask masks", s.images.size(), o.quiet);
+  double share = 0;
+  int id_base = 0;
+  for (const auto& [pass, idx] : drives) {
+    const Camera& c0 = s.full[idx[0]];
+    TrackOptions to = o.track;
+    if (to.max_jump == 0) to.max_jump = 0.25 * double(c0.width);
+    Tracker tracker(int(c0.width), int(c0.height), to);
+    for (size_t i : idx) {
+      if (s.full[i].width != c0.width || s.full[i].height != c0.height)
+        throw Error(ws.ImagePath(s.images[i]->name).string() +
+                    ": every image of a drive must have one size to be tracked");
+      tracker.AddFrame(MaskOf(ws, s, i, o.mask).data);
+    }
+    const TrackResult res = tracker.Finish();
+    std::vector<uint8_t> mask;
+    Image out(res.width, res.height, 1, 8);
+    for (size_t k = 0; k < idx.size(); ++k) {
+      res.RenderMask(int(k), o.track.dilate, mask);
+      if (!o.also.empty()) OrAlso(o.also, s.images[idx[k]]->name, c0, mask);
+      std::copy(mask.begin(), mask.end(), out.data.begin());
+      share += double(std::count(mask.begin(), mask.end(), 255)) / double(mask.size());
+      const fs::path path = ws.MaskPath(s.images[idx[k]]->name);
+      CreateFolder(path.parent_path());
+      WriteImage(path.string(), out, PngCompression::kFast);
+      ledger.Done(path);
+      ++rep.masks_written;
+      bar.Step();
+    }
+    for (TrackRow r : res.rows) {
+      const std::string& name = s.images[idx[size_t(r.frame)]]->name;
+      r.track += id_base;
+      rows.push_back({name, r});
+    }
+    id_base += res.summary.tracks;
+    const TrackSummary& t = res.summary;
+    rep.summary.frames += t.frames, rep.summary.tracks += t.tracks, rep.summary.kept += t.kept;
+    rep.summary.rejected += t.rejected, rep.summary.detected += t.detected;
+    rep.summary.interpolated += t.interpolated, rep.summary.rejected_blobs += t.rejected_blobs;
+    rep.summary.unfilled_gaps += t.unfilled_gaps;
+  }
+  WriteTracksTsv(ws.TracksPath().string(), rows);
+  ledger.Done(ws.TracksPath());
+  rep.masked = true;
+  rep.masked_share = share / double(s.images.size());
+}
+
+// The masks (and tracks.tsv) are stale when any is: tracking couples every frame.
+bool MasksStale(const DynmaskOptions& o, const Workspace& ws, const Scene& s, Ledger& ledger) {
+  std::vector<fs::path> maps;
+  for (const ImageRecord* im : s.images) maps.push_back(ws.DynamicPath(im->name));
+  if (!o.also.empty())
+    for (const ImageRecord* im : s.images) {
+      const fs::path p = fs::path(o.also) / fs::path(im->name).replace_extension(".png");
+      if (fs::exists(p)) maps.push_back(p);
+    }
+  bool stale = !ledger.Stale(ws.TracksPath(), maps, o.force).empty();
+  for (const ImageRecord* im : s.images)
+    stale = !ledger.Stale(ws.MaskPath(im->name), maps, o.force).empty() || stale;
+  return stale;
+}
+
+}  // namespace
+
+DynmaskReport RunDynmask(const DynmaskOptions& o) {
+  o.Check();
+  const Workspace ws(o.workspace);
+  ws.Require("dynmask", {WsItem::kSparse, WsItem::kImages});
+  const DepthProvider depth(ws, o.depth);
+  const Scene s = LoadScene(ws, o.max_width);
+  const auto nbs = ChooseNeighbours(s, o.neighbours, o.min_baseline);
+  DynmaskReport rep;
+  rep.images = s.images.size();
+  rep.depth_source = depth.Name();
+  DynmaskOptions resolved = o;
+  const OptionTable table = DeclareOptions(resolved);
+  Ledger ledger(ws.root(), o.ProvenanceName("dynmask"), table, ws.SparseModelFiles(), ws.root());
+  const std::vector<Job> todo = StaleMaps(o, ws, s, nbs, depth, ledger, rep);
+  RemoveStaleTemporaries(ws.DynamicDir());
+  RemoveStaleTemporaries(ws.MasksDir());
+  if (!todo.empty()) ComputeMaps(o, ws, s, nbs, depth, todo, ledger, rep);
+  const bool whole = o.frames.empty() && o.shard.empty();
+  if (whole && MasksStale(o, ws, s, ledger)) WriteMasks(o, ws, s, ledger, rep);
+  rep.why = ledger.Summary();
+  ledger.Write();
+  return rep;
+}
+
+}  // namespace mvtm

@@ -1,0 +1,55 @@
+// dynmask — vehicles, cyclists and pedestrians masked without labels: each photo checked against
+// its neighbours of the same drive warped through the static reconstruction (libcore/dynamic),
+// the evidence turned into blobs and tracked as segtrack tracks labels (libcore/track).
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+#include "cli/work.h"
+#include "dynamic/dynamic.h"
+#include "run/option_table.h"
+#include "track/tracker.h"
+
+namespace mvtm {
+
+enum class DepthSource { kAuto, kMesh, kStereo };
+
+// Work items: the workspace's images sorted by name (--frames/--shard select the probability
+// maps computed; the masks, which tracking couples, are made by a run without them).
+struct DynmaskOptions : WorkOptions {
+  std::string workspace;
+  int max_width = 640;         // working resolution: images wider are scaled down to this
+  int neighbours = 4;          // photos of the same drive each photo is checked against
+  double min_baseline = 0.25;  // nearest neighbour allowed, in median camera spacings
+  DepthSource depth = DepthSource::kAuto;  // auto: the mesh, else densify's maps
+  bool no_flow = false;                    // --no-flow: photometric evidence only
+  int passes = 2;  // 2: neighbours' pixels that their own first pass finds moving are left out
+  DynamicOptions evidence;  // --threshold, --flow/--no-flow, --quantile, ...
+  MaskOptions mask;         // --probability, --open, --close, --min-area
+  TrackOptions track;       // segtrack's tracking options; max_jump 0: a quarter width
+  std::string also;         // folder of masks OR-ed into the output (e.g. a video overlay)
+
+  DynmaskOptions() { track.max_jump = 0; }
+  void Check() const;
+};
+
+OptionTable DeclareOptions(DynmaskOptions& o);
+
+struct DynmaskReport {
+  size_t images = 0, written = 0, skipped = 0;  // probability maps
+  size_t no_neighbours = 0;                     // images checked against no photo
+  bool masked = false;                          // masks and tracks.tsv were (re)made
+  size_t masks_written = 0;
+  TrackSummary summary;
+  double masked_share = 0;  // mean share of the image masked
+  double ms_per_image = 0;  // evidence time per map written
+  std::string depth_source;
+  std::string why;
+};
+
+// Writes WS/dynamic/NAME.png for the selected images that are stale, then (without --frames or
+// --shard) WS/masks/NAME.png and WS/tracks.tsv from every image's map. Throws Error/UsageError.
+DynmaskReport RunDynmask(const DynmaskOptions& options);
+
+}  // namespace mvtm

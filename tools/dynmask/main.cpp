@@ -1,0 +1,47 @@
+// dynmask — thin main: the declared option table, then RunDynmask().
+#include <cstdio>
+
+#include "cli/app.h"
+#include "cli/options.h"
+#include "dynmask.h"
+
+namespace {
+
+constexpr const char* kAbout =
+    "Mask what is not the static road (vehicles, cyclists, pedestrians) without labels: each "
+    "photo against its neighbours of the same drive warped through the static depth (photometric "
+    "and optical-flow residuals), as a probability map (dynamic/NAME.png), then blobs tracked as "
+    "segtrack tracks labels (masks/NAME.png, tracks.tsv).";
+
+// Runs the tool and prints its summary; the exit status.
+int RunAndReport(mvtm::DynmaskOptions& o) {
+  const auto r = mvtm::RunDynmask(o);
+  if (o.quiet) return 0;
+  std::fprintf(stderr, "dynmask: %zu probability maps written, %zu up to date (depth: %s)",
+               r.written, r.skipped, r.depth_source.c_str());
+  if (r.written) std::fprintf(stderr, " (%.0f ms per image)", r.ms_per_image);
+  if (r.no_neighbours)
+    std::fprintf(stderr, "; %zu images had no neighbour (nothing masked)", r.no_neighbours);
+  if (r.masked) {
+    const auto& t = r.summary;
+    std::fprintf(stderr,
+                 "; masks: %zu written, %.2f %% of the image masked on average; %d tracks (%d "
+                 "kept, %d rejected)",
+                 r.masks_written, 100 * r.masked_share, t.tracks, t.kept, t.rejected);
+  } else if (!o.frames.empty() || !o.shard.empty()) {
+    std::fprintf(stderr, "; masks not made (a run without --frames/--shard makes them)");
+  } else {
+    std::fprintf(stderr, "; masks up to date");
+  }
+  if (!r.why.empty()) std::fprintf(stderr, " [%s]", r.why.c_str());
+  std::fprintf(stderr, "\n");
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  mvtm::DynmaskOptions o;
+  return mvtm::RunTool(mvtm::DeclareOptions(o), kAbout, argc, argv,
+                       [&] { return RunAndReport(o); });
+}
