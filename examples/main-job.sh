@@ -11,7 +11,8 @@
 # 5. ptmrender  every recorded pose rendered from the *other* images (held out): vertex colours,
 #               PTM with the vehicles projected, PTM with masks; then inpaint3d removes the
 #               vehicles from the photographs and PTM renders again; and a 1.5 m lane change
-#               ... and once more on a mesh built from the photos (densify + roadmesh --dense,
+#               ... with label-free masks (dynmask: the photos checked against each other, no
+#               labels) + inpaint3d, and once more on a mesh built from the photos (densify + roadmesh --dense,
 #               as a user without the fixture's true mesh would: workspace OUTDIR/photo_mesh)
 # 6. ssim       the photo-consistency table of the held-out renders against the truth
 # 7. drive      a car steered from a steering log (examples/steer-controls.awk) through a lane
@@ -64,8 +65,18 @@ done
 "$bin/bakedepth" -q "$pm"
 "$bin/ptmrender" -q --at-images --exclude-self "$pm" "$out/heldout_ptm_photo_mesh"
 
+echo "== 5c. the same held-out renders with label-free masks (dynmask: no labels read)" >&2
+lf=$out/label_free
+mkdir -p "$lf"
+for item in images sparse mesh.ply partners.tsv depth; do
+  [ -e "$lf/$item" ] || ln -s "$ws/$item" "$lf/$item"
+done
+"$bin/dynmask" -q "$lf"
+"$bin/inpaint3d" -q "$lf"
+"$bin/ptmrender" -q --at-images --exclude-self "$lf" "$out/heldout_ptm_label_free"
+
 echo "== 6. ssim: held-out renders against the ray-traced truth (no vehicles)" >&2
-for r in vertex ptm_vehicles ptm_masks ptm ptm_photo_mesh; do
+for r in vertex ptm_vehicles ptm_masks ptm ptm_label_free ptm_photo_mesh; do
   "$bin/ssim" "$out/heldout_$r" "$ws/truth/background" > "$out/ssim_$r.tsv"
 done
 mean() { awk -F'\t' -v c="$2" '$1 == "mean" { print $c }' "$1"; }
@@ -78,6 +89,7 @@ row "vertex colours" "$out/ssim_vertex.tsv"
 row "PTM, vehicles projected" "$out/ssim_ptm_vehicles.tsv"
 row "PTM, segtrack masks" "$out/ssim_ptm_masks.tsv"
 row "PTM, masks + inpaint3d textures" "$out/ssim_ptm.tsv"
+row "PTM, label-free masks + inpaint3d" "$out/ssim_ptm_label_free.tsv"
 row "PTM, the same on the photos' mesh" "$out/ssim_ptm_photo_mesh.tsv"
 printf '\nlane change: %s frames in %s; effects plan in %s\n' "$(ls "$out/lane_left" | grep -c png)" "$out/lane_left" "$out/plan.json"
 

@@ -33,7 +33,8 @@ void CheckView(const DynamicView& v, const char* what) {
 }
 
 // Where each target pixel lands in `nb` (map_x, map_y; NaN when not valid there).
-void WarpMaps(const DynamicView& t, const DynamicView& nb, double tol, cv::Mat& mx, cv::Mat& my) {
+void WarpMaps(const DynamicView& t, const DynamicView& nb, double tol, cv::Mat& mx, cv::Mat& my,
+              cv::Mat& coarser) {
   const Rigid3d t2n = nb.world_to_camera * t.world_to_camera.Inverse();
   const Eigen::Matrix3d R = t2n.R();
   const Eigen::Vector3d tr = t2n.t;
@@ -42,6 +43,7 @@ void WarpMaps(const DynamicView& t, const DynamicView& nb, double tol, cv::Mat& 
   const int nw = nb.depth.cols, nh = nb.depth.rows;
   mx.create(t.depth.size(), CV_32F);
   my.create(t.depth.size(), CV_32F);
+  coarser = cv::Mat::zeros(t.depth.size(), CV_8U);
   cv::parallel_for_(cv::Range(0, t.depth.rows), [&](const cv::Range& rows) {
     for (int y = rows.start; y < rows.end; ++y) {
       const float* z = t.depth.ptr<float>(y);
@@ -62,7 +64,9 @@ void WarpMaps(const DynamicView& t, const DynamicView& nb, double tol, cv::Mat& 
         if (!nb.dynamic.empty() &&
             nb.dynamic.at<float>(std::min(nh - 1, static_cast<int>(v)),
                                  std::min(nw - 1, static_cast<int>(u))) >= 0.5f)
-          continue;                           // hidden in nb by something that moves
+          continue;  // hidden in nb by something that moves
+        // The neighbour sees the point from farther (with fewer pixels, per focal length).
+        if (q.z() / gx > 1.25 * d / fx) coarser.at<uint8_t>(y, x) = 255;
         ox[x] = static_cast<float>(u - 0.5);  // remap's pixel centres are integers
         oy[x] = static_cast<float>(v - 0.5);
       }
@@ -89,7 +93,7 @@ double ExposureGain(const cv::Mat& target, const cv::Mat& warp) {
 
 // Photometric residual of one neighbour (NaN where not valid), see the header.
 cv::Mat Photometric(const cv::Mat& target, const cv::Mat& warp, const cv::Mat& valid,
-                    const DynamicOptions& o) {
+                    const cv::Mat& coarser, const DynamicOptions& o) {
   const cv::Mat k = cv::getStructuringElement(cv::MORPH_RECT, {2 * o.slack + 1, 2 * o.slack + 1});
   cv::Mat lo_in = warp.clone(), hi_in = warp.clone();
   lo_in.setTo(2.0, ~valid);  // invalid pixels never set a bound
@@ -97,7 +101,13 @@ cv::Mat Photometric(const cv::Mat& target, const cv::Mat& warp, const cv::Mat& v
   cv::Mat lo, hi;
   cv::erode(lo_in, lo, k);
   cv::dilate(hi_in, hi, k);
-  const cv::Mat above = target - hi, below = lo - target;
+  // Where the neighbour saw the surface coarser than the target (from farther), its warp is a
+  // blurred copy: the target blurred alike is compared, so detail the neighbour could not
+  // resolve is not a difference.
+  cv::Mat tb = target.clone(), blurred;
+  cv::GaussianBlur(target, blurred, {0, 0}, 1.0);
+  blurred.copyTo(tb, coarser);
+  const cv::Mat above = tb - hi, below = lo - tb;
   cv::Mat d;
   cv::max(above, below, d);
   d = cv::max(d, 0.0);
@@ -124,6 +134,13 @@ cv::Mat FlowResidual(const cv::Mat& target, const cv::Mat& warp, const cv::Mat& 
   target.convertTo(a8, CV_8U, 255);
   filled.convertTo(b8, CV_8U, 255);
   cv::Ptr<cv::DISOpticalFlow> dis = cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_FAST);
+  // DIS's coarsest pyramid level holds 4 patches across; its finest level must not be coarser
+  // (OpenCV 4.6 crashes on small images otherwise), and an image too small for one level has no
+  // flow evidence.
+  const int coarsest = static_cast<int>(std::floor(
+      std::log2(std::max(target.cols, target.rows) / (4.0 * dis->getPatchSize())) + 0.5));
+  if (coarsest < 0) return cv::Mat(target.size(), CV_32F, kNaN);
+  dis->setFinestScale(std::min(dis->getFinestScale(), coarsest));
   dis->calc(a8, b8, flow);
   cv::Mat parts[2], mag;
   cv::split(flow, parts);
@@ -233,8 +250,8 @@ void MaskOptions::Check() const {
   if (!(probability > 0 && probability < 1))
     throw UsageError("--probability must be in (0, 1), got " + std::to_string(probability));
   if (open < 0 || open > 50) throw UsageError("--open must be 0..50, got " + std::to_string(open));
-  if (close < 0 || close > 50)
-    throw UsageError("--close must be 0..50, got " + std::to_string(close));
+  if (!(close >= 0 && close <= 0.2))
+    throw UsageError("--close must be in [0, 0.2], got " + std::to_string(close));
   if (!(min_area >= 0 && min_area < 1))
     throw UsageError("--min-area must be in [0, 1), got " + std::to_string(min_area));
 }
@@ -248,15 +265,15 @@ DynamicEvidence EstimateDynamic(const DynamicView& t,
   DynamicEvidence ev;
   for (const DynamicView* nb : neighbours) {
     CheckView(*nb, "neighbour view");
-    cv::Mat mx, my, warp;
-    WarpMaps(t, *nb, o.depth_tolerance, mx, my);
+    cv::Mat mx, my, warp, coarser;
+    WarpMaps(t, *nb, o.depth_tolerance, mx, my, coarser);
     const cv::Mat valid = mx == mx;  // not NaN
     if (cv::countNonZero(valid) == 0) continue;
     ++ev.neighbours;
     cv::remap(nb->grey, warp, mx, my, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
     warp.setTo(0, ~valid);
     warp *= ExposureGain(t.grey, warp);
-    photo.push_back(Photometric(t.grey, warp, valid, o));
+    photo.push_back(Photometric(t.grey, warp, valid, coarser, o));
     if (o.flow) flow.push_back(FlowResidual(t.grey, warp, valid));
   }
   ev.photometric = Reduce(photo, o.quantile, t.grey.size());
@@ -275,6 +292,64 @@ DynamicEvidence EstimateDynamic(const DynamicView& t,
   return ev;
 }
 
+namespace {
+
+// The static point of pixel (x, y) of `t` along `up` relative to the camera centre; NaN when the
+// pixel has no depth.
+double HeightOf(const DynamicView& t, const Eigen::Vector3d& up_cam, int x, int y) {
+  const float z = t.depth.at<float>(y, x);
+  if (!(z > 0) || !std::isfinite(z)) return std::numeric_limits<double>::quiet_NaN();
+  const Eigen::Vector3d p((x + 0.5 - t.camera.cx()) / t.camera.fx() * z,
+                          (y + 0.5 - t.camera.cy()) / t.camera.fy() * z, z);
+  return p.dot(up_cam);
+}
+
+}  // namespace
+
+int KeepGrounded(const DynamicView& t, const Eigen::Vector3d& up, double at, double tolerance,
+                 cv::Mat& probability) {
+  const Eigen::Vector3d up_cam = t.world_to_camera.R() * up;  // world direction in the camera
+  std::vector<double> road;
+  for (int y = t.depth.rows * 4 / 5; y < t.depth.rows; ++y)
+    for (int x = t.depth.cols / 4; x < t.depth.cols * 3 / 4; ++x) {
+      const double h = HeightOf(t, up_cam, x, y);
+      if (std::isfinite(h)) road.push_back(h);
+    }
+  if (road.size() < 16) return 0;
+  std::nth_element(road.begin(), road.begin() + long(road.size() / 2), road.end());
+  const double ground = road[road.size() / 2];  // negative: below the camera
+  if (!(ground < 0)) return 0;
+  cv::Mat labels, stats, cents;
+  const cv::Mat on = probability >= at;
+  const int n = cv::connectedComponentsWithStats(on, labels, stats, cents, 8, CV_32S);
+  // Per blob: its lowest row in each column, then whether a foot point is near the ground.
+  std::vector<int> state(size_t(n), 0);  // 0 unknown (kept), 1 grounded, 2 floating
+  std::vector<int> lowest(size_t(probability.cols));
+  for (int b = 1; b < n; ++b) {
+    const int x0 = stats.at<int>(b, cv::CC_STAT_LEFT), w = stats.at<int>(b, cv::CC_STAT_WIDTH);
+    const int y0 = stats.at<int>(b, cv::CC_STAT_TOP), h = stats.at<int>(b, cv::CC_STAT_HEIGHT);
+    for (int x = x0; x < x0 + w; ++x) {
+      int low = -1;
+      for (int y = y0; y < y0 + h; ++y)
+        if (labels.at<int>(y, x) == b) low = y;
+      if (low < 0 || low + 1 >= probability.rows) continue;
+      const double hf = HeightOf(t, up_cam, x, low + 1);
+      if (!std::isfinite(hf)) continue;
+      if (std::abs(hf - ground) <= tolerance * std::abs(ground)) {
+        state[size_t(b)] = 1;
+        break;
+      }
+      state[size_t(b)] = 2;
+    }
+  }
+  int removed = 0;
+  for (int b = 1; b < n; ++b) removed += state[size_t(b)] == 2;
+  for (int y = 0; y < probability.rows; ++y)
+    for (int x = 0; x < probability.cols; ++x)
+      if (state[size_t(labels.at<int>(y, x))] == 2) probability.at<float>(y, x) = 0;
+  return removed;
+}
+
 cv::Mat MaskFromProbability(const cv::Mat& probability, const MaskOptions& o) {
   o.Check();
   cv::Mat m = probability >= o.probability;
@@ -282,7 +357,8 @@ cv::Mat MaskFromProbability(const cv::Mat& probability, const MaskOptions& o) {
     return cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * r + 1, 2 * r + 1});
   };
   if (o.open > 0) cv::morphologyEx(m, m, cv::MORPH_OPEN, disk(o.open));
-  if (o.close > 0) cv::morphologyEx(m, m, cv::MORPH_CLOSE, disk(o.close));
+  const int close = static_cast<int>(std::lround(o.close * m.cols));
+  if (close > 0) cv::morphologyEx(m, m, cv::MORPH_CLOSE, disk(close));
   // Holes: background components that do not touch the border.
   cv::Mat bg = ~m, labels;
   const int n = cv::connectedComponents(bg, labels, 4, CV_32S);

@@ -90,10 +90,23 @@ DynamicEvidence EstimateDynamic(const DynamicView& target,
                                 const std::vector<const DynamicView*>& neighbours,
                                 const DynamicOptions& options);
 
+// Vehicles, cyclists and pedestrians stand on the road; mistakes of a photo-built mesh (tree
+// canopies, facade edges, poles) float above it. Sets to 0 the probability of every blob (8-
+// connected pixels at or above `at`) whose foot does not touch the ground: the static 3-D points
+// of the pixels just below its lowest pixel in each column, taken along `up` (unit, world), must
+// include one within `tolerance` × the camera's height above the ground of the ground's height.
+// The ground's height under this camera is the median height along `up` of the static points
+// seen in the lower middle of the image (its lowest fifth, middle half: the road ahead); without
+// such points, nothing is removed. A blob whose foot is out of the image or has no depth is kept.
+// Returns the number of blobs removed.
+int KeepGrounded(const DynamicView& target, const Eigen::Vector3d& up, double at, double tolerance,
+                 cv::Mat& probability);
+
 struct MaskOptions {
   double probability = 0.4;  // pixels at or above are "not static", in (0, 1)
   int open = 1;              // radius of the opening that removes specks (pixels), 0..50
-  int close = 12;            // radius of the closing that joins a vehicle's parts, 0..50
+  double close = 0.02;       // radius of the closing that joins a vehicle's parts, in image
+                             // widths (rounded to pixels), [0, 0.2]
   double min_area = 2e-4;    // blobs smaller than this share of the image are dropped, [0, 1)
 
   void Check() const;

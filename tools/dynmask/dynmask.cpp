@@ -31,8 +31,8 @@ void DeclareMaskOptions(OptionTable& t, DynmaskOptions& o) {
       .Range(0, 1, true, true)
       .Alternative("0.7");
   t.Integer("--open", &o.mask.open, "Opening radius (working pixels): removes specks").Range(0, 50);
-  t.Integer("--close", &o.mask.close, "Closing radius (working pixels): joins a vehicle's parts")
-      .Range(0, 50);
+  t.Real("--close", &o.mask.close, "Closing radius in image widths (joins a vehicle's parts)")
+      .Range(0, 0.2);
   t.Real("--min-area", &o.mask.min_area, "Blobs below this share of the image are dropped")
       .Range(0, 1, false, true);
   t.Real("--max-jump", &o.track.max_jump,
@@ -70,6 +70,11 @@ OptionTable DeclareOptions(DynmaskOptions& o) {
          "Nearest neighbour allowed, in median camera spacings (larger: more parallax)")
       .Range(0, 10)
       .Alternative("1.5");
+  t.Real("--grounded", &o.grounded,
+         "Keep only blobs that stand on the ground: a foot within F x the camera's height of "
+         "the road under it (0: keep every blob)")
+      .Range(0, 10)
+      .Alternative("0");
   t.Integer("--passes", &o.passes,
             "2: a second pass leaves out the neighbours' pixels their own first pass finds "
             "moving (the road a vehicle covers there); 1: one pass")
@@ -98,6 +103,7 @@ OptionTable DeclareOptions(DynmaskOptions& o) {
   t.Integer("--slack", &o.evidence.slack, "Misalignment forgiven, working pixels").Range(0, 5);
   t.Integer("--window", &o.evidence.window, "Box averaging the photometric residual (odd)")
       .Range(1, 31)
+      .Alternative("7")
       .Check([&o] {
         if (o.evidence.window % 2 == 0) throw UsageError("--window: must be odd, 1..31");
       });
@@ -134,6 +140,7 @@ struct Scene {
   std::vector<const ImageRecord*> images;
   std::vector<Camera> full, work;
   std::vector<std::string> pass;
+  Eigen::Vector3d up = Eigen::Vector3d::Zero();  // the drive's up (unit, world)
 };
 
 Scene LoadScene(const Workspace& ws, int max_width) {
@@ -149,9 +156,11 @@ Scene LoadScene(const Workspace& ws, int max_width) {
                          ? c
                          : c.Scaled(std::max<uint64_t>(8, uint64_t(std::lround(c.width * f))),
                                     std::max<uint64_t>(8, uint64_t(std::lround(c.height * f)))));
+    s.up += im->world_to_camera.Up();
     const size_t u = im->name.find('_');
     s.pass.push_back(u == std::string::npos ? std::string() : im->name.substr(0, u));
   }
+  if (s.up.norm() > 0) s.up.normalize();
   return s;
 }
 
@@ -353,8 +362,11 @@ void ComputeMaps(const DynmaskOptions& o, const Workspace& ws, const Scene& s,
     }
     std::vector<const DynamicView*> views;
     for (const DynamicView& v : nv) views.push_back(&v);
-    const DynamicEvidence e = EstimateDynamic(cache.Get(job.i), views, ev);
+    DynamicEvidence e = EstimateDynamic(cache.Get(job.i), views, ev);
     if (e.neighbours == 0) ++rep.no_neighbours;
+    if (o.grounded > 0)
+      rep.floating += size_t(
+          KeepGrounded(cache.Get(job.i), s.up, o.mask.probability, o.grounded, e.probability));
     const fs::path out = ws.DynamicPath(s.images[job.i]->name);
     CreateFolder(out.parent_path());
     WriteProbability(out, e.probability);
@@ -396,9 +408,23 @@ void OrAlso(const std::string& dir, const std::string& name, const Camera& cam,
       if (m.data[k * size_t(m.channels) + size_t(c)] != 0) out[k] = 255;
 }
 
+// What every mask and tracks.tsv are made from: every probability map (tracking couples the
+// frames) and the --also masks that exist.
+std::vector<fs::path> MaskInputs(const DynmaskOptions& o, const Workspace& ws, const Scene& s) {
+  std::vector<fs::path> maps;
+  for (const ImageRecord* im : s.images) maps.push_back(ws.DynamicPath(im->name));
+  if (!o.also.empty())
+    for (const ImageRecord* im : s.images) {
+      const fs::path p = fs::path(o.also) / fs::path(im->name).replace_extension(".png");
+      if (fs::exists(p)) maps.push_back(p);
+    }
+  return maps;
+}
+
 // Tracks each drive's blobs and writes every mask and tracks.tsv.
 void WriteMasks(const DynmaskOptions& o, const Workspace& ws, const Scene& s, Ledger& ledger,
                 DynmaskReport& rep) {
+  const std::vector<fs::path> inputs = MaskInputs(o, ws, s);
   std::map<std::string, std::vector<size_t>> drives;
   for (size_t i = 0; i < s.images.size(); ++i) drives[s.pass[i]].push_back(i);
   CreateFolder(ws.MasksDir());
@@ -428,7 +454,7 @@ void WriteMasks(const DynmaskOptions& o, const Workspace& ws, const Scene& s, Le
       const fs::path path = ws.MaskPath(s.images[idx[k]]->name);
       CreateFolder(path.parent_path());
       WriteImage(path.string(), out, PngCompression::kFast);
-      ledger.Done(path);
+      ledger.Done(path, inputs);
       ++rep.masks_written;
       bar.Step();
     }
@@ -445,20 +471,14 @@ void WriteMasks(const DynmaskOptions& o, const Workspace& ws, const Scene& s, Le
     rep.summary.unfilled_gaps += t.unfilled_gaps;
   }
   WriteTracksTsv(ws.TracksPath().string(), rows);
-  ledger.Done(ws.TracksPath());
+  ledger.Done(ws.TracksPath(), inputs);
   rep.masked = true;
   rep.masked_share = share / double(s.images.size());
 }
 
-// The masks (and tracks.tsv) are stale when any is: tracking couples every frame.
+// The masks (and tracks.tsv) are stale when any is.
 bool MasksStale(const DynmaskOptions& o, const Workspace& ws, const Scene& s, Ledger& ledger) {
-  std::vector<fs::path> maps;
-  for (const ImageRecord* im : s.images) maps.push_back(ws.DynamicPath(im->name));
-  if (!o.also.empty())
-    for (const ImageRecord* im : s.images) {
-      const fs::path p = fs::path(o.also) / fs::path(im->name).replace_extension(".png");
-      if (fs::exists(p)) maps.push_back(p);
-    }
+  const std::vector<fs::path> maps = MaskInputs(o, ws, s);
   bool stale = !ledger.Stale(ws.TracksPath(), maps, o.force).empty();
   for (const ImageRecord* im : s.images)
     stale = !ledger.Stale(ws.MaskPath(im->name), maps, o.force).empty() || stale;

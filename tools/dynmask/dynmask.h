@@ -24,6 +24,7 @@ struct DynmaskOptions : WorkOptions {
   double min_baseline = 0.25;  // nearest neighbour allowed, in median camera spacings
   DepthSource depth = DepthSource::kAuto;  // auto: the mesh, else densify's maps
   bool no_flow = false;                    // --no-flow: photometric evidence only
+  double grounded = 0.25;  // blobs must touch the ground within this × camera height; 0: off
   int passes = 2;  // 2: neighbours' pixels that their own first pass finds moving are left out
   DynamicOptions evidence;  // --threshold, --flow/--no-flow, --quantile, ...
   MaskOptions mask;         // --probability, --open, --close, --min-area
@@ -39,6 +40,7 @@ OptionTable DeclareOptions(DynmaskOptions& o);
 struct DynmaskReport {
   size_t images = 0, written = 0, skipped = 0;  // probability maps
   size_t no_neighbours = 0;                     // images checked against no photo
+  size_t floating = 0;                          // blobs removed: not standing on the ground
   bool masked = false;                          // masks and tracks.tsv were (re)made
   size_t masks_written = 0;
   TrackSummary summary;

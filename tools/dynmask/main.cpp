@@ -20,6 +20,7 @@ int RunAndReport(mvtm::DynmaskOptions& o) {
   std::fprintf(stderr, "dynmask: %zu probability maps written, %zu up to date (depth: %s)",
                r.written, r.skipped, r.depth_source.c_str());
   if (r.written) std::fprintf(stderr, " (%.0f ms per image)", r.ms_per_image);
+  if (r.floating) std::fprintf(stderr, "; %zu blobs off the ground left out", r.floating);
   if (r.no_neighbours)
     std::fprintf(stderr, "; %zu images had no neighbour (nothing masked)", r.no_neighbours);
   if (r.masked) {
