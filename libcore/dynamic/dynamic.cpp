@@ -34,7 +34,7 @@ void CheckView(const DynamicView& v, const char* what) {
 
 // Where each target pixel lands in `nb` (map_x, map_y; NaN when not valid there).
 void WarpMaps(const DynamicView& t, const DynamicView& nb, double tol, cv::Mat& mx, cv::Mat& my,
-              cv::Mat& coarser) {
+              cv::Mat& coarser, cv::Mat& motion) {
   const Rigid3d t2n = nb.world_to_camera * t.world_to_camera.Inverse();
   const Eigen::Matrix3d R = t2n.R();
   const Eigen::Vector3d tr = t2n.t;
@@ -43,7 +43,8 @@ void WarpMaps(const DynamicView& t, const DynamicView& nb, double tol, cv::Mat& 
   const int nw = nb.depth.cols, nh = nb.depth.rows;
   mx.create(t.depth.size(), CV_32F);
   my.create(t.depth.size(), CV_32F);
-  coarser = cv::Mat::zeros(t.depth.size(), CV_8U);
+  coarser = cv::Mat::ones(t.depth.size(), CV_32F);
+  motion = cv::Mat::zeros(t.depth.size(), CV_32F);
   cv::parallel_for_(cv::Range(0, t.depth.rows), [&](const cv::Range& rows) {
     for (int y = rows.start; y < rows.end; ++y) {
       const float* z = t.depth.ptr<float>(y);
@@ -65,8 +66,9 @@ void WarpMaps(const DynamicView& t, const DynamicView& nb, double tol, cv::Mat& 
             nb.dynamic.at<float>(std::min(nh - 1, static_cast<int>(v)),
                                  std::min(nw - 1, static_cast<int>(u))) >= 0.5f)
           continue;  // hidden in nb by something that moves
-        // The neighbour sees the point from farther (with fewer pixels, per focal length).
-        if (q.z() / gx > 1.25 * d / fx) coarser.at<uint8_t>(y, x) = 255;
+        // How much coarser the neighbour sees the point (its pixel footprint over the target's).
+        coarser.at<float>(y, x) = static_cast<float>((q.z() / gx) / (d / fx));
+        motion.at<float>(y, x) = static_cast<float>(std::hypot(u - x - 0.5, v - y - 0.5));
         ox[x] = static_cast<float>(u - 0.5);  // remap's pixel centres are integers
         oy[x] = static_cast<float>(v - 0.5);
       }
@@ -101,12 +103,16 @@ cv::Mat Photometric(const cv::Mat& target, const cv::Mat& warp, const cv::Mat& v
   cv::Mat lo, hi;
   cv::erode(lo_in, lo, k);
   cv::dilate(hi_in, hi, k);
-  // Where the neighbour saw the surface coarser than the target (from farther), its warp is a
-  // blurred copy: the target blurred alike is compared, so detail the neighbour could not
-  // resolve is not a difference.
-  cv::Mat tb = target.clone(), blurred;
-  cv::GaussianBlur(target, blurred, {0, 0}, 1.0);
-  blurred.copyTo(tb, coarser);
+  // Where the neighbour saw the surface r times coarser than the target (from farther), its warp
+  // is a blurred copy: the target blurred alike (Gaussian sigma 0.5·sqrt(r² − 1), in steps) is
+  // compared, so detail the neighbour could not resolve is not a difference.
+  cv::Mat tb = target.clone();
+  for (double sigma : {0.5, 1.0, 1.5, 2.0, 3.0}) {
+    const double r = std::sqrt(1 + 4 * sigma * sigma);  // the ratio that asks for sigma
+    cv::Mat blurred;
+    cv::GaussianBlur(target, blurred, {0, 0}, sigma);
+    blurred.copyTo(tb, coarser >= r * 0.85);
+  }
   const cv::Mat above = tb - hi, below = lo - tb;
   cv::Mat d;
   cv::max(above, below, d);
@@ -127,7 +133,8 @@ cv::Mat Photometric(const cv::Mat& target, const cv::Mat& warp, const cv::Mat& v
 }
 
 // Length of the DIS flow from the target to the warp (invalid pixels: the target's own).
-cv::Mat FlowResidual(const cv::Mat& target, const cv::Mat& warp, const cv::Mat& valid) {
+cv::Mat FlowResidual(const cv::Mat& target, const cv::Mat& warp, const cv::Mat& valid,
+                     const cv::Mat& motion, const DynamicOptions& o) {
   cv::Mat filled = warp.clone();
   target.copyTo(filled, ~valid);
   cv::Mat a8, b8, flow;
@@ -145,6 +152,10 @@ cv::Mat FlowResidual(const cv::Mat& target, const cv::Mat& warp, const cv::Mat& 
   cv::Mat parts[2], mag;
   cv::split(flow, parts);
   cv::magnitude(parts[0], parts[1], mag);
+  // A large rigid motion warps the neighbour more (foreshortening, resampling): the residual is
+  // taken relative to max(threshold, flow_relative × the rigid motion), in threshold units.
+  cv::Mat allowed = cv::max(motion * o.flow_relative, o.flow_threshold);
+  mag = mag.mul(o.flow_threshold / allowed);
   mag.setTo(kNaN, ~valid);
   return mag;
 }
@@ -230,6 +241,8 @@ void SpreadOverRegions(const DynamicView& t, const cv::Mat& has_depth, const Dyn
 void DynamicOptions::Check() const {
   if (!(threshold > 0) || !std::isfinite(threshold))
     throw UsageError("--threshold must be above 0, got " + std::to_string(threshold));
+  if (!(flow_relative >= 0 && flow_relative < 10))
+    throw UsageError("--flow-relative must be in [0, 10), got " + std::to_string(flow_relative));
   if (!(flow_threshold > 0) || !std::isfinite(flow_threshold))
     throw UsageError("--flow-threshold must be above 0, got " + std::to_string(flow_threshold));
   if (!(quantile >= 0 && quantile <= 1))
@@ -265,8 +278,8 @@ DynamicEvidence EstimateDynamic(const DynamicView& t,
   DynamicEvidence ev;
   for (const DynamicView* nb : neighbours) {
     CheckView(*nb, "neighbour view");
-    cv::Mat mx, my, warp, coarser;
-    WarpMaps(t, *nb, o.depth_tolerance, mx, my, coarser);
+    cv::Mat mx, my, warp, coarser, motion;
+    WarpMaps(t, *nb, o.depth_tolerance, mx, my, coarser, motion);
     const cv::Mat valid = mx == mx;  // not NaN
     if (cv::countNonZero(valid) == 0) continue;
     ++ev.neighbours;
@@ -274,7 +287,7 @@ DynamicEvidence EstimateDynamic(const DynamicView& t,
     warp.setTo(0, ~valid);
     warp *= ExposureGain(t.grey, warp);
     photo.push_back(Photometric(t.grey, warp, valid, coarser, o));
-    if (o.flow) flow.push_back(FlowResidual(t.grey, warp, valid));
+    if (o.flow) flow.push_back(FlowResidual(t.grey, warp, valid, motion, o));
   }
   ev.photometric = Reduce(photo, o.quantile, t.grey.size());
   if (o.flow) ev.flow = Reduce(flow, o.quantile, t.grey.size());

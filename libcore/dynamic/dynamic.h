@@ -22,7 +22,9 @@
 //  * Flow residual (optional): the length of DIS optical flow (OpenCV, coarse to fine) from the
 //    target to the warp (invalid warp pixels replaced by the target's own, so they do not move),
 //    in pixels: a vehicle moving with the camera keeps its place in the photos, but not in the
-//    warp through the static depth behind it.
+//    warp through the static depth behind it. Where the rigid motion |q − p| is large (the near
+//    road), the warp is distorted more: the residual counts relative to
+//    max(flow_threshold, flow_relative · |q − p|).
 // Each pixel's residuals over its valid neighbours are reduced to their `quantile` (0: the
 // smallest, the default: a static pixel needs one neighbour that agrees, so a vehicle passing
 // over the road in some neighbours does not mask the road in this photo; a vehicle pixel must
@@ -67,6 +69,7 @@ struct DynamicOptions {
   double threshold = 0.05;        // photometric residual (luma 0..1) at which p = 0.5, > 0
   bool flow = true;               // also the flow residual
   double flow_threshold = 2.5;    // flow residual in pixels (DIS's noise is ~1 px) at p = 0.5
+  double flow_relative = 0;       // ... or this share of the rigid motion, when larger, [0, 10)
   double quantile = 0;            // of the residuals over the neighbours, in [0, 1]; 0: min
   double depth_tolerance = 0.05;  // relative: occlusion test in the neighbour, in (0, 1)
   int slack = 1;                  // pixels of misalignment forgiven, 0..5

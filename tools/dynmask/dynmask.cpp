@@ -93,6 +93,10 @@ OptionTable DeclareOptions(DynmaskOptions& o) {
          "Residual flow (working pixels) at which a pixel is 50 % not static")
       .Above(0)
       .Alternative("4");
+  t.Real("--flow-relative", &o.evidence.flow_relative,
+         "... or this share of the pixel's rigid motion between the photos, when larger (0: off)")
+      .Range(0, 10, false, true)
+      .Alternative("0.1");
   t.Real("--quantile", &o.evidence.quantile,
          "Quantile of the residuals over the neighbours (0: the smallest; 0.5: the median)")
       .Range(0, 1)
