@@ -17,6 +17,7 @@
 #include "raycast/mesh_raycaster.h"
 #include "run/ledger.h"
 #include "stereo/neighbours.h"
+#include "track/labels.h"
 #include "workspace/workspace.h"
 
 namespace mvtm {
@@ -51,6 +52,17 @@ void DeclareMaskOptions(OptionTable& t, DynmaskOptions& o) {
   t.Integer("--dilate", &o.track.dilate, "Dilate the masks by a disk of radius PX (full size)")
       .Range(0, 1000);
   t.Text("--also", &o.also, "Folder of masks (NAME.png) OR-ed into every output mask").Dir();
+  t.Text("--labels", &o.labels,
+         "Folder of label images (NAME.png, class ids): the masks are the blobs of --classes "
+         "that the geometry confirms move, whole")
+      .Dir();
+  t.Text("--classes", &o.classes, "With --labels: the class ids to confirm, comma-separated")
+      .Alternative("8")
+      .Check([&o] { LabelDecoder::ParseClasses(o.classes); });
+  t.Real("--confirm", &o.confirm,
+         "With --labels: mean probability over a label blob at which it is confirmed")
+      .Range(0, 1)
+      .Alternative("0.5");
 }
 
 }  // namespace
@@ -383,8 +395,40 @@ void ComputeMaps(const DynmaskOptions& o, const Workspace& ws, const Scene& s,
         std::chrono::duration<double, std::milli>(Clock::now() - t0).count() / double(rep.written);
 }
 
+fs::path LabelFile(const DynmaskOptions& o, const std::string& name) {
+  return fs::path(o.labels) / fs::path(name).replace_extension(".png");
+}
+
+// With --labels: the mask is the blobs of the label image's classes whose mean probability (the
+// map upsampled, bilinear) reaches --confirm, whole; the labels say what a vehicle is, the
+// geometry whether it moves. A frame without a label image keeps the geometry's mask.
+void ConfirmLabels(const DynmaskOptions& o, const std::string& name, const cv::Mat& prob,
+                   cv::Mat& mask) {
+  const fs::path p = LabelFile(o, name);
+  if (!fs::exists(p)) return;
+  const Image label = ReadImage(p.string());
+  RequireImageSize(label, p.string(), uint64_t(mask.cols), uint64_t(mask.rows));
+  std::vector<uint8_t> vehicle;
+  LabelDecoder::ClassIds(LabelDecoder::ParseClasses(o.classes)).Decode(label, p.string(), vehicle);
+  cv::Mat v(mask.rows, mask.cols, CV_8U, vehicle.data()), labels, up;
+  cv::resize(prob, up, mask.size(), 0, 0, cv::INTER_LINEAR);
+  const int n = cv::connectedComponents(v, labels, 8, CV_32S);
+  std::vector<double> sum(size_t(n), 0), count(size_t(n), 0);
+  for (int y = 0; y < mask.rows; ++y)
+    for (int x = 0; x < mask.cols; ++x) {
+      const size_t b = size_t(labels.at<int>(y, x));
+      sum[b] += up.at<float>(y, x), count[b] += 1;
+    }
+  for (int y = 0; y < mask.rows; ++y)
+    for (int x = 0; x < mask.cols; ++x) {
+      const size_t b = size_t(labels.at<int>(y, x));
+      mask.at<uint8_t>(y, x) = b > 0 && sum[b] >= o.confirm * count[b] ? 255 : 0;
+    }
+}
+
 // One image's mask from its probability map, at the image's full size.
-cv::Mat MaskOf(const Workspace& ws, const Scene& s, size_t i, const MaskOptions& mo) {
+cv::Mat MaskOf(const DynmaskOptions& o, const Workspace& ws, const Scene& s, size_t i) {
+  const MaskOptions& mo = o.mask;
   const fs::path p = ws.DynamicPath(s.images[i]->name);
   const Image im = ReadImage(p.string());
   RequireImageSize(im, p.string(), s.work[i].width, s.work[i].height);
@@ -395,8 +439,9 @@ cv::Mat MaskOf(const Workspace& ws, const Scene& s, size_t i, const MaskOptions&
           float(im.data[(size_t(y) * size_t(im.width) + size_t(x)) * size_t(im.channels)] /
                 im.MaxValue());
   cv::Mat m = MaskFromProbability(prob, mo), full;
-  cv::resize(m, full, cv::Size(int(s.full[i].width), int(s.full[i].height)), 0, 0,
-             cv::INTER_NEAREST);
+  const cv::Size size(int(s.full[i].width), int(s.full[i].height));
+  cv::resize(m, full, size, 0, 0, cv::INTER_NEAREST);
+  if (!o.labels.empty()) ConfirmLabels(o, s.images[i]->name, prob, full);
   return full;
 }
 
@@ -422,6 +467,9 @@ std::vector<fs::path> MaskInputs(const DynmaskOptions& o, const Workspace& ws, c
       const fs::path p = fs::path(o.also) / fs::path(im->name).replace_extension(".png");
       if (fs::exists(p)) maps.push_back(p);
     }
+  if (!o.labels.empty())
+    for (const ImageRecord* im : s.images)
+      if (fs::exists(LabelFile(o, im->name))) maps.push_back(LabelFile(o, im->name));
   return maps;
 }
 
@@ -445,7 +493,7 @@ void WriteMasks(const DynmaskOptions& o, const Workspace& ws, const Scene& s, Le
       if (s.full[i].width != c0.width || s.full[i].height != c0.height)
         throw Error(ws.ImagePath(s.images[i]->name).string() +
                     ": every image of a drive must have one size to be tracked");
-      tracker.AddFrame(MaskOf(ws, s, i, o.mask).data);
+      tracker.AddFrame(MaskOf(o, ws, s, i).data);
     }
     const TrackResult res = tracker.Finish();
     std::vector<uint8_t> mask;

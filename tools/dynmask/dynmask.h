@@ -30,6 +30,9 @@ struct DynmaskOptions : WorkOptions {
   MaskOptions mask;         // --probability, --open, --close, --min-area
   TrackOptions track;       // segtrack's tracking options; max_jump 0: a quarter width
   std::string also;         // folder of masks OR-ed into the output (e.g. a video overlay)
+  std::string labels;       // folder of label images: blobs confirmed or rejected by geometry
+  std::string classes = "8,9,10";  // their classes (CamVid: car, pedestrian, cyclist)
+  double confirm = 0.25;           // a label blob whose mean probability reaches this is masked
 
   DynmaskOptions() { track.max_jump = 0; }
   void Check() const;
