@@ -22,6 +22,12 @@ fs::path Derived(const fs::path& dir, const std::string& name, const char* ext) 
 }
 }  // namespace
 
+std::string PassOf(const std::string& image_name) {
+  const std::string base = fs::path(image_name).filename().string();
+  const size_t u = base.find('_');
+  return u == std::string::npos ? std::string() : base.substr(0, u);
+}
+
 Workspace::Workspace(fs::path root) : root_(std::move(root)) {}
 
 fs::path Workspace::SparseDir() const { return root_ / "sparse"; }

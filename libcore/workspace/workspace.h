@@ -45,6 +45,11 @@ enum class WsItem {
   kStereo
 };
 
+// The pass (drive) an image belongs to: its file name's prefix before the first '_'
+// (mkroad: A_0000.png is pass "A"); "" when the name has none. Images of one drive of a road
+// share it (pickview --partners pairs passes; dynmask compares a photo with its own pass).
+std::string PassOf(const std::string& image_name);
+
 class Workspace {
  public:
   explicit Workspace(fs::path root);

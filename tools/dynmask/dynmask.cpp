@@ -149,8 +149,8 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// The model, its images by name, their drives (the name before the first '_') and working
-// cameras.
+// The model, its images by name, their drives (PassOf: the file name before the first '_') and
+// working cameras.
 struct Scene {
   Reconstruction rec;
   std::vector<const ImageRecord*> images;
@@ -173,8 +173,7 @@ Scene LoadScene(const Workspace& ws, int max_width) {
                          : c.Scaled(std::max<uint64_t>(8, uint64_t(std::lround(c.width * f))),
                                     std::max<uint64_t>(8, uint64_t(std::lround(c.height * f)))));
     s.up += im->world_to_camera.Up();
-    const size_t u = im->name.find('_');
-    s.pass.push_back(u == std::string::npos ? std::string() : im->name.substr(0, u));
+    s.pass.push_back(PassOf(im->name));
   }
   if (s.up.norm() > 0) s.up.normalize();
   return s;

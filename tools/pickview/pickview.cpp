@@ -121,13 +121,6 @@ Model LoadModel(const Workspace& ws) {
   return m;
 }
 
-// The pass of an image: its file name's prefix before the first '_' (mkroad: A_0000.png).
-std::string PassOf(const std::string& name) {
-  std::string base = fs::path(name).filename().string();
-  size_t u = base.find('_');
-  return u == std::string::npos ? std::string() : base.substr(0, u);
-}
-
 // Masks as bit sets, loaded once each.
 class Masks {
  public:
