@@ -42,6 +42,13 @@ struct TrackOptions {
   void Check() const;  // throws UsageError naming the bad value and the allowed range
 };
 
+class OptionTable;
+
+// Declares the tracking options every masking tool shares, in this order, bound to `o`:
+// --max-missed, --max-gap, --smooth, --min-life, --min-ratio, --dilate (segtrack, dynmask).
+// --max-jump is each tool's own (its default and its meaning of 0 differ).
+void DeclareTrackOptions(OptionTable& table, TrackOptions& o);
+
 struct TrackSummary {
   int frames = 0, tracks = 0, kept = 0, rejected = 0;
   size_t detected = 0, interpolated = 0, rejected_blobs = 0, unfilled_gaps = 0;

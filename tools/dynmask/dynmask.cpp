@@ -40,17 +40,7 @@ void DeclareMaskOptions(OptionTable& t, DynmaskOptions& o) {
          "Tracking: largest distance from a track's predicted centroid to its blob (pixels; "
          "0: a quarter of the image width)")
       .AtLeast(0);
-  t.Integer("--max-missed", &o.track.max_missed, "A track ends after N frames without a blob")
-      .AtLeast(1);
-  t.Integer("--max-gap", &o.track.max_gap, "Fill gaps of at most G missed frames").AtLeast(0);
-  t.Real("--smooth", &o.track.smooth, "Gaussian sigma in frames for centroid and size (0: off)")
-      .AtLeast(0);
-  t.Integer("--min-life", &o.track.min_life, "Reject tracks spanning fewer than N frames")
-      .AtLeast(1);
-  t.Real("--min-ratio", &o.track.min_ratio, "Reject tracks detected in less than this share")
-      .Range(0, 1);
-  t.Integer("--dilate", &o.track.dilate, "Dilate the masks by a disk of radius PX (full size)")
-      .Range(0, 1000);
+  DeclareTrackOptions(t, o.track);
   t.Text("--also", &o.also, "Folder of masks (NAME.png) OR-ed into every output mask").Dir();
   t.Text("--labels", &o.labels,
          "Folder of label images (NAME.png, class ids): the masks are the blobs of --classes "

@@ -165,19 +165,7 @@ OptionTable DeclareOptions(SegtrackOptions& o) {
          "Largest distance from a track's predicted centroid to its blob")
       .Above(0)
       .Alternative("2");
-  t.Integer("--max-missed", &o.track.max_missed,
-            "A track ends after N consecutive frames without a blob")
-      .AtLeast(1);
-  t.Integer("--max-gap", &o.track.max_gap, "Fill gaps of at most G missed frames by interpolation")
-      .AtLeast(0);
-  t.Real("--smooth", &o.track.smooth, "Gaussian sigma in frames for centroid and size (0: off)")
-      .AtLeast(0);
-  t.Integer("--min-life", &o.track.min_life, "Reject tracks spanning fewer than N frames")
-      .AtLeast(1);
-  t.Real("--min-ratio", &o.track.min_ratio,
-         "Reject tracks detected in less than this share of their span")
-      .Range(0, 1);
-  t.Integer("--dilate", &o.track.dilate, "Dilate the masks by a disk of radius PX").Range(0, 1000);
+  DeclareTrackOptions(t, o.track);
   t.Flag("--rank", &o.rank,
          "Print the LABELDIRs ordered by total vehicle area (fewest first) on stdout")
       .Cosmetic();
