@@ -262,10 +262,13 @@ void LoadPhoto(const fs::path& path, const Camera& full, const Camera& work, cv:
   if (rgb.size() != size) cv::resize(rgb, rgb, size, 0, 0, cv::INTER_AREA);
 }
 
-// The views one run needs, loaded once each (an image is the neighbour of several).
+// The views one run needs, loaded once each (an image is the neighbour of several), and their
+// first-pass probabilities, computed once each.
 class ViewCache {
  public:
-  ViewCache(const Workspace& ws, const Scene& s, const DepthProvider& d) : ws_(ws), s_(s), d_(d) {}
+  ViewCache(const Workspace& ws, const Scene& s, const DepthProvider& d,
+            const std::vector<std::vector<size_t>>& nbs, const DynamicOptions& ev)
+      : ws_(ws), s_(s), d_(d), nbs_(nbs), ev_(ev) {}
   const DynamicView& Get(size_t i) {
     auto it = views_.find(i);
     if (it != views_.end()) return it->second;
@@ -277,17 +280,34 @@ class ViewCache {
     LoadPhoto(ws_.ImagePath(name), s_.full[i], s_.work[i], v.grey, v.colour);
     return views_.emplace(i, std::move(v)).first->second;
   }
-  // Forgets views of images before `i` that no later image needs (images go in name order).
+  // Image j's probability against its own neighbours (the first pass).
+  const cv::Mat& FirstPass(size_t j) {
+    auto it = first_.find(j);
+    if (it != first_.end()) return it->second;
+    std::vector<const DynamicView*> views;
+    for (size_t k : nbs_[j]) views.push_back(&Get(k));
+    return first_.emplace(j, EstimateDynamic(Get(j), views, ev_).probability).first->second;
+  }
+  // Forgets what belongs to images more than 32 before `below` (images go in name order, and
+  // neighbours are near in a drive; one needed again is simply made again).
   void Drop(size_t below) {
-    for (auto it = views_.begin(); it != views_.end();)
-      it = it->first + 32 < below ? views_.erase(it) : std::next(it);
+    DropBefore(views_, below);
+    DropBefore(first_, below);
   }
 
  private:
+  template <class Map>
+  static void DropBefore(Map& m, size_t below) {
+    for (auto it = m.begin(); it != m.end();)
+      it = it->first + 32 < below ? m.erase(it) : std::next(it);
+  }
   const Workspace& ws_;
   const Scene& s_;
   const DepthProvider& d_;
+  const std::vector<std::vector<size_t>>& nbs_;
+  const DynamicOptions& ev_;
   std::map<size_t, DynamicView> views_;
+  std::map<size_t, cv::Mat> first_;
 };
 
 // Writes one probability map (8-bit, 255 = surely not static) atomically.
@@ -343,27 +363,17 @@ void ComputeMaps(const DynmaskOptions& o, const Workspace& ws, const Scene& s,
                  const std::vector<std::vector<size_t>>& nbs, const DepthProvider& d,
                  const std::vector<Job>& todo, Ledger& ledger, DynmaskReport& rep) {
   CreateFolder(ws.DynamicDir());
-  ViewCache cache(ws, s, d);
   DynamicOptions ev = o.evidence;
   ev.flow = !o.no_flow;
+  ViewCache cache(ws, s, d, nbs, ev);
   Progress bar("dynmask", todo.size(), o.quiet);
   const auto t0 = Clock::now();
-  std::map<size_t, cv::Mat> first;  // first-pass probabilities of the neighbours
-  const auto first_pass = [&](size_t j) -> const cv::Mat& {
-    auto it = first.find(j);
-    if (it != first.end()) return it->second;
-    std::vector<const DynamicView*> views;
-    for (size_t k : nbs[j]) views.push_back(&cache.Get(k));
-    return first.emplace(j, EstimateDynamic(cache.Get(j), views, ev).probability).first->second;
-  };
   for (const Job& job : todo) {
     cache.Drop(job.i);
-    for (auto it = first.begin(); it != first.end();)
-      it = it->first + 32 < job.i ? first.erase(it) : std::next(it);
     std::vector<DynamicView> nv;
     for (size_t j : nbs[job.i]) {
       nv.push_back(cache.Get(j));  // Mat headers: no pixel copies
-      if (o.passes == 2) nv.back().dynamic = first_pass(j);
+      if (o.passes == 2) nv.back().dynamic = cache.FirstPass(j);
     }
     std::vector<const DynamicView*> views;
     for (const DynamicView& v : nv) views.push_back(&v);
