@@ -145,8 +145,8 @@ struct Scene {
   Reconstruction rec;
   std::vector<const ImageRecord*> images;
   std::vector<Camera> full, work;
-  std::vector<std::string> pass;
-  Eigen::Vector3d up = Eigen::Vector3d::Zero();  // the drive's up (unit, world)
+  std::map<std::string, std::vector<size_t>> drives;  // PassOf → its images, in name order
+  Eigen::Vector3d up = Eigen::Vector3d::Zero();       // the drive's up (unit, world)
 };
 
 Scene LoadScene(const Workspace& ws, int max_width) {
@@ -163,7 +163,7 @@ Scene LoadScene(const Workspace& ws, int max_width) {
                          : c.Scaled(std::max<uint64_t>(8, uint64_t(std::lround(c.width * f))),
                                     std::max<uint64_t>(8, uint64_t(std::lround(c.height * f)))));
     s.up += im->world_to_camera.Up();
-    s.pass.push_back(PassOf(im->name));
+    s.drives[PassOf(im->name)].push_back(s.full.size() - 1);
   }
   if (s.up.norm() > 0) s.up.normalize();
   return s;
@@ -172,13 +172,11 @@ Scene LoadScene(const Workspace& ws, int max_width) {
 // Neighbours of every image among the images of its own drive (stereo/neighbours.h's choice:
 // nearest centres on both sides, enough baseline, similar viewing direction).
 std::vector<std::vector<size_t>> ChooseNeighbours(const Scene& s, int count, double min_base) {
-  std::map<std::string, std::vector<size_t>> drives;
-  for (size_t i = 0; i < s.images.size(); ++i) drives[s.pass[i]].push_back(i);
   std::vector<std::vector<size_t>> out(s.images.size());
   NeighbourOptions no;
   no.count = count;
   no.min_baseline = min_base;
-  for (const auto& [name, idx] : drives) {
+  for (const auto& [name, idx] : s.drives) {
     std::vector<Rigid3d> w2c;
     std::vector<Camera> cams;
     for (size_t i : idx) w2c.push_back(s.images[i]->world_to_camera), cams.push_back(s.work[i]);
@@ -401,14 +399,14 @@ fs::path LabelFile(const DynmaskOptions& o, const std::string& name) {
 // With --labels: the mask is the blobs of the label image's classes whose mean probability (the
 // map upsampled, bilinear) reaches --confirm, whole; the labels say what a vehicle is, the
 // geometry whether it moves. A frame without a label image keeps the geometry's mask.
-void ConfirmLabels(const DynmaskOptions& o, const std::string& name, const cv::Mat& prob,
-                   cv::Mat& mask) {
+void ConfirmLabels(const DynmaskOptions& o, const LabelDecoder& decoder, const std::string& name,
+                   const cv::Mat& prob, cv::Mat& mask) {
   const fs::path p = LabelFile(o, name);
   if (!fs::exists(p)) return;
   const Image label = ReadImage(p.string());
   RequireImageSize(label, p.string(), uint64_t(mask.cols), uint64_t(mask.rows));
   std::vector<uint8_t> vehicle;
-  LabelDecoder::ClassIds(LabelDecoder::ParseClasses(o.classes)).Decode(label, p.string(), vehicle);
+  decoder.Decode(label, p.string(), vehicle);
   cv::Mat v(mask.rows, mask.cols, CV_8U, vehicle.data()), labels, up;
   cv::resize(prob, up, mask.size(), 0, 0, cv::INTER_LINEAR);
   const int n = cv::connectedComponents(v, labels, 8, CV_32S);
@@ -426,7 +424,8 @@ void ConfirmLabels(const DynmaskOptions& o, const std::string& name, const cv::M
 }
 
 // One image's mask from its probability map, at the image's full size.
-cv::Mat MaskOf(const DynmaskOptions& o, const Workspace& ws, const Scene& s, size_t i) {
+cv::Mat MaskOf(const DynmaskOptions& o, const LabelDecoder& decoder, const Workspace& ws,
+               const Scene& s, size_t i) {
   const MaskOptions& mo = o.mask;
   const fs::path p = ws.DynamicPath(s.images[i]->name);
   const Image im = ReadImage(p.string());
@@ -440,7 +439,7 @@ cv::Mat MaskOf(const DynmaskOptions& o, const Workspace& ws, const Scene& s, siz
   cv::Mat m = MaskFromProbability(prob, mo), full;
   const cv::Size size(int(s.full[i].width), int(s.full[i].height));
   cv::resize(m, full, size, 0, 0, cv::INTER_NEAREST);
-  if (!o.labels.empty()) ConfirmLabels(o, s.images[i]->name, prob, full);
+  if (!o.labels.empty()) ConfirmLabels(o, decoder, s.images[i]->name, prob, full);
   return full;
 }
 
@@ -476,14 +475,13 @@ std::vector<fs::path> MaskInputs(const DynmaskOptions& o, const Workspace& ws, c
 void WriteMasks(const DynmaskOptions& o, const Workspace& ws, const Scene& s, Ledger& ledger,
                 DynmaskReport& rep) {
   const std::vector<fs::path> inputs = MaskInputs(o, ws, s);
-  std::map<std::string, std::vector<size_t>> drives;
-  for (size_t i = 0; i < s.images.size(); ++i) drives[s.pass[i]].push_back(i);
+  const LabelDecoder decoder = LabelDecoder::ClassIds(LabelDecoder::ParseClasses(o.classes));
   CreateFolder(ws.MasksDir());
   std::vector<TracksTsvRow> rows;
   Progress bar("dynmask masks", s.images.size(), o.quiet);
   double share = 0;
   int id_base = 0;
-  for (const auto& [pass, idx] : drives) {
+  for (const auto& [pass, idx] : s.drives) {
     const Camera& c0 = s.full[idx[0]];
     TrackOptions to = o.track;
     if (to.max_jump == 0) to.max_jump = 0.25 * double(c0.width);
@@ -492,7 +490,7 @@ void WriteMasks(const DynmaskOptions& o, const Workspace& ws, const Scene& s, Le
       if (s.full[i].width != c0.width || s.full[i].height != c0.height)
         throw Error(ws.ImagePath(s.images[i]->name).string() +
                     ": every image of a drive must have one size to be tracked");
-      tracker.AddFrame(MaskOf(o, ws, s, i).data);
+      tracker.AddFrame(MaskOf(o, decoder, ws, s, i).data);
     }
     const TrackResult res = tracker.Finish();
     std::vector<uint8_t> mask;
