@@ -64,6 +64,7 @@ Ledger::Ledger(fs::path root, std::string record, const OptionTable& table,
   std::error_code ec;
   const fs::path dir = root_ / "provenance";
   if (!fs::is_directory(dir, ec)) return;
+  RemoveStaleTemporaries(dir);  // a killed run's half-written record
   std::vector<std::string> files;
   for (const auto& e : fs::directory_iterator(dir, ec))
     if (IsRecordOf(e.path().filename().string(), tool_)) files.push_back(e.path().filename());
@@ -158,6 +159,9 @@ std::string Ledger::CompareRun(const nlohmann::json& run) {
 std::string Ledger::Stale(const fs::path& output, const std::vector<fs::path>& item_inputs,
                           bool force) {
   std::lock_guard<std::recursive_mutex> lock(mutex_);
+  // A killed run's leftovers beside this output go, once per folder, even when all is up to date.
+  const fs::path folder = output.has_parent_path() ? output.parent_path() : fs::path(".");
+  if (swept_.insert(folder).second) RemoveStaleTemporaries(folder);
   const FileStamp now = StatFile(output);
   const std::string why = force ? "--force"
                           : !now.exists

@@ -27,7 +27,9 @@
 // redone). Entries of outputs this run did not touch are carried forward from the record of the
 // same name with their own run's options, so `--frames 0:2` after a full run keeps the others'
 // history. Concurrent runs writing one record: the last rename wins and outputs the others wrote
-// later no longer match it, so they are redone next time — never handed back wrongly.
+// later no longer match it, so they are redone next time — never handed back wrongly. A killed
+// run's temporaries are swept from ROOT/provenance and from each output's folder the first time
+// Stale() sees it (RemoveStaleTemporaries: only those of dead processes).
 //
 // Thread safety: Stale() and Done() may be called from several threads.
 #pragma once
@@ -38,6 +40,7 @@
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -101,6 +104,7 @@ class Ledger {
   nlohmann::json kept_runs_;  // the runs those entries refer to
   std::string run_id_;
   std::map<std::string, size_t> reasons_;
+  std::set<fs::path> swept_;  // output folders whose stale temporaries are gone
   mutable std::recursive_mutex mutex_;
   int64_t last_flush_ns_ = 0;
 };

@@ -148,5 +148,20 @@ TEST_F(LedgerTest, TheRecordIsTheProvenance) {
   EXPECT_EQ(j["outputs"]["f0.png"]["in"].begin().key(), "images/a.png");
 }
 
+TEST_F(LedgerTest, AKilledRunsTemporariesGoEvenWhenAllIsUpToDate) {
+  Run({}, {"f0.png", "sub/f1.png"});
+  // What kill -9 leaves: a half-written record and half-written outputs (pid 999999999: dead).
+  const fs::path record_tmp = dir_ / "out/provenance/.demo.tmp-999999999-0.json";
+  const fs::path out_tmp = dir_ / "out/.f0.tmp-999999999-1.png";
+  const fs::path sub_tmp = dir_ / "out/sub/.f1.tmp-999999999-2.png";
+  const fs::path live_tmp = dir_ / ("out/.f2.tmp-" + std::to_string(::getpid()) + "-3.png");
+  for (const fs::path& p : {record_tmp, out_tmp, sub_tmp, live_tmp}) Put(p, "half");
+  EXPECT_EQ(Run({}, {"f0.png", "sub/f1.png"}), (V{"", ""}));
+  EXPECT_FALSE(fs::exists(record_tmp));
+  EXPECT_FALSE(fs::exists(out_tmp));
+  EXPECT_FALSE(fs::exists(sub_tmp));
+  EXPECT_TRUE(fs::exists(live_tmp));  // a running writer's is never touched
+}
+
 }  // namespace
 }  // namespace mvtm
