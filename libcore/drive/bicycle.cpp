@@ -48,22 +48,26 @@ double RoadWheelAngle(double steering_wheel_deg, const BicycleParams& b, bool* c
 }
 
 SteeredPath::SteeredPath(const std::vector<ControlSample>& controls, const BicycleParams& b,
-                         const PlanarPose& start) {
+                         const PlanarPose& start)
+    : params_(b) {
   if (controls.empty()) throw Error("no control samples");
-  for (const ControlSample& c : controls) {
-    bool clamped = false;
-    const double delta = RoadWheelAngle(c.steer_deg, b, &clamped);
-    clamped_ += clamped;
-    times_.push_back(c.time);
-    speed_.push_back(c.speed);
-    curvature_.push_back(std::tan(delta) / b.wheelbase);
-  }
   knots_.push_back(start);
-  for (size_t i = 0; i + 1 < times_.size(); ++i) {
-    const double s = speed_[i] * (times_[i + 1] - times_[i]);
+  for (const ControlSample& c : controls) Append(c);
+}
+
+void SteeredPath::Append(const ControlSample& c) {
+  if (!times_.empty()) {
+    if (!(c.time > times_.back())) throw Error("control sample times must increase");
+    const double s = speed_.back() * (c.time - times_.back());
     length_ += std::abs(s);
-    knots_.push_back(AdvanceArc(knots_.back(), s, curvature_[i]));
+    knots_.push_back(AdvanceArc(knots_.back(), s, curvature_.back()));
   }
+  bool clamped = false;
+  const double delta = RoadWheelAngle(c.steer_deg, params_, &clamped);
+  clamped_ += clamped;
+  times_.push_back(c.time);
+  speed_.push_back(c.speed);
+  curvature_.push_back(std::tan(delta) / params_.wheelbase);
 }
 
 PlanarPose SteeredPath::At(double t) const {

@@ -63,6 +63,10 @@ class SteeredPath {
  public:
   SteeredPath(const std::vector<ControlSample>& controls, const BicycleParams& params,
               const PlanarPose& start);
+  // Appends a sample after the last (a live drive: simulate samples its controls as it goes);
+  // the path is then the one the constructor makes from all samples, bit for bit. Throws Error
+  // when its time is not after the last sample's.
+  void Append(const ControlSample& c);
   // The pose at time t, clamped to [start_time(), end_time()].
   PlanarPose At(double t) const;
   double start_time() const { return times_.front(); }
@@ -71,6 +75,7 @@ class SteeredPath {
   double length() const { return length_; }    // |distance| driven, metres
 
  private:
+  BicycleParams params_;
   std::vector<double> times_, speed_, curvature_;
   std::vector<PlanarPose> knots_;  // the pose at each sample time
   size_t clamped_ = 0;

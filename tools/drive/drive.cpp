@@ -13,6 +13,7 @@
 #include "base/stats.h"
 #include "base/text.h"
 #include "cli/work.h"
+#include "drive/car_setup.h"
 #include "drive/controls_tsv.h"
 #include "drive/ground.h"
 #include "drive/lane_change.h"
@@ -27,72 +28,7 @@ namespace mvtm {
 
 namespace {
 
-Eigen::Vector3d ParseOffset(const std::string& text) {
-  const auto f = SplitChar(text, ',');
-  if (f.size() != 3)
-    throw UsageError("--camera-offset: expected X,Y,Z in metres (forward, left, up), got '" + text +
-                     "'");
-  Eigen::Vector3d v;
-  for (int k = 0; k < 3; ++k) v[k] = ParseDoubleArg(f[k], "--camera-offset");
-  if (!(v.z() > 0)) throw UsageError("--camera-offset: the height Z must be > 0 metres");
-  return v;
-}
-
-// The recorded images of the pass, their poses (normalised) and the start image.
-struct Recorded {
-  Reconstruction rec;
-  std::vector<const ImageRecord*> images;
-  std::vector<Rigid3d> w2c;
-  size_t start = 0;
-};
-
-Recorded LoadRecorded(const Workspace& ws, const DriveOptions& o) {
-  Recorded r;
-  r.rec = ReadColmapModel(ws.SparseDir().string());
-  for (const ImageRecord* im : r.rec.ImagesByName())
-    if (im->name.compare(0, o.pass.size(), o.pass) == 0) {
-      r.images.push_back(im);
-      r.w2c.emplace_back(NormalizedQuaternion(im->world_to_camera.q), im->world_to_camera.t);
-    }
-  if (r.images.empty())
-    throw Error(ws.SparseDir().string(), 0,
-                o.pass.empty() ? "the model has no images"
-                               : "no image name starts with '" + o.pass + "' (--pass)");
-  if (!o.start.empty()) {
-    size_t i = 0;
-    while (i < r.images.size() && r.images[i]->name != o.start) ++i;
-    if (i == r.images.size())
-      throw UsageError("--start: no image '" + o.start + "' in the workspace" +
-                       (o.pass.empty() ? "" : " whose name starts with '" + o.pass + "'"));
-    r.start = i;
-  }
-  return r;
-}
-
-// Model units per metre, and where that came from.
-double ResolveScale(const DriveOptions& o, const Workspace& ws, const std::vector<double>& heights,
-                    std::string& source) {
-  if (o.scale > 0) {
-    source = "--scale";
-    return o.scale;
-  }
-  const fs::path record = ws.MetricRecord("drive");
-  if (o.metric || !record.empty()) {
-    source = o.metric ? "--metric" : record.string();
-    return 1.0;
-  }
-  std::string hint;
-  if (!heights.empty()) {
-    const double h = Median(heights);
-    hint = "; its cameras are " + FormatDouble(std::round(h * 1e4) / 1e4) +
-           " model units above the mesh, i.e. --scale " +
-           FormatDouble(std::round(h / 1.65 * 1e4) / 1e4) + " for a camera 1.65 m high";
-  }
-  throw UsageError(ws.root().string() +
-                   " is not known to be metric: give --scale S (model units per metre) or "
-                   "--metric" +
-                   hint);
-}
+using Recorded = RecordedDrive;
 
 // The car's path: time → rear axle pose, and the output times.
 struct CarPath {
@@ -213,33 +149,18 @@ std::vector<fs::path> DriveInputs(const DriveOptions& o, const Workspace& ws) {
   return inputs;
 }
 
-// The car's geometry: the camera offset given, or the recorded cameras' median height.
-CarGeometry MakeCar(const DriveOptions& o, const Workspace& ws, const std::vector<double>& heights,
-                    DriveReport& rep) {
-  CarGeometry car{o.wheelbase, o.track, Eigen::Vector3d::Zero()};
-  if (!o.camera_offset.empty()) {
-    car.camera_offset = ParseOffset(o.camera_offset);
-  } else {
-    if (heights.empty())
-      throw Error(ws.MeshPath().string(), 0,
-                  "no recorded camera is above the mesh: give --camera-offset X,Y,Z");
-    car.camera_offset = Eigen::Vector3d(0, 0, Median(heights) / rep.scale);
-    rep.height_from_workspace = true;
-  }
-  rep.camera_height = car.camera_offset.z();
-  return car;
-}
-
 // Drives the car and writes OUT.
 void MakeDrive(const DriveOptions& o, const Workspace& ws, const ControlsLog& log,
                DriveReport& rep) {
-  const Recorded r = LoadRecorded(ws, o);
+  const Recorded r = LoadRecordedDrive(ws, o.pass, o.start);
   const MeshRaycaster mesh(ReadMesh(ws.MeshPath().string()));
   const Eigen::Vector3d up = RecordedUp(r.w2c);
   const std::vector<double> heights = CameraHeights(mesh, r.w2c, up);
   rep.height_cameras = heights.size();
-  rep.scale = ResolveScale(o, ws, heights, rep.scale_source);
-  const CarGeometry car = MakeCar(o, ws, heights, rep);
+  rep.scale = ResolveScale(o.scale, o.metric, ws, heights, "drive", rep.scale_source);
+  const CarGeometry car = MakeCar(o.wheelbase, o.track, o.camera_offset, ws, heights, rep.scale,
+                                  &rep.height_from_workspace);
+  rep.camera_height = car.camera_offset.z();
   const RoadFrame frame = FrameAtCamera(r.w2c[r.start], up, rep.scale);
   const CarPath path = o.lane_change.empty()
                            ? SteeredCarPath(log, o, car, PlanarCamera(frame, r.w2c[r.start]), rep)
@@ -283,7 +204,7 @@ OptionTable DeclareOptions(DriveOptions& o) {
          "centre (default 0,0,H: H the recorded cameras' median height above the mesh)")
       .Alternative("0,0,1.5")
       .Check([&o] {
-        if (!o.camera_offset.empty()) ParseOffset(o.camera_offset);
+        if (!o.camera_offset.empty()) ParseCameraOffset(o.camera_offset, "--camera-offset");
       });
   t.Text("--start", &o.start,
          "Start at this workspace image's pose (default: the first, in name order)");
