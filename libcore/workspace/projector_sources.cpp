@@ -1,8 +1,10 @@
 #include "workspace/projector_sources.h"
 
 #include <algorithm>
+#include <chrono>
 
 #include "base/error.h"
+#include "image/mask.h"
 #include "io/exposure_tsv.h"
 
 namespace mvtm {
@@ -142,6 +144,62 @@ void ProjectorSources::Trim() {
     for (auto it = cache->begin(); it != cache->end();)
       it = it->second.used < keep_from ? cache->erase(it) : std::next(it);
   }
+}
+
+std::vector<Projector> GatherProjectors(ProjectorSources& sources,
+                                        const std::vector<size_t>& indices, const EffectsPlan& plan,
+                                        double* depth_ms) {
+  std::vector<Projector> ps;
+  for (size_t k : indices) {
+    Projector p;
+    p.view = sources.ViewOf(k);
+    p.image = &sources.ImageOf(k);
+    p.key = static_cast<int64_t>(k);
+    if (plan.occlusion || plan.skybox) {
+      const auto t0 = std::chrono::steady_clock::now();
+      p.depth = &sources.DepthOf(k);
+      if (depth_ms)
+        *depth_ms +=
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                .count();
+    }
+    if (plan.masks) p.mask = sources.MaskOf(k);
+    if (plan.exposure) sources.ExposureOf(k, p.exposure);
+    ps.push_back(p);
+  }
+  return ps;
+}
+
+CameraExposure ExposureNear(const std::vector<Projector>& ps, const Eigen::Vector3d& centre) {
+  double sw = 0, g = 0, off = 0;
+  for (const Projector& p : ps) {
+    const double d2 = (p.view.world_to_camera.Centre() - centre).squaredNorm();
+    if (d2 == 0) return p.exposure;
+    sw += 1 / d2;
+    g += p.exposure.gain / d2;
+    off += p.exposure.offset / d2;
+  }
+  if (sw == 0) return CameraExposure();
+  return CameraExposure{float(g / sw), float(off / sw)};
+}
+
+std::string FirstMaskedImage(const Workspace& ws, const std::vector<const ImageRecord*>& images,
+                             const std::set<size_t>& used) {
+  for (size_t i : used) {
+    const fs::path mp = ws.MaskPath(images[i]->name);
+    if (fs::exists(mp) && CountSet(ReadMask(mp.string())) > 0) return mp.filename().string();
+  }
+  return "";
+}
+
+std::string FirstExposedImage(const Workspace& ws, const std::vector<const ImageRecord*>& images,
+                              const std::set<size_t>& used) {
+  const std::map<std::string, ExposureRow> rows = ReadWorkspaceExposure(ws);
+  for (size_t i : used) {
+    auto it = rows.find(images[i]->name);
+    if (it != rows.end() && ChangesSamples(it->second)) return it->first;
+  }
+  return "";
 }
 
 }  // namespace mvtm

@@ -18,9 +18,12 @@
 #include <exception>
 #include <future>
 #include <map>
+#include <set>
+#include <string>
 #include <vector>
 
 #include "io/exposure_tsv.h"
+#include "render/effects_plan.h"
 #include "render/renderer.h"
 #include "scene/reconstruction.h"
 #include "workspace/assets.h"
@@ -91,5 +94,25 @@ class ProjectorSources {
   std::map<std::string, ExposureRow> exposure_;  // exposure.tsv, read on first use
   bool exposure_read_ = false;
 };
+
+// The projectors of one frame: the images `indices` (best first) with what `plan` needs (their
+// depth maps for occlusion or the skybox, masks, exposures). The references point into `sources`
+// until its next Trim(). `depth_ms` (optional) accumulates the time spent gathering depth maps.
+std::vector<Projector> GatherProjectors(ProjectorSources& sources,
+                                        const std::vector<size_t>& indices, const EffectsPlan& plan,
+                                        double* depth_ms = nullptr);
+
+// The exposure a camera at `centre` records at: its projectors' exposures weighted by inverse
+// squared distance (a projector at the centre itself alone); the identity without projectors.
+CameraExposure ExposureNear(const std::vector<Projector>& projectors,
+                            const Eigen::Vector3d& centre);
+
+// The name of the first of `images[used]` whose mask has a set pixel ("" when none): the example
+// that plans the masks effect.
+std::string FirstMaskedImage(const Workspace& ws, const std::vector<const ImageRecord*>& images,
+                             const std::set<size_t>& used);
+// The name of the first of `images[used]` whose exposure (exposure.tsv) changes its samples.
+std::string FirstExposedImage(const Workspace& ws, const std::vector<const ImageRecord*>& images,
+                              const std::set<size_t>& used);
 
 }  // namespace mvtm

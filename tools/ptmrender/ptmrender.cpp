@@ -215,27 +215,6 @@ ProjectorPicks PickProjectors(const PtmRenderOptions& o, const Scene& scene,
   return picks;
 }
 
-// The file name of the first used projector whose mask has a set pixel ("" when none).
-std::string FindMaskedProjector(const Workspace& ws, const Scene& scene,
-                                const std::set<size_t>& used) {
-  for (size_t i : used) {
-    fs::path mp = ws.MaskPath(scene.images[i]->name);
-    if (fs::exists(mp) && CountSet(ReadMask(mp.string())) > 0) return mp.filename().string();
-  }
-  return "";
-}
-
-// The name of the first used projector whose exposure (exposure.tsv) is not the identity.
-std::string FindExposedProjector(const Workspace& ws, const Scene& scene,
-                                 const std::set<size_t>& used) {
-  const std::map<std::string, ExposureRow> rows = ReadWorkspaceExposure(ws);
-  for (size_t i : used) {
-    auto it = rows.find(scene.images[i]->name);
-    if (it != rows.end() && ChangesSamples(it->second)) return it->first;
-  }
-  return "";
-}
-
 SceneSurvey StartSurvey(const PtmRenderOptions& o, const Workspace& ws, const Scene& scene,
                         const ProjectorPicks& picks) {
   SceneSurvey s;
@@ -251,8 +230,8 @@ SceneSurvey StartSurvey(const PtmRenderOptions& o, const Workspace& ws, const Sc
   s.blend_weights = o.blend;
   s.projector_differs = picks.differs;
   s.several_admissible = picks.several;
-  if (s.ptm && !o.no_masks) s.mask_example = FindMaskedProjector(ws, scene, picks.used);
-  if (s.ptm && !o.no_exposure) s.exposure_example = FindExposedProjector(ws, scene, picks.used);
+  if (s.ptm && !o.no_masks) s.mask_example = FirstMaskedImage(ws, scene.images, picks.used);
+  if (s.ptm && !o.no_exposure) s.exposure_example = FirstExposedImage(ws, scene.images, picks.used);
   return s;
 }
 
@@ -339,40 +318,16 @@ struct FrameJob {
 
 std::vector<Projector> FrameProjectors(const FrameJob& job, const EffectsPlan& plan, size_t i,
                                        ProjectorSources& sources, PtmRenderReport& rep) {
-  std::vector<Projector> ps;
-  for (const auto& c : job.picks.per_pose[i]) {
-    Projector p;
-    p.view = sources.ViewOf(c.index);
-    p.image = &sources.ImageOf(c.index);
-    p.key = static_cast<int64_t>(c.index);
-    if (plan.occlusion || plan.skybox) {
-      auto td = Clock::now();
-      p.depth = &sources.DepthOf(c.index);
-      rep.depth_ms += Ms(td, Clock::now());
-    }
-    if (plan.masks) p.mask = sources.MaskOf(c.index);
-    if (plan.exposure) sources.ExposureOf(c.index, p.exposure);
-    ps.push_back(p);
-  }
-  return ps;
+  std::vector<size_t> indices;
+  for (const auto& c : job.picks.per_pose[i]) indices.push_back(c.index);
+  return GatherProjectors(sources, indices, plan, &rep.depth_ms);
 }
 
-// The exposure the render camera records at: its projectors' exposures weighted by inverse
-// squared distance (a projector at the pose itself alone), or the common one.
+// The exposure the render camera records at (ExposureNear), or the common one.
 CameraExposure RenderExposureOf(const FrameJob& job, const EffectsPlan& plan,
                                 const std::vector<Projector>& ps, size_t i) {
-  CameraExposure e;
-  if (!plan.exposure || job.o.render_exposure == RenderExposure::kCommon || ps.empty()) return e;
-  const Eigen::Vector3d c = job.poses[i].w2c.Centre();
-  double sw = 0, g = 0, off = 0;
-  for (const Projector& p : ps) {
-    const double d2 = (p.view.world_to_camera.Centre() - c).squaredNorm();
-    if (d2 == 0) return p.exposure;
-    sw += 1 / d2;
-    g += p.exposure.gain / d2;
-    off += p.exposure.offset / d2;
-  }
-  return CameraExposure{float(g / sw), float(off / sw)};
+  if (!plan.exposure || job.o.render_exposure == RenderExposure::kCommon) return CameraExposure();
+  return ExposureNear(ps, job.poses[i].w2c.Centre());
 }
 
 // Renders the frames, surveying each from its own render (its depth: holes, coverage) instead of
