@@ -79,6 +79,11 @@ PlanarPose SteeredPath::At(double t) const {
   return AdvanceArc(knots_[i], speed_[i] * (t - times_[i]), curvature_[i]);
 }
 
+PlanarPose SteeredPath::Continued(double t) const {
+  if (!(t > times_.back())) return At(t);
+  return AdvanceArc(knots_.back(), speed_.back() * (t - times_.back()), curvature_.back());
+}
+
 std::vector<double> SampleTimes(double t0, double t1, double rate) {
   std::vector<double> out;
   const double n = std::floor((t1 - t0) * rate + 1e-9);

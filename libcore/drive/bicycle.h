@@ -69,6 +69,10 @@ class SteeredPath {
   void Append(const ControlSample& c);
   // The pose at time t, clamped to [start_time(), end_time()].
   PlanarPose At(double t) const;
+  // The pose at time t ≥ start_time() with the last sample's controls held past end_time() (a
+  // live drive between its samples); At(t) up to end_time().
+  PlanarPose Continued(double t) const;
+  double speed() const { return speed_.back(); }  // the last sample's speed
   double start_time() const { return times_.front(); }
   double end_time() const { return times_.back(); }
   size_t clamped() const { return clamped_; }  // samples whose steering angle was clamped

@@ -33,12 +33,12 @@ struct Pedals {
 };
 
 struct LongitudinalParams {
-  double max_accel = 3.0;     // m/s² at full throttle
-  double max_brake = 8.0;     // m/s² at full brake
-  double drag = 0.00035;      // 1/m: deceleration per v²
-  double rolling = 0.15;      // m/s² while moving
-  double max_speed = 50.0;    // m/s
-  double max_reverse = 3.0;   // m/s
+  double max_accel = 3.0;    // m/s² at full throttle
+  double max_brake = 8.0;    // m/s² at full brake
+  double drag = 0.00035;     // 1/m: deceleration per v²
+  double rolling = 0.15;     // m/s² while moving
+  double max_speed = 50.0;   // m/s
+  double max_reverse = 3.0;  // m/s
 };
 
 // The speed after one step of dt seconds from speed v (m/s).
@@ -65,10 +65,10 @@ class RecordedPath {
 };
 
 struct DrivingSummary {
-  double duration = 0, distance = 0;         // s, m
-  double mean_speed = 0, sd_speed = 0;       // m/s
-  double speed_limit = 0;                    // m/s, 0: none given
-  double rms_over_limit = 0, time_over = 0;  // m/s, s
+  double duration = 0, distance = 0;                 // s, m
+  double mean_speed = 0, sd_speed = 0;               // m/s
+  double speed_limit = 0;                            // m/s, 0: none given
+  double rms_over_limit = 0, time_over = 0;          // m/s, s
   double mean_offset = 0, sdlp = 0, max_offset = 0;  // m
   size_t resets = 0;
 };

@@ -1,0 +1,46 @@
+// simulate's window: the rendered frames shown through SDL2 (a software window surface, so it
+// works with SDL's offscreen and dummy video drivers and under Xvfb), side by side for several
+// screens, scaled up from the render size, with the HUD drawn over them.
+//
+// HUD (the thesis's speedometer): speed in km/h (seven-segment digits, top left), the steering-
+// wheel angle as a bar from the centre (left of centre: turning left) with its degrees, the
+// reverse gear as "R", and the adaptive quality level as blocks (full: all lit).
+// Thread safety: the main thread only.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "image/image.h"
+
+namespace mvtm {
+
+struct HudState {
+  double speed_kmh = 0;
+  double steer_deg = 0;
+  bool reverse = false;
+  int quality = 0, qualities = 1;  // level (0 = full) of how many
+};
+
+class Screen {
+ public:
+  // A window of width x height pixels titled `title`. Throws Error with SDL's reason.
+  Screen(int width, int height, const std::string& title);
+  ~Screen();
+  Screen(const Screen&) = delete;
+  Screen& operator=(const Screen&) = delete;
+  // Shows the frames (3-channel, 0..255, one per screen, left to right; each scaled to its
+  // share of the window), with the HUD when `hud`.
+  void Show(const std::vector<const Image*>& frames, const HudState* hud);
+  int width() const { return width_; }
+  int height() const { return height_; }
+
+ private:
+  void* window_ = nullptr;  // SDL_Window*
+  int width_, height_;
+};
+
+// Draws the HUD into a 3-channel 0..255 image (what Show() draws, for a recorded frame).
+void DrawHud(Image& frame, const HudState& hud);
+
+}  // namespace mvtm

@@ -1,0 +1,787 @@
+#include "simulate.h"
+
+#include <SDL2/SDL.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <ostream>
+#include <set>
+#include <thread>
+
+#include "base/atomic_file.h"
+#include "base/error.h"
+#include "base/text.h"
+#include "base/version.h"
+#include "cli/work.h"
+#include "devices.h"
+#include "drive/car_setup.h"
+#include "drive/controls_tsv.h"
+#include "image/async_writer.h"
+#include "index/view_selection.h"
+#include "io/mesh_io.h"
+#include "render/effects_plan.h"
+#include "render/renderer.h"
+#include "screen.h"
+#include "workspace/projector_sources.h"
+#include "workspace/workspace.h"
+
+namespace mvtm {
+
+OptionTable DeclareOptions(SimulateOptions& o) {
+  OptionTable t("simulate");
+  t.Positional("WS", &o.workspace,
+               "Workspace folder (sparse/, images/, mesh.ply; depth/, masks/, textures/ used "
+               "when present)")
+      .Dir();
+  t.Text("--size", &o.size,
+         "One screen's size WxH (default: the camera's); the camera's horizontal field of view "
+         "is kept, the vertical follows the aspect")
+      .Alternative("160x90")
+      .Check([&o] {
+        if (!o.size.empty()) ParseImageSize(o.size);
+      });
+  t.Integer("--screens", &o.screens, "Screens side by side, each rendered with its own yaw")
+      .Range(1, 8);
+  t.Real("--screen-yaw", &o.screen_yaw,
+         "Degrees between neighbouring screens' cameras (0: the horizontal field of view)")
+      .Range(0, 120);
+  t.Real("--scale", &o.scale, "Model units per metre (1 for a metric workspace)").Check([&o] {
+    if (o.scale != 0) CheckRange(o.scale, 0, 1e12, true, "--scale");
+  });
+  t.Flag("--metric", &o.metric, "The workspace is in metres (--scale 1)");
+  t.Real("--wheelbase", &o.wheelbase, "Rear to front axle, metres").Range(0.5, 20);
+  t.Real("--steering-ratio", &o.steering_ratio, "Steering-wheel angle per road-wheel angle")
+      .Range(1, 100);
+  t.Real("--max-steer", &o.max_steer, "Largest road-wheel angle, degrees").Range(0, 89, true);
+  t.Real("--track", &o.track, "Left to right wheel, metres (where the ground is probed)")
+      .Range(0.2, 5);
+  t.Text("--camera-offset", &o.camera_offset,
+         "X,Y,Z: the camera in metres forward, left and up of the ground under the rear axle "
+         "centre (default 0,0,H: H the recorded cameras' median height above the mesh)")
+      .Check([&o] {
+        if (!o.camera_offset.empty()) ParseCameraOffset(o.camera_offset, "--camera-offset");
+      });
+  t.Text("--start", &o.start, "Start at this workspace image's pose (default: the first)");
+  t.Text("--pass", &o.pass,
+         "The recorded drive is the images whose names start with this (default: all)");
+  t.Real("--max-accel", &o.car.max_accel, "Acceleration at full throttle, m/s^2").Range(0.1, 20);
+  t.Real("--max-brake", &o.car.max_brake, "Deceleration at full brake, m/s^2").Range(0.1, 20);
+  t.Real("--drag", &o.car.drag, "Aerodynamic deceleration per squared speed, 1/m").Range(0, 1);
+  t.Real("--max-speed", &o.max_speed, "Speed cap, km/h").Range(1, 400);
+  t.Real("--sim-rate", &o.sim_rate, "Vehicle simulation steps per second").Range(10, 2000);
+  t.Real("--fps", &o.fps,
+         "Target frame rate (pacing, adaptive quality; --as-fast: frames per "
+         "simulated second)")
+      .Range(1, 240);
+  t.Flag("--no-adapt", &o.no_adapt,
+         "Keep full quality (render scale 1, --projectors) whatever the frame rate");
+  t.Integer("--projectors", &o.projectors, "K: projectors tried per pixel, best first")
+      .Range(1, 16);
+  t.Real("--bias", &o.bias, "Occlusion bias, relative: occluded when z > depth*(1+B)")
+      .Range(0, 1, false, true);
+  t.Flag("--no-occlusion", &o.no_occlusion, "Never test projector depth");
+  t.Flag("--no-skybox", &o.no_skybox, "Constant background instead of projected sky");
+  t.Flag("--no-masks", &o.no_masks, "Ignore masks/ (vehicles are projected too)");
+  t.Flag("--no-exposure", &o.no_exposure, "Ignore exposure.tsv");
+  t.Flag("--no-blend", &o.no_blend, "The first projector that sees a point, not a blend");
+  t.Flag("--no-fill", &o.no_fill, "Constant background where nothing is seen");
+  t.Text("--record", &o.record,
+         "Folder for controls.tsv, poses.tsv, poses.tum and summary.json of the session");
+  t.Flag("--record-frames", &o.record_frames, "With --record: also the frames shown");
+  t.Text("--replay", &o.replay,
+         "Drive this controls log (time steer speed) through the loop instead of the devices")
+      .File();
+  t.Flag("--as-fast", &o.as_fast,
+         "Do not wait for the clock: frames at simulation times t0 + k/FPS (needs --replay or "
+         "--duration)");
+  t.Real("--duration", &o.duration, "End after this many simulated seconds (0: until quit)")
+      .Range(0, 1e6);
+  t.Text("--virtual-input", &o.virtual_input,
+         "Drive SDL's virtual joystick with this script ('time axis0 axis1 ...' rows)")
+      .File();
+  t.Text("--mapping", &o.mapping, "Input mapping file (JSON: axes, inversion, dead zones)").File();
+  t.Real("--speed-limit", &o.speed_limit,
+         "Speed limit for the summary's RMS excess and time over it, km/h (0: none)")
+      .Range(0, 400);
+  t.Choice("--off-road", &o.off_road, kOffRoads,
+           "Off the mesh (or --max-offset): reset to the nearest recorded pose, or stop there");
+  t.Choice("--at-end", &o.at_end, kAtEnds,
+           "Past the recorded drive's end: stop the session, or loop to the start");
+  t.Real("--max-offset", &o.max_offset,
+         "Metres from the recorded path counted as off the road (0: only the mesh's edge)")
+      .Range(0, 1000);
+  t.Flag("--no-hud", &o.no_hud, "No speedometer and steering bar (studies)");
+  t.Flag("--no-window", &o.no_window,
+         "Render without showing (benchmarks, batch replays); keyboard unavailable");
+  t.Flag("--explain", &o.explain, "Print the effects plan as JSON and drive nothing").Cosmetic();
+  t.Choice("--gl", &o.gl, GlBackendTable(), "OpenGL backend");
+  DeclareQuietOption(t, o.quiet);
+  return t;
+}
+
+void SimulateOptions::Check() const {
+  CheckDeclared(*this);
+  if (scale != 0 && metric) throw UsageError("give --scale or --metric, not both");
+  if (as_fast && replay.empty() && duration == 0)
+    throw UsageError("--as-fast needs --replay LOG or --duration S (it would never end)");
+  if (record_frames && record.empty()) throw UsageError("--record-frames needs --record OUT");
+  if (!replay.empty() && !virtual_input.empty())
+    throw UsageError("give --replay or --virtual-input, not both");
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double Seconds(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
+
+// The road the car drives: the recorded drive on the mesh, in metres.
+struct Road {
+  RecordedDrive rec;
+  std::unique_ptr<MeshRaycaster> ray;
+  double scale = 1;
+  std::string scale_source;
+  CarGeometry car;
+  RoadFrame frame;
+  std::unique_ptr<RecordedPath> path;  // the recorded camera feet
+  std::vector<PlanarPose> rear;        // the rear axle under each recorded camera
+  BicycleParams bicycle;
+};
+
+Road LoadRoad(const SimulateOptions& o, const Workspace& ws, const Mesh& mesh) {
+  Road r;
+  r.rec = LoadRecordedDrive(ws, o.pass, o.start);
+  r.ray = std::make_unique<MeshRaycaster>(mesh);
+  const Eigen::Vector3d up = RecordedUp(r.rec.w2c);
+  const std::vector<double> heights = CameraHeights(*r.ray, r.rec.w2c, up);
+  r.scale = ResolveScale(o.scale, o.metric, ws, heights, "simulate", r.scale_source);
+  r.car = MakeCar(o.wheelbase, o.track, o.camera_offset, ws, heights, r.scale, nullptr);
+  r.frame = FrameAtCamera(r.rec.w2c[r.rec.start], up, r.scale);
+  std::vector<Eigen::Vector2d> feet;
+  for (const Rigid3d& w2c : r.rec.w2c) {
+    const PlanarPose foot = PlanarCamera(r.frame, w2c);
+    feet.emplace_back(foot.x, foot.y);
+    r.rear.push_back(RearAxleUnder(foot, r.car));
+  }
+  r.path = std::make_unique<RecordedPath>(feet);
+  r.bicycle = BicycleParams{o.wheelbase, o.steering_ratio, o.max_steer};
+  return r;
+}
+
+// The camera's foot point (planar metres) of a car whose rear axle is at `rear`.
+Eigen::Vector2d FootOf(const PlanarPose& rear, const CarGeometry& car) {
+  const double c = std::cos(rear.heading), s = std::sin(rear.heading);
+  const Eigen::Vector3d& off = car.camera_offset;
+  return {rear.x + c * off.x() - s * off.y(), rear.y + s * off.x() + c * off.y()};
+}
+
+// The car as it drives: its path (a segment per reset), its ground and its speed.
+class LiveCar {
+ public:
+  LiveCar(const Road& road, const PlanarPose& rear, double t) : road_(road) { Restart(rear, t); }
+  // Puts the car at `rear`, standing, from time t: a new segment.
+  void Restart(const PlanarPose& rear, double t) {
+    path_ = std::make_unique<SteeredPath>(std::vector<ControlSample>{{t, 0, 0, 0}}, road_.bicycle,
+                                          rear);
+    placer_ = std::make_unique<GroundPlacer>(*road_.ray, road_.frame, road_.car);
+    speed_ = 0;
+    steer_ = 0;
+  }
+  // The controls from time t on; appended to the path when they change (or `always`). True
+  // when appended.
+  bool Control(double t, double steer, double speed, bool always) {
+    if (!always && steer == steer_ && speed == speed_) return false;
+    if (t > path_->end_time())
+      path_->Append({t, steer, speed, 0});
+    else  // the segment's first sample (a restart at t): replace it
+      path_ = std::make_unique<SteeredPath>(std::vector<ControlSample>{{t, steer, speed, 0}},
+                                            road_.bicycle, path_->At(t));
+    steer_ = steer;
+    speed_ = speed;
+    return true;
+  }
+  PlanarPose At(double t) const { return path_->Continued(t); }
+  Placement Place(double t) { return placer_->Place(At(t), t); }
+  double speed() const { return speed_; }
+  double steer() const { return steer_; }
+  double segment_start() const { return path_->start_time(); }
+
+ private:
+  const Road& road_;
+  std::unique_ptr<SteeredPath> path_;
+  std::unique_ptr<GroundPlacer> placer_;
+  double speed_ = 0, steer_ = 0;
+};
+
+// The session's files, written as it goes under OUT/.NAME.partial, renamed at the end.
+class Recorder {
+ public:
+  explicit Recorder(const std::string& dir) : dir_(dir) {
+    if (dir_.empty()) return;
+    CreateFolder(dir_);
+    controls_.open(Partial("controls.tsv"));
+    poses_.open(Partial("poses.tsv"));
+    tum_.open(Partial("poses.tum"));
+    if (!controls_ || !poses_ || !tum_)
+      throw Error(dir_.string(), 0, "cannot write the session's files");
+    controls_ << "time\tsteer\tspeed\tthrottle\tbrake\n";
+    poses_ << "# time tx ty tz qx qy qz qw display_time (camera-to-world; time: simulation "
+              "seconds; display_time: wall seconds since the start)\n";
+    tum_ << "# timestamp tx ty tz qx qy qz qw (camera-to-world)\n";
+  }
+  bool on() const { return !dir_.empty(); }
+  // A controls row; one at the time of the row before replaces it (a segment's first sample
+  // replaced in the same step), so times strictly increase.
+  void Control(double t, double steer, double speed, const Pedals& p) {
+    if (!on()) return;
+    if (pending_ && pending_time_ < t) Flush();
+    pending_ = true;
+    pending_time_ = t;
+    pending_row_ = FormatDouble(t) + '\t' + FormatDouble(steer) + '\t' + FormatDouble(speed) +
+                   '\t' + FormatDouble(p.throttle) + '\t' + FormatDouble(p.brake) + '\n';
+  }
+  void Comment(const std::string& text) {
+    if (!on()) return;
+    Flush();
+    controls_ << "# " << text << '\n';
+  }
+  void Pose(double t, const Rigid3d& c2w, double display) {
+    if (!on()) return;
+    std::string row = FormatDouble(t);
+    for (double v : {c2w.t.x(), c2w.t.y(), c2w.t.z(), c2w.q.x(), c2w.q.y(), c2w.q.z(), c2w.q.w()})
+      row += ' ' + FormatDouble(v);
+    poses_ << row << ' ' << FormatDouble(display) << '\n';
+    tum_ << row << '\n';
+    if (Clock::now() - flushed_ > std::chrono::seconds(1)) {  // a crash keeps all but a second
+      controls_.flush();
+      poses_.flush();
+      tum_.flush();
+      flushed_ = Clock::now();
+    }
+  }
+  void Frame(size_t n, Image frame) {
+    if (!on()) return;
+    char name[32];
+    std::snprintf(name, sizeof name, "%06zu.png", n);
+    writer_.Push((dir_ / "frames" / name).string(), std::move(frame), PngCompression::kFast);
+  }
+  // Closes the files and renames them into place; writes summary.json.
+  void Finish(const nlohmann::json& summary) {
+    if (!on()) return;
+    Flush();
+    writer_.Finish();
+    for (auto* f : {&controls_, &poses_, &tum_}) {
+      f->close();
+      if (f->fail()) throw Error(dir_.string(), 0, "write failed (disk full?)");
+    }
+    for (const char* n : {"controls.tsv", "poses.tsv", "poses.tum"}) {
+      std::error_code ec;
+      fs::rename(Partial(n), dir_ / n, ec);
+      if (ec) throw Error((dir_ / n).string(), 0, "cannot write: " + ec.message());
+    }
+    WriteTextAtomic(dir_ / "summary.json", [&](std::ostream& f) { f << summary.dump(2) << '\n'; });
+  }
+
+ private:
+  fs::path Partial(const std::string& name) const { return dir_ / ("." + name + ".partial"); }
+  void Flush() {
+    if (pending_) controls_ << pending_row_;
+    pending_ = false;
+  }
+  fs::path dir_;
+  bool pending_ = false;
+  double pending_time_ = 0;
+  std::string pending_row_;
+  std::ofstream controls_, poses_, tum_;
+  AsyncImageWriter writer_;
+  Clock::time_point flushed_ = Clock::now();
+};
+
+// Adaptive quality: levels of (render scale, projectors), full first.
+class Quality {
+ public:
+  Quality(int projectors, double fps, bool adapt) : budget_(1 / fps), adapt_(adapt) {
+    const int k = projectors, two = std::min(k, 2);
+    const std::pair<double, int> all[] = {{1, k}, {1, two}, {0.75, two}, {0.75, 1}, {0.5, 1}};
+    for (const auto& l : all)
+      if (levels_.empty() || levels_.back() != l) levels_.push_back(l);
+  }
+  double scale() const { return levels_[size_t(level_)].first; }
+  int projectors() const { return levels_[size_t(level_)].second; }
+  int level() const { return level_; }
+  int levels() const { return int(levels_.size()); }
+  // After a frame that took `seconds` (render and show): a change, or none.
+  std::optional<QualityChange> Update(double seconds, double t) {
+    mean_ = frames_ == 0 ? seconds : 0.8 * mean_ + 0.2 * seconds;
+    ++frames_;
+    if (!adapt_) return std::nullopt;
+    int to = level_;
+    if (mean_ > 1.05 * budget_ && frames_ >= 10 && level_ + 1 < levels()) to = level_ + 1;
+    if (mean_ < 0.6 * budget_ && frames_ >= 60 && level_ > 0) to = level_ - 1;
+    if (to == level_) return std::nullopt;
+    char why[96];
+    std::snprintf(why, sizeof why, "%.1f ms per frame against a %.1f ms budget", mean_ * 1e3,
+                  budget_ * 1e3);
+    level_ = to;
+    frames_ = 0;
+    return QualityChange{t, level_, scale(), projectors(), why};
+  }
+
+ private:
+  std::vector<std::pair<double, int>> levels_;
+  double budget_;
+  bool adapt_;
+  int level_ = 0, frames_ = 0;
+  double mean_ = 0;
+};
+
+// One screen's camera: the model's camera at W x H keeping its horizontal field of view.
+Camera ScreenCamera(const Reconstruction& rec, const std::string& size) {
+  const Camera base = rec.RenderCamera();
+  if (size.empty()) return base;
+  const ImageSize s = ParseImageSize(size);
+  const double k = double(s.width) / double(base.width);
+  Camera c;
+  c.id = base.id;
+  c.model = CameraModel::kPinhole;
+  c.width = s.width;
+  c.height = s.height;
+  c.params = {base.fx() * k, base.fy() * k, s.width / 2.0 + (base.cx() - base.width / 2.0) * k,
+              s.height / 2.0 + (base.cy() - base.height / 2.0) * k};
+  return c;
+}
+
+// Turned `yaw_left_deg` about the camera's own up axis.
+Rigid3d Yawed(const Rigid3d& c2w, double yaw_left_deg) {
+  if (yaw_left_deg == 0) return c2w;
+  Rigid3d r = c2w;
+  const Eigen::Vector3d up = -(c2w.R().col(1));
+  r.q = Eigen::Quaterniond(Eigen::AngleAxisd(yaw_left_deg * M_PI / 180, up)) * c2w.q;
+  r.q.normalize();
+  return r;
+}
+
+// ptmrender's rendering of the workspace, for live views.
+class LiveView {
+ public:
+  LiveView(const SimulateOptions& o, const Workspace& ws, const Reconstruction& rec,
+           const Mesh& mesh)
+      : o_(o),
+        ws_(ws),
+        rec_(rec),
+        images_(rec.ImagesByName()),
+        renderer_(mesh),
+        sources_(ws, rec, images_, &renderer_, /*prefer_textures=*/true) {
+    for (const ImageRecord* im : images_) candidates_.push_back(im->world_to_camera);
+    screen_ = ScreenCamera(rec, o.size);
+    const double hfov = 2 * std::atan(screen_.width / (2 * screen_.fx())) * 180 / M_PI;
+    screen_yaw_ = o.screen_yaw > 0 ? o.screen_yaw : hfov;
+  }
+  const Camera& screen() const { return screen_; }
+  // The survey and plan from the start view and recorded views along the drive.
+  void Plan(const Rigid3d& start_c2w, const std::vector<Rigid3d>& recorded_w2c);
+  const SceneSurvey& survey() const { return survey_; }
+  const EffectsPlan& plan() const { return plan_; }
+  // Renders every screen at the car's camera pose; `log` gets plan upgrades.
+  std::vector<Image> Render(const Rigid3d& c2w, const Quality& q, double ahead_m,
+                            std::vector<std::string>& log);
+
+ private:
+  std::vector<size_t> Pick(const Rigid3d& w2c, int k) const {
+    ViewSelectionOptions so;
+    so.k = size_t(k);
+    std::vector<size_t> idx;
+    for (const Candidate& c : SelectViews(w2c, candidates_, so)) idx.push_back(c.index);
+    return idx;
+  }
+  Image RenderOne(const Rigid3d& w2c, const Camera& cam, int k, bool survey,
+                  std::vector<std::string>& log);
+
+  const SimulateOptions& o_;
+  const Workspace& ws_;
+  const Reconstruction& rec_;
+  std::vector<const ImageRecord*> images_;
+  std::vector<Rigid3d> candidates_;
+  Renderer renderer_;
+  ProjectorSources sources_;
+  Camera screen_;
+  double screen_yaw_ = 0;
+  SceneSurvey survey_;
+  EffectsPlan plan_;
+};
+
+void LiveView::Plan(const Rigid3d& start_c2w, const std::vector<Rigid3d>& recorded_w2c) {
+  SceneSurvey& s = survey_;
+  s.ptm = true;
+  s.projectors_requested = o_.projectors;
+  s.bias = o_.bias;
+  s.no_occlusion = o_.no_occlusion;
+  s.no_masks = o_.no_masks;
+  s.no_skybox = o_.no_skybox;
+  s.no_exposure = o_.no_exposure;
+  s.no_blend = o_.no_blend;
+  s.no_fill = o_.no_fill;
+  s.projector_differs = true;  // a live car is never exactly at a recorded pose
+  s.several_admissible = o_.projectors > 1 && images_.size() > 1;
+  std::set<size_t> all;
+  for (size_t i = 0; i < images_.size(); ++i) all.insert(i);
+  if (!o_.no_masks) s.mask_example = FirstMaskedImage(ws_, images_, all);
+  if (!o_.no_exposure) s.exposure_example = FirstExposedImage(ws_, images_, all);
+  std::vector<std::pair<Rigid3d, std::string>> views = {{start_c2w.Inverse(), "the start view"}};
+  const size_t n = recorded_w2c.size(), step = std::max<size_t>(1, n / 8);
+  for (size_t i = 0; i < n; i += step)
+    views.push_back({recorded_w2c[i], "recorded view " + std::to_string(i)});
+  for (const auto& [w2c, name] : views) {
+    const std::vector<size_t> idx = Pick(w2c, 1);
+    std::optional<View> first;
+    if (!idx.empty()) first = sources_.ViewOf(idx[0]);
+    AddToSurvey(s, SurveyView(renderer_, View{screen_, w2c}, first ? &*first : nullptr), name);
+  }
+  plan_ = PlanEffects(s);
+}
+
+Image LiveView::RenderOne(const Rigid3d& w2c, const Camera& cam, int k, bool survey,
+                          std::vector<std::string>& log) {
+  sources_.Trim();
+  const std::vector<size_t> idx = Pick(w2c, k);
+  const std::vector<Projector> ps = GatherProjectors(sources_, idx, plan_);
+  const CameraExposure exposure =
+      plan_.exposure ? ExposureNear(ps, w2c.Centre()) : CameraExposure();
+  const View view{cam, w2c};
+  Renderer::Frame f = renderer_.Render(view, ps, plan_, nullptr, survey, exposure);
+  if (survey) {  // a hole the survey did not foresee turns the skybox and fill on from now
+    AddToSurvey(survey_, CoverageOf(f.depth, view, ps.empty() ? nullptr : &ps[0].view),
+                "a live view");
+    const EffectsPlan now = PlanEffects(survey_);
+    if (now.skybox != plan_.skybox || now.fill != plan_.fill)
+      log.push_back(std::string("plan: a live view sees no surface somewhere: skybox ") +
+                    (now.skybox ? "on" : "off") + ", fill " + (now.fill ? "on" : "off"));
+    plan_ = now;
+  }
+  return std::move(f.colour);
+}
+
+std::vector<Image> LiveView::Render(const Rigid3d& c2w, const Quality& q, double ahead_m,
+                                    std::vector<std::string>& log) {
+  const uint64_t w = std::max<uint64_t>(1, uint64_t(std::lround(screen_.width * q.scale())));
+  const uint64_t h = std::max<uint64_t>(1, uint64_t(std::lround(screen_.height * q.scale())));
+  const Camera cam = q.scale() == 1 ? screen_ : screen_.Scaled(w, h);
+  std::vector<Image> frames;
+  const bool survey = !(plan_.skybox && plan_.fill) && !(o_.no_skybox && o_.no_fill);
+  for (int i = 0; i < o_.screens; ++i) {
+    const double yaw = ((o_.screens - 1) / 2.0 - i) * screen_yaw_;
+    frames.push_back(
+        RenderOne(Yawed(c2w, yaw).Inverse(), cam, q.projectors(), survey && i == 0, log));
+  }
+  // Read ahead: the projectors of where the car will be (straight on) in half a second.
+  Rigid3d ahead = c2w;
+  ahead.t += c2w.R().col(2) * ahead_m;
+  sources_.Prefetch(Pick(ahead.Inverse(), q.projectors()), plan_.occlusion || plan_.skybox,
+                    plan_.masks);
+  return frames;
+}
+
+// SDL for the session's lifetime.
+struct SdlSession {
+  explicit SdlSession(bool video) {
+    SDL_SetHint(SDL_HINT_JOYSTICK_ALLOW_BACKGROUND_EVENTS, "1");  // a study runs other windows
+    // The window's pixels are copied in software: an accelerated window framebuffer would make
+    // SDL's own GL context current on this thread, under the renderer's.
+    SDL_SetHint(SDL_HINT_FRAMEBUFFER_ACCELERATION, "0");
+    const Uint32 flags = SDL_INIT_JOYSTICK | SDL_INIT_GAMECONTROLLER | (video ? SDL_INIT_VIDEO : 0);
+    if (SDL_Init(flags) != 0)
+      throw Error(
+          std::string("SDL cannot start") + (video ? " a window" : "") + ": " + SDL_GetError() +
+          (video ? " (no display? SDL_VIDEODRIVER=offscreen, xvfb-run, or --no-window)" : ""));
+  }
+  ~SdlSession() { SDL_Quit(); }
+  SdlSession(const SdlSession&) = delete;
+  SdlSession& operator=(const SdlSession&) = delete;
+};
+
+// The running session: the car, its input, the screens, the record.
+class Session {
+ public:
+  Session(const SimulateOptions& o, Road& road, LiveView& view, Devices& devices, Screen* screen,
+          Recorder& rec, const ControlsLog* log, SimulateReport& rep)
+      : o_(o),
+        road_(road),
+        view_(view),
+        devices_(devices),
+        screen_(screen),
+        rec_(rec),
+        log_(log),
+        rep_(rep),
+        quality_(o.projectors, o.fps, !o.no_adapt),
+        measures_(o.speed_limit / 3.6),
+        t0_(log ? log->samples.front().time : 0),
+        car_(road, road.rear[road.rec.start], t0_) {
+    lp_ = o.car;
+    lp_.max_speed = o.max_speed / 3.6;
+    t_end_ = log              ? log->samples.back().time
+             : o.duration > 0 ? t0_ + o.duration
+                              : std::numeric_limits<double>::infinity();
+    t_last_ = t0_;
+    last_good_ = road.rear[road.rec.start];
+    hud_ = !o.no_hud;
+    rec_.Control(t0_, 0, 0, Pedals());
+    if (log_) Apply(log_->samples[next_sample_++]);
+  }
+  void Run();
+
+ private:
+  void Apply(const ControlSample& c) {
+    car_.Control(c.time, c.steer_deg, c.speed, true);
+    rec_.Control(c.time, c.steer_deg, c.speed, Pedals());
+  }
+  double NextStepTime() const {
+    double t = t0_ + double(k_ + 1) / o_.sim_rate;
+    if (log_ && next_sample_ < log_->samples.size())
+      t = std::min(t, log_->samples[next_sample_].time);
+    return t;
+  }
+  void Step(double t);
+  void Reset(double t, const std::string& why, bool to_start);
+  bool Frame(double T, double display);  // false: the session ends
+
+  const SimulateOptions& o_;
+  Road& road_;
+  LiveView& view_;
+  Devices& devices_;
+  Screen* screen_;
+  Recorder& rec_;
+  const ControlsLog* log_;
+  SimulateReport& rep_;
+  Quality quality_;
+  DrivingMeasures measures_;
+  LongitudinalParams lp_;
+  double t0_, t_end_ = 0, t_last_ = 0, offset_ = 0;
+  LiveCar car_;
+  long k_ = 0;
+  size_t next_sample_ = 0;
+  Pedals pedals_;
+  PlanarPose last_good_;
+  bool hud_ = true, ended_ = false;
+};
+
+void Session::Step(double t) {
+  measures_.Add(t - t_last_, car_.speed(), offset_);
+  if (t >= t0_ + double(k_ + 1) / o_.sim_rate) ++k_;
+  if (log_) {
+    while (next_sample_ < log_->samples.size() && log_->samples[next_sample_].time <= t)
+      Apply(log_->samples[next_sample_++]);
+  } else {
+    pedals_ = devices_.Sample(t, 1 / o_.sim_rate);
+    const double v = NextSpeed(car_.speed(), pedals_, 1 / o_.sim_rate, lp_);
+    if (car_.Control(t, pedals_.steer_deg, v, false))
+      rec_.Control(t, pedals_.steer_deg, v, pedals_);
+  }
+  t_last_ = t;
+  ++rep_.steps;
+  const PathPoint pp = road_.path->Project(FootOf(car_.At(t), road_.car));
+  offset_ = pp.offset;
+  if (pp.along >= pp.length - 0.05 && car_.speed() > 0) {
+    if (o_.at_end == AtEnd::kStop) {
+      ended_ = true;
+      rep_.ended = "the end of the recorded drive";
+    } else {
+      Reset(t, "the end of the recorded drive: back to the start", true);
+    }
+  } else if (o_.max_offset > 0 && std::abs(offset_) > o_.max_offset) {
+    Reset(t,
+          FormatDouble(std::round(std::abs(offset_) * 100) / 100) +
+              " m from the recorded path (--max-offset)",
+          false);
+  }
+}
+
+void Session::Reset(double t, const std::string& why, bool to_start) {
+  PlanarPose at = last_good_;
+  std::string where = "where it last was on the road";
+  if (to_start || o_.off_road == OffRoad::kReset) {
+    const size_t i =
+        to_start ? road_.rec.start : road_.path->Nearest(FootOf(car_.At(t), road_.car));
+    at = road_.rear[i];
+    where = road_.rec.images[i]->name;
+  }
+  car_.Restart(at, t);
+  measures_.Reset();
+  rec_.Comment("reset at " + FormatDouble(t) + " s to " + where + ": " + why);
+  rec_.Control(t, 0, 0, Pedals());
+  rep_.log.push_back("t=" + FormatDouble(std::round(t * 1000) / 1000) + " s: car put " +
+                     (where.find(' ') == std::string::npos ? "at " : "") + where + ": " + why);
+  offset_ = road_.path->Project(FootOf(at, road_.car)).offset;
+}
+
+bool Session::Frame(double T, double display) {
+  const auto t_start = Clock::now();
+  const InputEvents ev = devices_.Poll();
+  for (const std::string& l : ev.log) rep_.log.push_back("t=" + FormatDouble(T) + " s: " + l);
+  if (ev.quit) {
+    rep_.quit = true;
+    rep_.ended = "quit";
+    return false;
+  }
+  if (ev.toggle_hud) hud_ = !hud_;
+  for (double next = NextStepTime(); next <= T && !ended_; next = NextStepTime()) Step(next);
+  if (ev.reset) Reset(T, "Backspace", false);
+  Placement p;
+  try {
+    p = car_.Place(T);
+  } catch (const Error& e) {
+    Reset(T, std::string("off the mesh (") + e.what() + ")", false);
+    p = car_.Place(T);
+  }
+  last_good_ = car_.At(T);
+  const auto t_render = Clock::now();
+  std::vector<Image> frames = view_.Render(
+      p.camera_to_world, quality_, std::max(0.0, car_.speed()) * 0.5 * road_.scale, rep_.log);
+  rep_.render_ms += Seconds(t_render, Clock::now()) * 1e3;
+  const HudState hs{car_.speed() * 3.6, car_.steer(), pedals_.reverse, quality_.level(),
+                    quality_.levels()};
+  if (screen_) {
+    std::vector<const Image*> ptrs;
+    for (const Image& f : frames) ptrs.push_back(&f);
+    screen_->Show(ptrs, hud_ ? &hs : nullptr);
+  }
+  rec_.Pose(T, p.camera_to_world, display);
+  if (o_.record_frames) rec_.Frame(rep_.frames, std::move(frames[0]));
+  ++rep_.frames;
+  if (auto c = quality_.Update(Seconds(t_start, Clock::now()), T)) rep_.quality.push_back(*c);
+  return !ended_ && T < t_end_;
+}
+
+void Session::Run() {
+  const auto wall0 = Clock::now();
+  const double budget = 1 / o_.fps;
+  double T = t0_;
+  if (o_.as_fast) {
+    const std::vector<double> times = SampleTimes(t0_, t_end_, o_.fps);
+    for (double t : times) {
+      T = t;
+      if (!Frame(t, Seconds(wall0, Clock::now()))) break;
+    }
+  } else {
+    for (;;) {
+      const auto frame_start = Clock::now();
+      T = std::min(t_end_, t0_ + Seconds(wall0, frame_start));
+      if (!Frame(T, Seconds(wall0, frame_start))) break;
+      std::this_thread::sleep_until(frame_start + std::chrono::duration<double>(budget));
+    }
+  }
+  // The log ends at the last frame shown, so drive's path ends where the session did.
+  if (!log_ && T > car_.segment_start() && car_.Control(T, car_.steer(), car_.speed(), true))
+    rec_.Control(T, car_.steer(), car_.speed(), pedals_);
+  rep_.sim_start = t0_;
+  rep_.sim_end = T;
+  rep_.wall_s = Seconds(wall0, Clock::now());
+  rep_.final_level = quality_.level();
+  rep_.final_scale = quality_.scale();
+  rep_.final_projectors = quality_.projectors();
+  rep_.driving = measures_.Summary();
+  if (rep_.ended.empty()) rep_.ended = log_ ? "the end of the log" : "--duration reached";
+}
+
+nlohmann::json SummaryJson(const SimulateOptions& o, const SimulateReport& r) {
+  SimulateOptions copy = o;
+  const OptionTable table = DeclareOptions(copy);
+  const DrivingSummary& d = r.driving;
+  nlohmann::json q = nlohmann::json::array();
+  for (const QualityChange& c : r.quality)
+    q.push_back({{"time", c.time},
+                 {"level", c.level},
+                 {"render_scale", c.render_scale},
+                 {"projectors", c.projectors},
+                 {"why", c.why}});
+  return {{"tool", "simulate"},
+          {"version", kVersion},
+          {"options", table.Json()},
+          {"gl", r.gl},
+          {"device", r.device},
+          {"ended", r.ended},
+          {"simulation", {{"start", r.sim_start}, {"end", r.sim_end}, {"steps", r.steps}}},
+          {"frames",
+           {{"shown", r.frames},
+            {"wall_s", r.wall_s},
+            {"fps", r.wall_s > 0 ? double(r.frames) / r.wall_s : 0.0},
+            {"render_ms", r.frames ? r.render_ms / double(r.frames) : 0.0}}},
+          {"quality",
+           {{"changes", q},
+            {"final_level", r.final_level},
+            {"render_scale", r.final_scale},
+            {"projectors", r.final_projectors}}},
+          {"driving",
+           {{"duration_s", d.duration},
+            {"distance_m", d.distance},
+            {"mean_speed_kmh", d.mean_speed * 3.6},
+            {"sd_speed_kmh", d.sd_speed * 3.6},
+            {"speed_limit_kmh", d.speed_limit * 3.6},
+            {"rms_over_limit_kmh", d.rms_over_limit * 3.6},
+            {"time_over_limit_s", d.time_over},
+            {"mean_offset_m", d.mean_offset},
+            {"sdlp_m", d.sdlp},
+            {"max_offset_m", d.max_offset},
+            {"resets", d.resets}}},
+          {"log", r.log}};
+}
+
+}  // namespace
+
+SimulateReport RunSimulate(const SimulateOptions& o, std::ostream& out) {
+  o.Check();
+  const Workspace ws(o.workspace);
+  ws.Require("simulate", {WsItem::kSparse, WsItem::kMesh});
+  ControlsLog log;
+  if (!o.replay.empty()) log = ReadControlsTsv(o.replay);
+  const InputMapping mapping = o.mapping.empty() ? InputMapping() : ReadInputMapping(o.mapping);
+  std::vector<VirtualRow> script;
+  if (!o.virtual_input.empty()) script = ReadVirtualScript(o.virtual_input);
+  const Mesh mesh = ReadMesh(ws.MeshPath().string());
+  if (mesh.faces.empty()) throw Error(ws.MeshPath().string(), 0, "the mesh has no triangles");
+  Road road = LoadRoad(o, ws, mesh);
+  SimulateReport rep;
+  // SDL and the window first: SDL's offscreen video driver sets up EGL state of its own, so the
+  // renderer's context is made after it (and stays the current one).
+  std::optional<SdlSession> sdl;
+  std::unique_ptr<Screen> screen;
+  if (!o.explain) sdl.emplace(!o.no_window);
+  if (!o.explain && !o.no_window) {
+    const Camera sc = ScreenCamera(road.rec.rec, o.size);
+    screen = std::make_unique<Screen>(int(sc.width) * o.screens, int(sc.height),
+                                      "mvtm simulate — " + o.workspace);
+  }
+  auto ctx = GlContext::Create(o.gl);
+  rep.gl = ctx->Describe();
+  LiveView view(o, ws, road.rec.rec, mesh);
+  GroundPlacer start_placer(*road.ray, road.frame, road.car);
+  const Placement start = start_placer.Place(road.rear[road.rec.start], 0);
+  view.Plan(start.camera_to_world, road.rec.w2c);
+  if (o.explain) {
+    nlohmann::json j;
+    j["screens"] = o.screens;
+    j["render_size"] = {view.screen().width, view.screen().height};
+    j["gl"] = rep.gl;
+    j["effects"] = ExplainEffects(view.survey(), view.plan());
+    j["shader_defines"] = view.plan().Defines();
+    out << j.dump(2) << "\n";
+    return rep;
+  }
+  Devices devices(mapping, script, !o.no_window);
+  rep.device = o.replay.empty() ? devices.Describe() : "replay of " + o.replay;
+  Recorder rec(o.record);
+  Session session(o, road, view, devices, screen.get(), rec, o.replay.empty() ? nullptr : &log,
+                  rep);
+  session.Run();
+  rec.Finish(SummaryJson(o, rep));
+  return rep;
+}
+
+}  // namespace mvtm
