@@ -26,7 +26,9 @@ double Ms(Clock::time_point a, Clock::time_point b) {
 struct Chunk {
   Eigen::Vector3d origin, lo, hi;  // world, double
   GLint base_vertex = 0;
+  size_t vertex_count = 0;
   size_t first_index = 0, index_count = 0;
+  size_t lod_first = 0, lod_count = 0;  // the simplified triangles (SetDetail)
 };
 
 void CheckGlError(const char* where) {
@@ -94,6 +96,50 @@ struct Renderer::Impl {
   GLuint vao = 0, vbo = 0, ebo = 0;
   std::vector<Chunk> chunks;
   size_t triangles = 0;
+  // Level of detail (SetDetail): the vertices (x y z r g b, chunk-relative), the full-detail
+  // indices and which vertices lie on a chunk border (never moved, so chunks meet at any level).
+  std::vector<float> verts;
+  std::vector<uint32_t> indices;
+  std::vector<uint8_t> border;
+  double lod_distance = 0, lod_cell = 0;
+  bool lod_allowed = false;  // Render's surface pass only, never RenderDepth
+
+  // Vertex clustering (Rossignac & Borrel 1993) of each chunk on a grid of `cell` model units:
+  // every vertex off the border moves to the first vertex of its cell, degenerate triangles go.
+  void BuildLod(double cell) {
+    std::vector<uint32_t> all(indices);
+    for (Chunk& ch : chunks) {
+      std::map<std::array<int64_t, 3>, uint32_t> first;
+      std::vector<uint32_t> rep(ch.vertex_count);
+      for (uint32_t v = 0; v < ch.vertex_count; ++v) {
+        const size_t g = size_t(ch.base_vertex) + v;
+        rep[v] = v;
+        if (border[g]) continue;
+        std::array<int64_t, 3> key;
+        for (int k = 0; k < 3; ++k)
+          key[k] = int64_t(std::floor((double(verts[6 * g + size_t(k)]) + ch.origin[k]) / cell));
+        rep[v] = first.emplace(key, v).first->second;
+      }
+      ch.lod_first = all.size();
+      for (size_t i = ch.first_index; i + 2 < ch.first_index + ch.index_count; i += 3) {
+        const uint32_t a = rep[indices[i]], b = rep[indices[i + 1]], c = rep[indices[i + 2]];
+        if (a != b && b != c && a != c) all.insert(all.end(), {a, b, c});
+      }
+      ch.lod_count = all.size() - ch.lod_first;
+    }
+    glBindVertexArray(vao);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(all.size() * sizeof(uint32_t)),
+                 all.data(), GL_STATIC_DRAW);
+    glBindVertexArray(0);
+    CheckGlError("level of detail");
+    lod_cell = cell;
+  }
+
+  // Distance (model units) from `c` to the chunk's box.
+  static double BoxDistance(const Chunk& ch, const Eigen::Vector3d& c) {
+    return (c - c.cwiseMax(ch.lo).cwiseMin(ch.hi)).norm();
+  }
   Eigen::Vector3d lo, hi;
   std::map<std::string, GLuint> programs;  // by defines + stage
   // Depth renders; the two passes of a colour render: surface (gbuffer.frag), then per pixel
@@ -228,10 +274,12 @@ struct Renderer::Impl {
     for (const Chunk* ch : visible) {
       Eigen::Vector3f o = (ch->origin - C).cast<float>();
       glUniform3fv(off, 1, o.data());
-      glDrawElementsBaseVertex(GL_TRIANGLES, static_cast<GLsizei>(ch->index_count), GL_UNSIGNED_INT,
-                               reinterpret_cast<void*>(ch->first_index * sizeof(uint32_t)),
-                               ch->base_vertex);
-      tris += ch->index_count / 3;
+      const bool coarse = lod_allowed && lod_distance > 0 && BoxDistance(*ch, C) > lod_distance;
+      const size_t first = coarse ? ch->lod_first : ch->first_index;
+      const size_t count = coarse ? ch->lod_count : ch->index_count;
+      glDrawElementsBaseVertex(GL_TRIANGLES, static_cast<GLsizei>(count), GL_UNSIGNED_INT,
+                               reinterpret_cast<void*>(first * sizeof(uint32_t)), ch->base_vertex);
+      tris += count / 3;
     }
     glFinish();
     auto t2 = Clock::now();
@@ -414,9 +462,21 @@ Renderer::Renderer(const Mesh& mesh, double chunk_size) : impl_(std::make_unique
       key[k] = static_cast<int64_t>(std::floor((c[k] - m.lo[k]) / chunk_size));
     bins[key].push_back(f);
   }
-  std::vector<float> verts;  // x y z r g b
-  std::vector<uint32_t> indices;
+  std::vector<float>& verts = m.verts;  // x y z r g b
+  std::vector<uint32_t>& indices = m.indices;
   const bool colours = mesh.has_colors();
+  // A vertex used by the triangles of two chunks is on a border (kept at every level of detail).
+  std::vector<int64_t> chunk_of(mesh.vertices.size(), -1);
+  std::vector<uint8_t> shared(mesh.vertices.size(), 0);
+  int64_t bin_id = 0;
+  for (const auto& [key, faces] : bins) {
+    for (uint32_t f : faces)
+      for (uint32_t vi : mesh.faces[f]) {
+        if (chunk_of[vi] >= 0 && chunk_of[vi] != bin_id) shared[vi] = 1;
+        chunk_of[vi] = bin_id;
+      }
+    ++bin_id;
+  }
   for (const auto& [key, faces] : bins) {
     Chunk ch;
     std::unordered_map<uint32_t, uint32_t> local;
@@ -431,7 +491,9 @@ Renderer::Renderer(const Mesh& mesh, double chunk_size) : impl_(std::make_unique
       }
     ch.origin = (ch.lo + ch.hi) / 2;
     ch.base_vertex = static_cast<GLint>(verts.size() / 6);
+    ch.vertex_count = order.size();
     for (uint32_t vi : order) {
+      m.border.push_back(shared[vi]);
       Eigen::Vector3d p = mesh.vertices[vi] - ch.origin;
       verts.insert(verts.end(), {float(p.x()), float(p.y()), float(p.z())});
       if (colours)
@@ -489,6 +551,14 @@ void Renderer::Impl::DrawSurface(Target& t, const std::vector<Target::Format>& f
   glDepthFunc(GL_LESS);
   glDisable(GL_CULL_FACE);
   Draw(Program("mesh.vert", frag, {}, {}), view, stats);
+}
+
+void Renderer::SetDetail(double distance, double cell) {
+  Impl& m = *impl_;
+  if (!(distance >= 0) || (distance > 0 && !(cell > 0)))
+    throw Error("level of detail: the distance must be >= 0 and the cell > 0");
+  if (distance > 0 && cell != m.lod_cell) m.BuildLod(cell);
+  m.lod_distance = distance;
 }
 
 Image Renderer::RenderDepth(const View& view, RenderStats* stats) {
@@ -617,7 +687,9 @@ Renderer::Frame Renderer::Render(const View& view, const std::vector<Projector>&
   }
   // Two passes: the surface each pixel sees, then texturing once per pixel (a fragment hidden by
   // a nearer one costs no texturing, and a software rasteriser shades tiny triangles wastefully).
+  m.lod_allowed = true;  // the frame's own surface may be simplified far away; depth maps never
   m.DrawSurface(m.surface_target, {kLinearDepth, kRgba8}, "gbuffer.frag", view, stats);
+  m.lod_allowed = false;
   auto t_shade = Clock::now();
   m.EnsureTarget(m.colour_target, w, h, {kRgba8, kSource}, false);
   glBindFramebuffer(GL_FRAMEBUFFER, m.colour_target.fbo);

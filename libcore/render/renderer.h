@@ -9,7 +9,8 @@
 //    Projector transforms are likewise built in double relative to the render camera.
 //  * Depth maps are linear camera-space z (float32 metres), +inf where there is no surface.
 //  * Images are float samples 0..255 (8-bit scale), row 0 at the top, like libcore/image.
-//  * Chunks outside the view frustum are not drawn (frustum culling in double on the CPU).
+//  * Chunks outside the view frustum are not drawn (frustum culling in double on the CPU); far
+//    ones may be drawn simplified (SetDetail: a live renderer's level of detail).
 //
 // Thread safety: a Renderer belongs to the thread holding the GL context.
 #pragma once
@@ -92,6 +93,14 @@ class Renderer {
   Frame Render(const View& view, const std::vector<Projector>& projectors, const EffectsPlan& plan,
                RenderStats* stats = nullptr, bool with_depth = false,
                CameraExposure exposure = CameraExposure());
+
+  // Level of detail for Render's frames (never RenderDepth's depth maps): chunks whose box is
+  // farther than `distance` (model units) from the camera are drawn simplified by vertex
+  // clustering (Rossignac & Borrel 1993) on a world grid of `cell` model units; vertices on a
+  // chunk's border never move, so chunks of different levels meet without cracks. Distance 0:
+  // full detail everywhere (the default). The simplified triangles are built once per cell size.
+  // Throws Error for a negative distance or a cell <= 0 with a distance.
+  void SetDetail(double distance, double cell);
 
   size_t triangles() const;
   size_t chunks() const;

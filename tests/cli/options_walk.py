@@ -15,6 +15,11 @@ how to vary fails the test. SPECS (tests/cli/options_walk.json) gives per tool:
   args      per flag, the extra arguments that vary it when its declared alternative alone does
             not do (e.g. a file, or a companion option); "" skips the flag, with
   why       per skipped flag, the reason (a skipped flag without a reason fails)
+  session   (simulate) the tool runs a session, not outputs kept up to date: every run makes
+            its files anew. Walked instead: the base run's record (the file `record` names, e.g.
+            rec/summary.json) lists exactly the options --help shows, and every option changed
+            alone runs and is recorded with its new value (the record says what the session
+            ran with).
 "Redone" means every output file was rewritten (its modification time changed) or the set of
 files changed; "nothing redone" means no output file was touched.
 """
@@ -109,6 +114,9 @@ for line in helptext.splitlines():
         shown.add(m.group(1).lower())
 records = [os.path.join(d, f) for d, _, fs in os.walk(base) for f in fs
            if f == tool + ".json" and os.path.basename(d) == "provenance"]
+if spec.get("session"):
+    records = [os.path.join(base, spec["record"])] if os.path.isfile(
+        os.path.join(base, spec["record"])) else []
 if not records:
     failures.append(f"the base command wrote no provenance/{tool}.json")
 for r in records:
@@ -131,6 +139,20 @@ for opt in table["options"]:
         failures.append(f"{flag}: no alternative value declared and none in the spec")
         continue
     cmd = spec["cmd"] + " " + args
+    if spec.get("session"):
+        run = fresh("opt" + flag.replace("-", "_"))
+        try:
+            sh(cmd, run)
+            key = flag[2:].replace("-", "_")
+            was = json.load(open(records[0]))["options"].get(key)
+            now = json.load(open(os.path.join(run, spec["record"])))["options"].get(key)
+            if now == was:
+                failures.append(f"{flag}: changed to {args!r}, the record still says {now!r}")
+        except (RuntimeError, OSError, KeyError, ValueError) as e:
+            failures.append(f"{flag}: {e}")
+        shutil.rmtree(run)
+        walked += 1
+        continue
     run = os.path.join(scratch, "opt" + flag.replace("-", "_"))
     shutil.copytree(base, run, symlinks=True)  # keeps modification times
     before = files(run)

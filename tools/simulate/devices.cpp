@@ -274,6 +274,8 @@ Pedals Devices::Sample(double t, double dt) {
   return p;
 }
 
-std::string Devices::Describe() const { return joystick_ ? name_ : "keyboard"; }
+std::string Devices::Describe() const {
+  return joystick_ ? name_ : keyboard_ ? "keyboard" : "none";
+}
 
 }  // namespace mvtm

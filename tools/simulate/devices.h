@@ -84,7 +84,7 @@ class Devices {
   // The controls at simulation time t after a step of dt seconds: the script's rows up to t are
   // applied first, then the devices are read; the keyboard's wheel moves by its rate over dt.
   Pedals Sample(double t, double dt);
-  // The device in use ("keyboard" when none).
+  // The device in use: its name, else "keyboard" with a window, else "none".
   std::string Describe() const;
 
  private:

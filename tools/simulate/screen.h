@@ -3,8 +3,9 @@
 // screens, scaled up from the render size, with the HUD drawn over them.
 //
 // HUD (the thesis's speedometer): speed in km/h (seven-segment digits, top left), the steering-
-// wheel angle as a bar from the centre (left of centre: turning left) with its degrees, the
-// reverse gear as "R", and the adaptive quality level as blocks (full: all lit).
+// wheel angle as a bar from the centre (left of centre: turning left; ±450° spans a third of
+// the width each way), the reverse gear as a red block beside the speed, and the adaptive
+// quality level as blocks (full quality: all lit).
 // Thread safety: the main thread only.
 #pragma once
 

@@ -70,7 +70,8 @@ OptionTable DeclareOptions(SimulateOptions& o) {
       });
   t.Text("--start", &o.start, "Start at this workspace image's pose (default: the first)");
   t.Text("--pass", &o.pass,
-         "The recorded drive is the images whose names start with this (default: all)");
+         "The recorded drive is the images whose names start with this (default: the start "
+         "image's drive, its name's prefix before '_')");
   t.Real("--max-accel", &o.car.max_accel, "Acceleration at full throttle, m/s^2").Range(0.1, 20);
   t.Real("--max-brake", &o.car.max_brake, "Deceleration at full brake, m/s^2").Range(0.1, 20);
   t.Real("--drag", &o.car.drag, "Aerodynamic deceleration per squared speed, 1/m").Range(0, 1);
@@ -80,8 +81,11 @@ OptionTable DeclareOptions(SimulateOptions& o) {
          "Target frame rate (pacing, adaptive quality; --as-fast: frames per "
          "simulated second)")
       .Range(1, 240);
-  t.Flag("--no-adapt", &o.no_adapt,
-         "Keep full quality (render scale 1, --projectors) whatever the frame rate");
+  t.Flag("--no-adapt", &o.no_adapt, "Keep the quality level whatever the frame rate");
+  t.Integer("--quality", &o.quality,
+            "Start at this quality level: 0 full (render scale 1, --projectors, full mesh) ... 6 "
+            "(render 0.5x, 1 projector, mesh simplified beyond 12 m); with --no-adapt, fixed")
+      .Range(0, 6);
   t.Integer("--projectors", &o.projectors, "K: projectors tried per pixel, best first")
       .Range(1, 16);
   t.Real("--bias", &o.bias, "Occlusion bias, relative: occluded when z > depth*(1+B)")
@@ -153,6 +157,7 @@ struct Road {
   RoadFrame frame;
   std::unique_ptr<RecordedPath> path;  // the recorded camera feet
   std::vector<PlanarPose> rear;        // the rear axle under each recorded camera
+  std::vector<size_t> along;           // the recorded images the path runs through
   BicycleParams bicycle;
 };
 
@@ -165,11 +170,17 @@ Road LoadRoad(const SimulateOptions& o, const Workspace& ws, const Mesh& mesh) {
   r.scale = ResolveScale(o.scale, o.metric, ws, heights, "simulate", r.scale_source);
   r.car = MakeCar(o.wheelbase, o.track, o.camera_offset, ws, heights, r.scale, nullptr);
   r.frame = FrameAtCamera(r.rec.w2c[r.rec.start], up, r.scale);
+  // The car is set up as drive sets it up (the up axis and height from every recorded image of
+  // --pass), but the path it is measured against is the start image's own drive (its name's
+  // prefix before '_', without --pass), not every drive of the road in name order.
+  const std::string own = o.pass.empty() ? PassOf(r.rec.images[r.rec.start]->name) : "";
   std::vector<Eigen::Vector2d> feet;
-  for (const Rigid3d& w2c : r.rec.w2c) {
-    const PlanarPose foot = PlanarCamera(r.frame, w2c);
-    feet.emplace_back(foot.x, foot.y);
+  for (size_t i = 0; i < r.rec.w2c.size(); ++i) {
+    const PlanarPose foot = PlanarCamera(r.frame, r.rec.w2c[i]);
     r.rear.push_back(RearAxleUnder(foot, r.car));
+    if (!own.empty() && PassOf(r.rec.images[i]->name) != own) continue;
+    r.along.push_back(i);
+    feet.emplace_back(foot.x, foot.y);
   }
   r.path = std::make_unique<RecordedPath>(feet);
   r.bicycle = BicycleParams{o.wheelbase, o.steering_ratio, o.max_steer};
@@ -232,6 +243,9 @@ class Recorder {
     tum_.open(Partial("poses.tum"));
     if (!controls_ || !poses_ || !tum_)
       throw Error(dir_.string(), 0, "cannot write the session's files");
+    // A session's frames are its own: an earlier, longer session's are not left beside them.
+    std::error_code ec;
+    fs::remove_all(dir_ / "frames", ec);
     controls_ << "time\tsteer\tspeed\tthrottle\tbrake\n";
     poses_ << "# time tx ty tz qx qy qz qw display_time (camera-to-world; time: simulation "
               "seconds; display_time: wall seconds since the start)\n";
@@ -267,11 +281,17 @@ class Recorder {
       flushed_ = Clock::now();
     }
   }
-  void Frame(size_t n, Image frame) {
+  // Frame n as shown: NNNNNN.png, or with several screens NNNNNN_sK.png (K from the left).
+  void Frame(size_t n, std::vector<Image> screens) {
     if (!on()) return;
-    char name[32];
-    std::snprintf(name, sizeof name, "%06zu.png", n);
-    writer_.Push((dir_ / "frames" / name).string(), std::move(frame), PngCompression::kFast);
+    for (size_t k = 0; k < screens.size(); ++k) {
+      char name[48];
+      if (screens.size() == 1)
+        std::snprintf(name, sizeof name, "%06zu.png", n);
+      else
+        std::snprintf(name, sizeof name, "%06zu_s%zu.png", n, k);
+      writer_.Push((dir_ / "frames" / name).string(), std::move(screens[k]), PngCompression::kFast);
+    }
   }
   // Closes the files and renames them into place; writes summary.json.
   void Finish(const nlohmann::json& summary) {
@@ -305,17 +325,29 @@ class Recorder {
   Clock::time_point flushed_ = Clock::now();
 };
 
-// Adaptive quality: levels of (render scale, projectors), full first.
+// Adaptive quality: levels of (render scale, projectors, level-of-detail distance in metres; 0:
+// full detail), full first.
 class Quality {
  public:
-  Quality(int projectors, double fps, bool adapt) : budget_(1 / fps), adapt_(adapt) {
+  struct Level {
+    double scale;
+    int projectors;
+    double lod_m;
+    bool operator!=(const Level& o) const {
+      return scale != o.scale || projectors != o.projectors || lod_m != o.lod_m;
+    }
+  };
+  Quality(int projectors, double fps, bool adapt, int start) : budget_(1 / fps), adapt_(adapt) {
     const int k = projectors, two = std::min(k, 2);
-    const std::pair<double, int> all[] = {{1, k}, {1, two}, {0.75, two}, {0.75, 1}, {0.5, 1}};
-    for (const auto& l : all)
+    const Level all[] = {{1, k, 0},     {1, two, 0},  {1, two, 40}, {0.75, two, 40},
+                         {0.75, 1, 25}, {0.5, 1, 25}, {0.5, 1, 12}};
+    for (const Level& l : all)
       if (levels_.empty() || levels_.back() != l) levels_.push_back(l);
+    level_ = std::min(start, levels() - 1);
   }
-  double scale() const { return levels_[size_t(level_)].first; }
-  int projectors() const { return levels_[size_t(level_)].second; }
+  double scale() const { return levels_[size_t(level_)].scale; }
+  int projectors() const { return levels_[size_t(level_)].projectors; }
+  double lod_m() const { return levels_[size_t(level_)].lod_m; }
   int level() const { return level_; }
   int levels() const { return int(levels_.size()); }
   // After a frame that took `seconds` (render and show): a change, or none.
@@ -324,19 +356,23 @@ class Quality {
     ++frames_;
     if (!adapt_) return std::nullopt;
     int to = level_;
-    if (mean_ > 1.05 * budget_ && frames_ >= 10 && level_ + 1 < levels()) to = level_ + 1;
-    if (mean_ < 0.6 * budget_ && frames_ >= 60 && level_ > 0) to = level_ - 1;
+    // Far over budget, a level down after 3 frames (the first frames compile shaders and read
+    // projectors: a start, not a trend); just over it, after 10.
+    const int settle = mean_ > 2 * budget_ ? 3 : 10;
+    // Down at 90 % of the budget: the headroom absorbs a projector read or a reset's reload.
+    if (mean_ > 0.9 * budget_ && frames_ >= settle && level_ + 1 < levels()) to = level_ + 1;
+    if (mean_ < 0.45 * budget_ && frames_ >= 60 && level_ > 0) to = level_ - 1;
     if (to == level_) return std::nullopt;
     char why[96];
     std::snprintf(why, sizeof why, "%.1f ms per frame against a %.1f ms budget", mean_ * 1e3,
                   budget_ * 1e3);
     level_ = to;
     frames_ = 0;
-    return QualityChange{t, level_, scale(), projectors(), why};
+    return QualityChange{t, level_, scale(), projectors(), lod_m(), why};
   }
 
  private:
-  std::vector<std::pair<double, int>> levels_;
+  std::vector<Level> levels_;
   double budget_;
   bool adapt_;
   int level_ = 0, frames_ = 0;
@@ -373,13 +409,14 @@ Rigid3d Yawed(const Rigid3d& c2w, double yaw_left_deg) {
 class LiveView {
  public:
   LiveView(const SimulateOptions& o, const Workspace& ws, const Reconstruction& rec,
-           const Mesh& mesh)
+           const Mesh& mesh, double scale)
       : o_(o),
         ws_(ws),
         rec_(rec),
         images_(rec.ImagesByName()),
         renderer_(mesh),
-        sources_(ws, rec, images_, &renderer_, /*prefer_textures=*/true) {
+        sources_(ws, rec, images_, &renderer_, /*prefer_textures=*/true),
+        scale_(scale) {
     for (const ImageRecord* im : images_) candidates_.push_back(im->world_to_camera);
     screen_ = ScreenCamera(rec, o.size);
     const double hfov = 2 * std::atan(screen_.width / (2 * screen_.fx())) * 180 / M_PI;
@@ -390,6 +427,8 @@ class LiveView {
   void Plan(const Rigid3d& start_c2w, const std::vector<Rigid3d>& recorded_w2c);
   const SceneSurvey& survey() const { return survey_; }
   const EffectsPlan& plan() const { return plan_; }
+  const RenderStats& stats() const { return stats_; }  // totals over every render
+  double load_ms() const { return load_ms_; }          // choosing and reading projectors, in total
   // Renders every screen at the car's camera pose; `log` gets plan upgrades.
   std::vector<Image> Render(const Rigid3d& c2w, const Quality& q, double ahead_m,
                             std::vector<std::string>& log);
@@ -412,10 +451,14 @@ class LiveView {
   std::vector<Rigid3d> candidates_;
   Renderer renderer_;
   ProjectorSources sources_;
+  double scale_;      // model units per metre
+  double lod_m_ = 0;  // the level of detail in use (metres; 0: full)
   Camera screen_;
   double screen_yaw_ = 0;
   SceneSurvey survey_;
   EffectsPlan plan_;
+  RenderStats stats_;
+  double load_ms_ = 0;
 };
 
 void LiveView::Plan(const Rigid3d& start_c2w, const std::vector<Rigid3d>& recorded_w2c) {
@@ -450,13 +493,15 @@ void LiveView::Plan(const Rigid3d& start_c2w, const std::vector<Rigid3d>& record
 
 Image LiveView::RenderOne(const Rigid3d& w2c, const Camera& cam, int k, bool survey,
                           std::vector<std::string>& log) {
+  const auto t0 = Clock::now();
   sources_.Trim();
   const std::vector<size_t> idx = Pick(w2c, k);
   const std::vector<Projector> ps = GatherProjectors(sources_, idx, plan_);
+  load_ms_ += Seconds(t0, Clock::now()) * 1e3;
   const CameraExposure exposure =
       plan_.exposure ? ExposureNear(ps, w2c.Centre()) : CameraExposure();
   const View view{cam, w2c};
-  Renderer::Frame f = renderer_.Render(view, ps, plan_, nullptr, survey, exposure);
+  Renderer::Frame f = renderer_.Render(view, ps, plan_, &stats_, survey, exposure);
   if (survey) {  // a hole the survey did not foresee turns the skybox and fill on from now
     AddToSurvey(survey_, CoverageOf(f.depth, view, ps.empty() ? nullptr : &ps[0].view),
                 "a live view");
@@ -471,6 +516,10 @@ Image LiveView::RenderOne(const Rigid3d& w2c, const Camera& cam, int k, bool sur
 
 std::vector<Image> LiveView::Render(const Rigid3d& c2w, const Quality& q, double ahead_m,
                                     std::vector<std::string>& log) {
+  if (q.lod_m() != lod_m_) {  // cells a 25th of the distance: a constant angular error
+    renderer_.SetDetail(q.lod_m() * scale_, q.lod_m() * scale_ / 25);
+    lod_m_ = q.lod_m();
+  }
   const uint64_t w = std::max<uint64_t>(1, uint64_t(std::lround(screen_.width * q.scale())));
   const uint64_t h = std::max<uint64_t>(1, uint64_t(std::lround(screen_.height * q.scale())));
   const Camera cam = q.scale() == 1 ? screen_ : screen_.Scaled(w, h);
@@ -487,6 +536,21 @@ std::vector<Image> LiveView::Render(const Rigid3d& c2w, const Quality& q, double
   sources_.Prefetch(Pick(ahead.Inverse(), q.projectors()), plan_.occlusion || plan_.skybox,
                     plan_.masks);
   return frames;
+}
+
+// Where the projectors' depth maps come from, when the plan needs them ("" when it does not).
+std::string DepthSource(const Workspace& ws, const Reconstruction& rec, const EffectsPlan& plan) {
+  if (!(plan.occlusion || plan.skybox)) return "";
+  size_t baked = 0, n = 0;
+  for (const ImageRecord* im : rec.ImagesByName()) {
+    ++n;
+    baked += fs::exists(ws.DepthPath(im->name));
+  }
+  const std::string counts = std::to_string(baked) + " of " + std::to_string(n);
+  if (baked == n) return "depth maps: all " + std::to_string(n) + " baked (WS/depth/)";
+  return "depth maps: " + counts +
+         " baked; the others are rendered from the mesh when a projector is first used (a "
+         "depth pass each, on the render thread; `bakedepth WS` makes them once)";
 }
 
 // SDL for the session's lifetime.
@@ -520,7 +584,7 @@ class Session {
         rec_(rec),
         log_(log),
         rep_(rep),
-        quality_(o.projectors, o.fps, !o.no_adapt),
+        quality_(o.projectors, o.fps, !o.no_adapt, o.quality),
         measures_(o.speed_limit / 3.6),
         t0_(log ? log->samples.front().time : 0),
         car_(road, road.rear[road.rec.start], t0_) {
@@ -607,15 +671,20 @@ void Session::Reset(double t, const std::string& why, bool to_start) {
   PlanarPose at = last_good_;
   std::string where = "where it last was on the road";
   if (to_start || o_.off_road == OffRoad::kReset) {
-    const size_t i =
-        to_start ? road_.rec.start : road_.path->Nearest(FootOf(car_.At(t), road_.car));
+    const size_t i = to_start ? road_.rec.start
+                              : road_.along[road_.path->Nearest(FootOf(car_.At(t), road_.car))];
     at = road_.rear[i];
     where = road_.rec.images[i]->name;
   }
   car_.Restart(at, t);
+  // A replayed log goes on with its current sample (its speed is taken as it is).
+  if (log_ && next_sample_ > 0) {
+    const ControlSample& c = log_->samples[next_sample_ - 1];
+    car_.Control(t, c.steer_deg, c.speed, true);
+  }
   measures_.Reset();
   rec_.Comment("reset at " + FormatDouble(t) + " s to " + where + ": " + why);
-  rec_.Control(t, 0, 0, Pedals());
+  rec_.Control(t, car_.steer(), car_.speed(), Pedals());
   rep_.log.push_back("t=" + FormatDouble(std::round(t * 1000) / 1000) + " s: car put " +
                      (where.find(' ') == std::string::npos ? "at " : "") + where + ": " + why);
   offset_ = road_.path->Project(FootOf(at, road_.car)).offset;
@@ -653,7 +722,7 @@ bool Session::Frame(double T, double display) {
     screen_->Show(ptrs, hud_ ? &hs : nullptr);
   }
   rec_.Pose(T, p.camera_to_world, display);
-  if (o_.record_frames) rec_.Frame(rep_.frames, std::move(frames[0]));
+  if (o_.record_frames) rec_.Frame(rep_.frames, std::move(frames));
   ++rep_.frames;
   if (auto c = quality_.Update(Seconds(t_start, Clock::now()), T)) rep_.quality.push_back(*c);
   return !ended_ && T < t_end_;
@@ -670,11 +739,20 @@ void Session::Run() {
       if (!Frame(t, Seconds(wall0, Clock::now()))) break;
     }
   } else {
+    // Frames on a fixed cadence of deadlines: a late frame is followed by a shorter wait, so
+    // the rate holds when frames take less than the budget on average; one far behind (more
+    // than three frames) starts the cadence again from now instead of rushing to catch up.
+    const auto period =
+        std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(budget));
+    auto deadline = wall0;
     for (;;) {
       const auto frame_start = Clock::now();
       T = std::min(t_end_, t0_ + Seconds(wall0, frame_start));
       if (!Frame(T, Seconds(wall0, frame_start))) break;
-      std::this_thread::sleep_until(frame_start + std::chrono::duration<double>(budget));
+      deadline += period;
+      const auto now = Clock::now();
+      if (now > deadline + 3 * period) deadline = now;
+      std::this_thread::sleep_until(deadline);
     }
   }
   // The log ends at the last frame shown, so drive's path ends where the session did.
@@ -686,6 +764,12 @@ void Session::Run() {
   rep_.final_level = quality_.level();
   rep_.final_scale = quality_.scale();
   rep_.final_projectors = quality_.projectors();
+  rep_.final_lod_m = quality_.lod_m();
+  const RenderStats& st = view_.stats();
+  const double n = double(std::max<size_t>(1, rep_.frames));
+  rep_.stages = {{"draw_ms", st.draw_ms / n},         {"shade_ms", st.shade_ms / n},
+                 {"readback_ms", st.readback_ms / n}, {"fill_ms", st.fill_ms / n},
+                 {"cull_ms", st.cull_ms / n},         {"load_ms", view_.load_ms() / n}};
   rep_.driving = measures_.Summary();
   if (rep_.ended.empty()) rep_.ended = log_ ? "the end of the log" : "--duration reached";
 }
@@ -737,13 +821,14 @@ nlohmann::json SummaryJson(const SimulateOptions& o, const SimulateReport& r) {
 
 SimulateReport RunSimulate(const SimulateOptions& o, std::ostream& out) {
   o.Check();
-  const Workspace ws(o.workspace);
-  ws.Require("simulate", {WsItem::kSparse, WsItem::kMesh});
+  // The small files first: a bad one fails fast, before the workspace is loaded.
   ControlsLog log;
   if (!o.replay.empty()) log = ReadControlsTsv(o.replay);
   const InputMapping mapping = o.mapping.empty() ? InputMapping() : ReadInputMapping(o.mapping);
   std::vector<VirtualRow> script;
   if (!o.virtual_input.empty()) script = ReadVirtualScript(o.virtual_input);
+  const Workspace ws(o.workspace);
+  ws.Require("simulate", {WsItem::kSparse, WsItem::kMesh});
   const Mesh mesh = ReadMesh(ws.MeshPath().string());
   if (mesh.faces.empty()) throw Error(ws.MeshPath().string(), 0, "the mesh has no triangles");
   Road road = LoadRoad(o, ws, mesh);
@@ -760,9 +845,17 @@ SimulateReport RunSimulate(const SimulateOptions& o, std::ostream& out) {
   }
   auto ctx = GlContext::Create(o.gl);
   rep.gl = ctx->Describe();
-  LiveView view(o, ws, road.rec.rec, mesh);
+  LiveView view(o, ws, road.rec.rec, mesh, road.scale);
   GroundPlacer start_placer(*road.ray, road.frame, road.car);
-  const Placement start = start_placer.Place(road.rear[road.rec.start], 0);
+  Placement start;
+  try {
+    start = start_placer.Place(road.rear[road.rec.start], 0);
+  } catch (const Error& e) {
+    throw Error(ws.MeshPath().string(), 0,
+                "the car at the start image " + road.rec.images[road.rec.start]->name +
+                    " is off the mesh (" + e.what() + "): choose another --start or " +
+                    "--camera-offset");
+  }
   view.Plan(start.camera_to_world, road.rec.w2c);
   if (o.explain) {
     nlohmann::json j;
@@ -771,11 +864,18 @@ SimulateReport RunSimulate(const SimulateOptions& o, std::ostream& out) {
     j["gl"] = rep.gl;
     j["effects"] = ExplainEffects(view.survey(), view.plan());
     j["shader_defines"] = view.plan().Defines();
+    j["depth_maps"] = DepthSource(ws, road.rec.rec, view.plan());
     out << j.dump(2) << "\n";
     return rep;
   }
+  if (const std::string d = DepthSource(ws, road.rec.rec, view.plan()); !d.empty())
+    rep.log.push_back(d);
   Devices devices(mapping, script, !o.no_window);
   rep.device = o.replay.empty() ? devices.Describe() : "replay of " + o.replay;
+  if (rep.device == "none")
+    rep.log.push_back(
+        "no input device: the car stands until a wheel or game controller is plugged in (or "
+        "open a window for the keyboard)");
   Recorder rec(o.record);
   Session session(o, road, view, devices, screen.get(), rec, o.replay.empty() ? nullptr : &log,
                   rep);

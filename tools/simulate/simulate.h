@@ -22,10 +22,13 @@
 // frame shows a hole (skybox, fill; logged); projectors chosen per frame as ptmrender chooses
 // them (index/view_selection.h) and read ahead on a background thread for where the car will be
 // in half a second (ProjectorSources::Prefetch). Adaptive quality (unless --no-adapt): levels of
-// (render scale, projectors) from (1, K) down to (0.5, 1); a level down when the mean frame time
-// exceeds the budget 1/--fps by 5 % (after 10 frames at a level), a level up when it is under
-// 60 % of it (after 60); never below half the window's resolution or one projector. Each
-// change is logged with its reason. The mesh itself is not simplified (no level of detail).
+// (render scale, projectors, mesh detail) from (1, K, full) down to (0.5, 1, simplified beyond
+// 12 m): (1,K) (1,2) (1,2,40 m) (0.75,2,40 m) (0.75,1,25 m) (0.5,1,25 m) (0.5,1,12 m), the mesh
+// beyond the distance drawn simplified by vertex clustering on cells of 1/25 of it
+// (Renderer::SetDetail); a level down when the mean frame time exceeds 90 % of the budget
+// 1/--fps (after 10 frames at a level, 3 when over twice the budget), a level up when it is
+// under 45 % of it (after 60); never
+// below half the window's resolution or one projector. Each change is logged with its reason.
 //
 // Off the road: no surface under a wheel, or (with --max-offset) farther than that from the
 // recorded path, is handled by --off-road: reset (the car put back at the nearest recorded pose,
@@ -43,6 +46,7 @@
 #pragma once
 
 #include <iosfwd>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -74,6 +78,7 @@ struct SimulateOptions {
   double sim_rate = 200;   // simulation steps per second
   double fps = 30;         // target frame rate
   bool no_adapt = false;
+  int quality = 0;  // the starting quality level (0: full)
   int projectors = 4;
   double bias = 0.005;
   bool no_occlusion = false, no_skybox = false, no_masks = false, no_exposure = false;
@@ -82,7 +87,7 @@ struct SimulateOptions {
   bool record_frames = false;
   std::string replay;  // controls log
   bool as_fast = false;
-  double duration = 0;  // seconds of simulation; 0: until quit (or the log's end)
+  double duration = 0;  // seconds of simulation; 0: until quit or the log's end (the first)
   std::string virtual_input, mapping;
   double speed_limit = 0;  // km/h, 0: none
   OffRoad off_road = OffRoad::kReset;
@@ -102,6 +107,7 @@ struct QualityChange {
   int level = 0;
   double render_scale = 1;
   int projectors = 1;
+  double lod_m = 0;  // level-of-detail distance, metres (0: full detail)
   std::string why;
 };
 
@@ -115,6 +121,8 @@ struct SimulateReport {
   int final_level = 0;
   double final_scale = 1;
   int final_projectors = 1;
+  double final_lod_m = 0;
+  std::map<std::string, double> stages;  // mean per frame: draw_ms, shade_ms, ..., triangles
   std::vector<QualityChange> quality;
   std::vector<std::string> log;  // devices, plan upgrades, resets
   DrivingSummary driving;
