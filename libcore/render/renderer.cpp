@@ -447,6 +447,24 @@ struct Renderer::Impl {
   }
 };
 
+// Whether each mesh vertex is used by the triangles of two chunks (a border, kept at every level
+// of detail).
+std::vector<uint8_t> ChunkBorders(
+    const Mesh& mesh, const std::map<std::array<int64_t, 3>, std::vector<uint32_t>>& bins) {
+  std::vector<int64_t> chunk_of(mesh.vertices.size(), -1);
+  std::vector<uint8_t> shared(mesh.vertices.size(), 0);
+  int64_t bin_id = 0;
+  for (const auto& [key, faces] : bins) {
+    for (uint32_t f : faces)
+      for (uint32_t vi : mesh.faces[f]) {
+        if (chunk_of[vi] >= 0 && chunk_of[vi] != bin_id) shared[vi] = 1;
+        chunk_of[vi] = bin_id;
+      }
+    ++bin_id;
+  }
+  return shared;
+}
+
 Renderer::Renderer(const Mesh& mesh, double chunk_size) : impl_(std::make_unique<Impl>()) {
   if (mesh.faces.empty() || mesh.vertices.empty()) throw Error("the mesh has no triangles");
   Impl& m = *impl_;
@@ -465,18 +483,7 @@ Renderer::Renderer(const Mesh& mesh, double chunk_size) : impl_(std::make_unique
   std::vector<float>& verts = m.verts;  // x y z r g b
   std::vector<uint32_t>& indices = m.indices;
   const bool colours = mesh.has_colors();
-  // A vertex used by the triangles of two chunks is on a border (kept at every level of detail).
-  std::vector<int64_t> chunk_of(mesh.vertices.size(), -1);
-  std::vector<uint8_t> shared(mesh.vertices.size(), 0);
-  int64_t bin_id = 0;
-  for (const auto& [key, faces] : bins) {
-    for (uint32_t f : faces)
-      for (uint32_t vi : mesh.faces[f]) {
-        if (chunk_of[vi] >= 0 && chunk_of[vi] != bin_id) shared[vi] = 1;
-        chunk_of[vi] = bin_id;
-      }
-    ++bin_id;
-  }
+  const std::vector<uint8_t> shared = ChunkBorders(mesh, bins);
   for (const auto& [key, faces] : bins) {
     Chunk ch;
     std::unordered_map<uint32_t, uint32_t> local;

@@ -129,4 +129,36 @@ void DrawHud(Image& frame, const HudState& hud) {
   Draw(c, hud);
 }
 
+Image Screen::Capture() const {
+  SDL_Surface* src = SDL_GetWindowSurface(static_cast<SDL_Window*>(window_));
+  if (!src) throw Error(std::string("the window has no surface: ") + SDL_GetError());
+  SDL_Surface* rgb = SDL_ConvertSurfaceFormat(src, SDL_PIXELFORMAT_RGB24, 0);
+  if (!rgb) throw Error(std::string("cannot read the window: ") + SDL_GetError());
+  Image out(rgb->w, rgb->h, 3);
+  for (int y = 0; y < rgb->h; ++y) {
+    const auto* row = static_cast<const uint8_t*>(rgb->pixels) + size_t(y) * size_t(rgb->pitch);
+    for (int x = 0; x < rgb->w; ++x)
+      for (int k = 0; k < 3; ++k) out.at(x, y, k) = row[3 * x + k];
+  }
+  SDL_FreeSurface(rgb);
+  return out;
+}
+
+Image Compose(const std::vector<const Image*>& frames, int width, int height, const HudState* hud) {
+  Image out(width, height, 3);
+  const int n = int(frames.size());
+  for (int i = 0; i < n; ++i) {
+    const Image& f = *frames[size_t(i)];
+    const int x0 = i * width / n, x1 = (i + 1) * width / n;
+    for (int y = 0; y < height; ++y)
+      for (int x = x0; x < x1; ++x) {
+        const int sx = std::min(f.width - 1, (x - x0) * f.width / std::max(1, x1 - x0));
+        const int sy = std::min(f.height - 1, y * f.height / height);
+        for (int k = 0; k < 3; ++k) out.at(x, y, k) = f.at(sx, sy, f.channels == 3 ? k : 0);
+      }
+  }
+  if (hud) DrawHud(out, *hud);
+  return out;
+}
+
 }  // namespace mvtm

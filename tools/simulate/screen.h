@@ -33,6 +33,8 @@ class Screen {
   // Shows the frames (3-channel, 0..255, one per screen, left to right; each scaled to its
   // share of the window), with the HUD when `hud`.
   void Show(const std::vector<const Image*>& frames, const HudState* hud);
+  // What the window shows now (3 channels, 0..255): a screenshot.
+  Image Capture() const;
   int width() const { return width_; }
   int height() const { return height_; }
 
@@ -41,7 +43,10 @@ class Screen {
   int width_, height_;
 };
 
-// Draws the HUD into a 3-channel 0..255 image (what Show() draws, for a recorded frame).
+// Draws the HUD into a 3-channel 0..255 image, as Show() draws it over the window.
 void DrawHud(Image& frame, const HudState& hud);
+// The frames side by side, each scaled (nearest) to width/N x height, with the HUD when given:
+// what a window of width x height would show (a screenshot without a window).
+Image Compose(const std::vector<const Image*>& frames, int width, int height, const HudState* hud);
 
 }  // namespace mvtm

@@ -34,24 +34,10 @@
 
 namespace mvtm {
 
-OptionTable DeclareOptions(SimulateOptions& o) {
-  OptionTable t("simulate");
-  t.Positional("WS", &o.workspace,
-               "Workspace folder (sparse/, images/, mesh.ply; depth/, masks/, textures/ used "
-               "when present)")
-      .Dir();
-  t.Text("--size", &o.size,
-         "One screen's size WxH (default: the camera's); the camera's horizontal field of view "
-         "is kept, the vertical follows the aspect")
-      .Alternative("160x90")
-      .Check([&o] {
-        if (!o.size.empty()) ParseImageSize(o.size);
-      });
-  t.Integer("--screens", &o.screens, "Screens side by side, each rendered with its own yaw")
-      .Range(1, 8);
-  t.Real("--screen-yaw", &o.screen_yaw,
-         "Degrees between neighbouring screens' cameras (0: the horizontal field of view)")
-      .Range(0, 120);
+namespace {
+
+// The car: its scale, geometry, start and longitudinal dynamics (as drive's where they agree).
+void DeclareCarOptions(OptionTable& t, SimulateOptions& o) {
   t.Real("--scale", &o.scale, "Model units per metre (1 for a metric workspace)").Check([&o] {
     if (o.scale != 0) CheckRange(o.scale, 0, 1e12, true, "--scale");
   });
@@ -77,6 +63,10 @@ OptionTable DeclareOptions(SimulateOptions& o) {
   t.Real("--drag", &o.car.drag, "Aerodynamic deceleration per squared speed, 1/m").Range(0, 1);
   t.Real("--max-speed", &o.max_speed, "Speed cap, km/h").Range(1, 400);
   t.Real("--sim-rate", &o.sim_rate, "Vehicle simulation steps per second").Range(10, 2000);
+}
+
+// Frame rate, quality and the renderer's effects (as ptmrender's where they agree).
+void DeclareRenderOptions(OptionTable& t, SimulateOptions& o) {
   t.Real("--fps", &o.fps,
          "Target frame rate (pacing, adaptive quality; --as-fast: frames per "
          "simulated second)")
@@ -96,6 +86,30 @@ OptionTable DeclareOptions(SimulateOptions& o) {
   t.Flag("--no-exposure", &o.no_exposure, "Ignore exposure.tsv");
   t.Flag("--no-blend", &o.no_blend, "The first projector that sees a point, not a blend");
   t.Flag("--no-fill", &o.no_fill, "Constant background where nothing is seen");
+}
+
+}  // namespace
+
+OptionTable DeclareOptions(SimulateOptions& o) {
+  OptionTable t("simulate");
+  t.Positional("WS", &o.workspace,
+               "Workspace folder (sparse/, images/, mesh.ply; depth/, masks/, textures/ used "
+               "when present)")
+      .Dir();
+  t.Text("--size", &o.size,
+         "One screen's size WxH (default: the camera's); the camera's horizontal field of view "
+         "is kept, the vertical follows the aspect")
+      .Alternative("160x90")
+      .Check([&o] {
+        if (!o.size.empty()) ParseImageSize(o.size);
+      });
+  t.Integer("--screens", &o.screens, "Screens side by side, each rendered with its own yaw")
+      .Range(1, 8);
+  t.Real("--screen-yaw", &o.screen_yaw,
+         "Degrees between neighbouring screens' cameras (0: the horizontal field of view)")
+      .Range(0, 120);
+  DeclareCarOptions(t, o);
+  DeclareRenderOptions(t, o);
   t.Text("--record", &o.record,
          "Folder for controls.tsv, poses.tsv, poses.tum and summary.json of the session");
   t.Flag("--record-frames", &o.record_frames, "With --record: also the frames shown");
@@ -105,7 +119,8 @@ OptionTable DeclareOptions(SimulateOptions& o) {
   t.Flag("--as-fast", &o.as_fast,
          "Do not wait for the clock: frames at simulation times t0 + k/FPS (needs --replay or "
          "--duration)");
-  t.Real("--duration", &o.duration, "End after this many simulated seconds (0: until quit)")
+  t.Real("--duration", &o.duration,
+         "End after this many simulated seconds (0: until quit, or the end of --replay's log)")
       .Range(0, 1e6);
   t.Text("--virtual-input", &o.virtual_input,
          "Drive SDL's virtual joystick with this script ('time axis0 axis1 ...' rows)")
@@ -121,6 +136,8 @@ OptionTable DeclareOptions(SimulateOptions& o) {
   t.Real("--max-offset", &o.max_offset,
          "Metres from the recorded path counted as off the road (0: only the mesh's edge)")
       .Range(0, 1000);
+  t.Text("--screenshot", &o.screenshot,
+         "Write the last frame shown, HUD included, as this PNG when the session ends");
   t.Flag("--no-hud", &o.no_hud, "No speedometer and steering bar (studies)");
   t.Flag("--no-window", &o.no_window,
          "Render without showing (benchmarks, batch replays); keyboard unavailable");
@@ -634,6 +651,19 @@ class Session {
   Pedals pedals_;
   PlanarPose last_good_;
   bool hud_ = true, ended_ = false;
+  std::vector<Image> last_frames_;  // --screenshot without a window: the last frame's screens
+  HudState last_hud_;
+
+ public:
+  // The last frame as the window shows it (without a window: as it would), HUD included.
+  Image Screenshot() const {
+    if (screen_) return screen_->Capture();
+    std::vector<const Image*> ptrs;
+    for (const Image& f : last_frames_) ptrs.push_back(&f);
+    if (ptrs.empty()) return Image();
+    return Compose(ptrs, int(view_.screen().width) * o_.screens, int(view_.screen().height),
+                   hud_ ? &last_hud_ : nullptr);
+  }
 };
 
 void Session::Step(double t) {
@@ -716,10 +746,12 @@ bool Session::Frame(double T, double display) {
   rep_.render_ms += Seconds(t_render, Clock::now()) * 1e3;
   const HudState hs{car_.speed() * 3.6, car_.steer(), pedals_.reverse, quality_.level(),
                     quality_.levels()};
-  if (screen_) {
-    std::vector<const Image*> ptrs;
-    for (const Image& f : frames) ptrs.push_back(&f);
-    screen_->Show(ptrs, hud_ ? &hs : nullptr);
+  std::vector<const Image*> ptrs;
+  for (const Image& f : frames) ptrs.push_back(&f);
+  if (screen_) screen_->Show(ptrs, hud_ ? &hs : nullptr);
+  if (!o_.screenshot.empty() && !screen_) {  // kept for the end: the last frame's
+    last_frames_ = frames;
+    last_hud_ = hs;
   }
   rec_.Pose(T, p.camera_to_world, display);
   if (o_.record_frames) rec_.Frame(rep_.frames, std::move(frames));
@@ -881,6 +913,10 @@ SimulateReport RunSimulate(const SimulateOptions& o, std::ostream& out) {
                   rep);
   session.Run();
   rec.Finish(SummaryJson(o, rep));
+  if (!o.screenshot.empty()) {
+    const Image shot = session.Screenshot();
+    if (!shot.empty()) WriteImage(o.screenshot, shot);
+  }
   return rep;
 }
 

@@ -92,7 +92,8 @@ struct SimulateOptions {
   double speed_limit = 0;  // km/h, 0: none
   OffRoad off_road = OffRoad::kReset;
   AtEnd at_end = AtEnd::kStop;
-  double max_offset = 0;  // metres from the recorded path; 0: only the mesh's edge
+  double max_offset = 0;   // metres from the recorded path; 0: only the mesh's edge
+  std::string screenshot;  // PNG of the last frame shown, as the window showed it
   bool no_hud = false, no_window = false, explain = false;
   GlBackend gl = GlBackend::kAuto;
   bool quiet = false;

@@ -414,6 +414,73 @@ TEST_F(RenderTest, FillLeavesNoPixelAtTheBackground) {
   EXPECT_GE(stats.fill_ms, 0.0);
 }
 
+// A ground y = 1.5 + bump(x, z) below a camera at the origin looking down +z (y down): x in
+// [-60, 60], z in [0, 120], quads of 0.5 m (115k triangles).
+Mesh Ground(double bump) {
+  Mesh m;
+  const int nx = 240, nz = 240;
+  for (int j = 0; j <= nz; ++j)
+    for (int i = 0; i <= nx; ++i) {
+      const double x = -60 + 0.5 * i, z = 0.5 * j;
+      m.vertices.emplace_back(x, 1.5 + bump * std::sin(x / 3) * std::sin(z / 4), z);
+      m.colors.push_back({uint8_t(100 + i % 50), 120, uint8_t(60 + j % 90)});
+    }
+  for (int j = 0; j < nz; ++j)
+    for (int i = 0; i < nx; ++i) {
+      uint32_t a = j * (nx + 1) + i, b = a + 1, c = a + nx + 1, d = c + 1;
+      m.faces.push_back({a, b, d});
+      m.faces.push_back({a, d, c});
+    }
+  return m;
+}
+
+TEST_F(RenderTest, LevelOfDetailKeepsTheSurfaceWithoutCracks) {
+  // Far chunks simplified (beyond 10 m, cells of 2 m): a flat ground renders the same depth
+  // (clustered vertices stay on the plane), a bumpy one leaves no pixel seeing through it, and
+  // far fewer triangles are drawn. Pixels are judged by where their ray meets the flat ground,
+  // away from the mesh's own edges (which clustering may move).
+  const Camera cam = Cam(160, 120, 120);
+  const View view{cam, LookingDownZ({0, 0, 0})};
+  EffectsPlan plan;
+  plan.ptm = false;  // vertex colours: the surface pass alone decides
+  for (double bump : {0.0, 0.3}) {
+    Renderer r(Ground(bump));
+    RenderStats full_stats, lod_stats;
+    const Renderer::Frame full = r.Render(view, {}, plan, &full_stats, true);
+    r.SetDetail(10, 2);
+    const Renderer::Frame lod = r.Render(view, {}, plan, &lod_stats, true);
+    // Depth maps are never simplified.
+    const Image depth_map = r.RenderDepth(view);
+    r.SetDetail(0, 0);
+    const Renderer::Frame again = r.Render(view, {}, plan, nullptr, true);
+    size_t checked = 0;
+    double worst = 0;
+    for (int y = 0; y < 120; ++y)
+      for (int x = 0; x < 160; ++x) {
+        const double dy = y + 0.5 - 60;
+        if (dy < 1) continue;  // at or above the horizon
+        const double z = 1.5 * 120 / dy, gx = z * (x + 0.5 - 80) / 120;
+        if (z < 2 || z > 110 || std::abs(gx) > 55) continue;
+        ++checked;
+        ASSERT_FALSE(std::isinf(lod.depth.at(x, y))) << "crack at " << x << "," << y;
+        ASSERT_FALSE(std::isinf(full.depth.at(x, y)));
+        worst = std::max(worst, std::abs(lod.depth.at(x, y) - full.depth.at(x, y)) /
+                                    double(full.depth.at(x, y)));
+        ASSERT_EQ(depth_map.at(x, y), full.depth.at(x, y));
+        ASSERT_EQ(again.depth.at(x, y), full.depth.at(x, y));  // back to full detail
+      }
+    EXPECT_GT(checked, 4000u);
+    if (bump == 0) {
+      EXPECT_LT(worst, 1e-4) << "a plane stays a plane";
+    }
+    EXPECT_LT(double(lod_stats.triangles_drawn), 0.3 * double(full_stats.triangles_drawn))
+        << lod_stats.triangles_drawn << " of " << full_stats.triangles_drawn;
+  }
+  Renderer r(Plane(5, 10));
+  EXPECT_THROW(r.SetDetail(-1, 1), Error);
+  EXPECT_THROW(r.SetDetail(5, 0), Error);
+}
+
 TEST_F(RenderTest, BadInputsAreClearErrors) {
   EXPECT_THROW({ Renderer r{Mesh()}; }, Error);
   Renderer r(Plane(5, 10));
