@@ -28,7 +28,10 @@ struct Chunk {
   GLint base_vertex = 0;
   size_t vertex_count = 0;
   size_t first_index = 0, index_count = 0;
-  size_t lod_first = 0, lod_count = 0;  // the simplified triangles (SetDetail)
+  // The simplified triangles (SetDetail), a tier per doubling of the distance, each with its
+  // own compacted vertices (a software rasteriser shades every vertex of the index range).
+  std::array<size_t, 4> lod_first{}, lod_count{};
+  std::array<GLint, 4> lod_base{};
 };
 
 void CheckGlError(const char* where) {
@@ -104,36 +107,59 @@ struct Renderer::Impl {
   double lod_distance = 0, lod_cell = 0;
   bool lod_allowed = false;  // Render's surface pass only, never RenderDepth
 
-  // Vertex clustering (Rossignac & Borrel 1993) of each chunk on a grid of `cell` model units:
-  // every vertex off the border moves to the first vertex of its cell, degenerate triangles go.
+  // Vertex clustering (Rossignac & Borrel 1993) of each chunk on grids of `cell` · 2^tier model
+  // units: every vertex off the border moves to the first vertex of its cell, degenerate
+  // triangles go, and the vertices still used are copied into the tier's own compact range.
   void BuildLod(double cell) {
+    std::vector<float> all_verts(verts);
     std::vector<uint32_t> all(indices);
-    for (Chunk& ch : chunks) {
-      std::map<std::array<int64_t, 3>, uint32_t> first;
-      std::vector<uint32_t> rep(ch.vertex_count);
-      for (uint32_t v = 0; v < ch.vertex_count; ++v) {
-        const size_t g = size_t(ch.base_vertex) + v;
-        rep[v] = v;
-        if (border[g]) continue;
-        std::array<int64_t, 3> key;
-        for (int k = 0; k < 3; ++k)
-          key[k] = int64_t(std::floor((double(verts[6 * g + size_t(k)]) + ch.origin[k]) / cell));
-        rep[v] = first.emplace(key, v).first->second;
+    for (Chunk& ch : chunks)
+      for (size_t tier = 0; tier < ch.lod_first.size(); ++tier) {
+        const double c = cell * double(1 << tier);
+        std::map<std::array<int64_t, 3>, uint32_t> first;
+        std::vector<uint32_t> rep(ch.vertex_count);
+        for (uint32_t v = 0; v < ch.vertex_count; ++v) {
+          const size_t g = size_t(ch.base_vertex) + v;
+          rep[v] = v;
+          if (border[g]) continue;
+          std::array<int64_t, 3> key;
+          for (int k = 0; k < 3; ++k)
+            key[k] = int64_t(std::floor((double(verts[6 * g + size_t(k)]) + ch.origin[k]) / c));
+          rep[v] = first.emplace(key, v).first->second;
+        }
+        ch.lod_base[tier] = GLint(all_verts.size() / 6);
+        std::vector<uint32_t> compact(ch.vertex_count, UINT32_MAX);
+        auto local = [&](uint32_t v) {  // the tier's index of chunk vertex v, copied on first use
+          if (compact[v] == UINT32_MAX) {
+            compact[v] = uint32_t(all_verts.size() / 6) - uint32_t(ch.lod_base[tier]);
+            const size_t g = 6 * (size_t(ch.base_vertex) + v);
+            all_verts.insert(all_verts.end(), verts.begin() + long(g), verts.begin() + long(g + 6));
+          }
+          return compact[v];
+        };
+        ch.lod_first[tier] = all.size();
+        for (size_t i = ch.first_index; i + 2 < ch.first_index + ch.index_count; i += 3) {
+          const uint32_t a = rep[indices[i]], b = rep[indices[i + 1]], d = rep[indices[i + 2]];
+          if (a != b && b != d && a != d) all.insert(all.end(), {local(a), local(b), local(d)});
+        }
+        ch.lod_count[tier] = all.size() - ch.lod_first[tier];
       }
-      ch.lod_first = all.size();
-      for (size_t i = ch.first_index; i + 2 < ch.first_index + ch.index_count; i += 3) {
-        const uint32_t a = rep[indices[i]], b = rep[indices[i + 1]], c = rep[indices[i + 2]];
-        if (a != b && b != c && a != c) all.insert(all.end(), {a, b, c});
-      }
-      ch.lod_count = all.size() - ch.lod_first;
-    }
     glBindVertexArray(vao);
+    glBindBuffer(GL_ARRAY_BUFFER, vbo);
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(all_verts.size() * sizeof(float)),
+                 all_verts.data(), GL_STATIC_DRAW);
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo);
     glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(all.size() * sizeof(uint32_t)),
                  all.data(), GL_STATIC_DRAW);
     glBindVertexArray(0);
     CheckGlError("level of detail");
     lod_cell = cell;
+  }
+
+  // The detail tier of a chunk `d` model units away: -1 full, else 0..3 (one per doubling).
+  int Tier(double d) const {
+    if (!lod_allowed || lod_distance <= 0 || d <= lod_distance) return -1;
+    return std::min(3, int(std::floor(std::log2(d / lod_distance))));
   }
 
   // Distance (model units) from `c` to the chunk's box.
@@ -274,11 +300,13 @@ struct Renderer::Impl {
     for (const Chunk* ch : visible) {
       Eigen::Vector3f o = (ch->origin - C).cast<float>();
       glUniform3fv(off, 1, o.data());
-      const bool coarse = lod_allowed && lod_distance > 0 && BoxDistance(*ch, C) > lod_distance;
-      const size_t first = coarse ? ch->lod_first : ch->first_index;
-      const size_t count = coarse ? ch->lod_count : ch->index_count;
+      const int tier = Tier(BoxDistance(*ch, C));
+      const size_t t = size_t(std::max(tier, 0));
+      const size_t first = tier < 0 ? ch->first_index : ch->lod_first[t];
+      const size_t count = tier < 0 ? ch->index_count : ch->lod_count[t];
+      const GLint base = tier < 0 ? ch->base_vertex : ch->lod_base[t];
       glDrawElementsBaseVertex(GL_TRIANGLES, static_cast<GLsizei>(count), GL_UNSIGNED_INT,
-                               reinterpret_cast<void*>(first * sizeof(uint32_t)), ch->base_vertex);
+                               reinterpret_cast<void*>(first * sizeof(uint32_t)), base);
       tris += count / 3;
     }
     glFinish();

@@ -96,9 +96,12 @@ class Renderer {
 
   // Level of detail for Render's frames (never RenderDepth's depth maps): chunks whose box is
   // farther than `distance` (model units) from the camera are drawn simplified by vertex
-  // clustering (Rossignac & Borrel 1993) on a world grid of `cell` model units; vertices on a
-  // chunk's border never move, so chunks of different levels meet without cracks. Distance 0:
-  // full detail everywhere (the default). The simplified triangles are built once per cell size.
+  // clustering (Rossignac & Borrel 1993) on a world grid of `cell` model units, beyond twice
+  // the distance of 2·cell, four times 4·cell, eight times 8·cell (a constant angular error);
+  // vertices on a chunk's border never move, so chunks of different levels meet without
+  // cracks. The mesh's own open edges may move by up to a cell (a fused mesh is ragged: keeping
+  // them would keep most of it). Distance 0: full detail everywhere (the default). The
+  // simplified meshes are built once per cell size.
   // Throws Error for a negative distance or a cell <= 0 with a distance.
   void SetDetail(double distance, double cell);
 

@@ -73,9 +73,9 @@ void DeclareRenderOptions(OptionTable& t, SimulateOptions& o) {
       .Range(1, 240);
   t.Flag("--no-adapt", &o.no_adapt, "Keep the quality level whatever the frame rate");
   t.Integer("--quality", &o.quality,
-            "Start at this quality level: 0 full (render scale 1, --projectors, full mesh) ... 6 "
-            "(render 0.5x, 1 projector, mesh simplified beyond 12 m); with --no-adapt, fixed")
-      .Range(0, 6);
+            "Start at this quality level: 0 full (render scale 1, --projectors, full mesh) ... 7 "
+            "(render 0.5x, 1 projector, mesh simplified beyond 6 m); with --no-adapt, fixed")
+      .Range(0, 7);
   t.Integer("--projectors", &o.projectors, "K: projectors tried per pixel, best first")
       .Range(1, 16);
   t.Real("--bias", &o.bias, "Occlusion bias, relative: occluded when z > depth*(1+B)")
@@ -357,7 +357,7 @@ class Quality {
   Quality(int projectors, double fps, bool adapt, int start) : budget_(1 / fps), adapt_(adapt) {
     const int k = projectors, two = std::min(k, 2);
     const Level all[] = {{1, k, 0},     {1, two, 0},  {1, two, 40}, {0.75, two, 40},
-                         {0.75, 1, 25}, {0.5, 1, 25}, {0.5, 1, 12}};
+                         {0.75, 1, 25}, {0.5, 1, 25}, {0.5, 1, 12}, {0.5, 1, 6}};
     for (const Level& l : all)
       if (levels_.empty() || levels_.back() != l) levels_.push_back(l);
     level_ = std::min(start, levels() - 1);
@@ -707,8 +707,9 @@ void Session::Reset(double t, const std::string& why, bool to_start) {
     where = road_.rec.images[i]->name;
   }
   car_.Restart(at, t);
-  // A replayed log goes on with its current sample (its speed is taken as it is).
-  if (log_ && next_sample_ > 0) {
+  // A replayed log goes on with its current sample (its speed is taken as it is) from the pose
+  // the car was put at; stopped (--off-road stop), the car stands until the log's next sample.
+  if (log_ && next_sample_ > 0 && (to_start || o_.off_road == OffRoad::kReset)) {
     const ControlSample& c = log_->samples[next_sample_ - 1];
     car_.Control(t, c.steer_deg, c.speed, true);
   }

@@ -23,9 +23,10 @@
 // them (index/view_selection.h) and read ahead on a background thread for where the car will be
 // in half a second (ProjectorSources::Prefetch). Adaptive quality (unless --no-adapt): levels of
 // (render scale, projectors, mesh detail) from (1, K, full) down to (0.5, 1, simplified beyond
-// 12 m): (1,K) (1,2) (1,2,40 m) (0.75,2,40 m) (0.75,1,25 m) (0.5,1,25 m) (0.5,1,12 m), the mesh
-// beyond the distance drawn simplified by vertex clustering on cells of 1/25 of it
-// (Renderer::SetDetail); a level down when the mean frame time exceeds 90 % of the budget
+// 6 m): (1,K) (1,2) (1,2,40 m) (0.75,2,40 m) (0.75,1,25 m) (0.5,1,25 m) (0.5,1,12 m)
+// (0.5,1,6 m), the mesh beyond the distance D drawn simplified by vertex clustering on cells of
+// D/25, doubling with each doubling of the distance (Renderer::SetDetail); a level down when the
+// mean frame time exceeds 90 % of the budget
 // 1/--fps (after 10 frames at a level, 3 when over twice the budget), a level up when it is
 // under 45 % of it (after 60); never
 // below half the window's resolution or one projector. Each change is logged with its reason.
