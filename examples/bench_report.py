@@ -122,12 +122,13 @@ def measure_simulate(args, rows):
     work = tempfile.mkdtemp(prefix="mvtm-bench-sim-")
     env = dict(os.environ, MESA_SHADER_CACHE_DISABLE="true", PWD=work, SDL_VIDEODRIVER="offscreen")
     env.pop("DISPLAY", None)
-    road = ["--frames", "20", "--size", "640x192"] if args.short else ["--full"]
+    # --short (CI: keeps the report working): a small road and seconds-long drives.
+    road = ["--frames", "12", "--size", "320x96"] if args.short else ["--full"]
     run = lambda cmd: subprocess.run(cmd, cwd=work, env=env, check=True,
                                      stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     run([os.path.join(b, "mkroad"), "-q", "--vehicles", "0", "--offpath-every", "0"] + road + ["ws"])
     run([os.path.join(b, "bakedepth"), "-q", "ws"])
-    seconds = 4 if args.short else 11.5
+    seconds = 2 if args.short else 11.5
     with open(os.path.join(work, "log.tsv"), "w") as f:
         f.write(f"time steer speed\n0 0 8\n{seconds} 0 8\n")
     sim = [os.path.join(b, "simulate"), "-q", "--metric", "--replay", "log.tsv", "--record", "sim"]
@@ -150,24 +151,26 @@ def measure_simulate(args, rows):
             "ptmrender at the same poses, whole process", n / ptm_s)
     # Adaptive, real time, with a window: 30 s around the road (looping at its end).
     with open(os.path.join(work, "long.tsv"), "w") as f:
-        f.write(f"time steer speed\n0 0 6\n{10 if args.short else 30} 0 6\n")
+        f.write(f"time steer speed\n0 0 6\n{3 if args.short else 30} 0 6\n")
     _, sustained = simulate_fps([os.path.join(b, "simulate"), "-q", "--metric", "--replay",
                                  os.path.join(work, "long.tsv"), "--size", "640x360", "--at-end",
                                  "loop", "--record", os.path.join(work, "sim"),
                                  os.path.join(work, "ws")], sim_env)
-    add(rows, "simulate", "640x360 adaptive, real time, window: sustained fps (last 20 s)",
+    add(rows, "simulate", "640x360 adaptive, real time, window: sustained fps (last 20 s of 30)",
         sustained, "fps", "the target (--fps 30)", 30.0)
-    # Latency: the wheel turned at t = 2 s; frames from the first at or after it to the first
+    # Latency: the wheel turned at t = turn s; frames from the first at or after it to the first
     # whose heading shows the turn.
+    turn = 1 if args.short else 2
     with open(os.path.join(work, "wheel.tsv"), "w") as f:
-        f.write("time a0 a1 a2\n0 0 16000 0\n2 -20000 16000 0\n")
+        f.write(f"time a0 a1 a2\n0 0 16000 0\n{turn} -20000 16000 0\n")
     subprocess.run([os.path.join(b, "simulate"), "-q", "--metric", "--virtual-input",
-                    os.path.join(work, "wheel.tsv"), "--duration", "3", "--no-window", "--size",
-                    "640x360", "--record", os.path.join(work, "lat"), os.path.join(work, "ws")],
+                    os.path.join(work, "wheel.tsv"), "--duration", str(turn + 1), "--no-window",
+                    "--size", "640x360", "--record", os.path.join(work, "lat"),
+                    os.path.join(work, "ws")],
                    env=env, check=True)
     poses = [[float(x) for x in l.split()] for l in open(os.path.join(work, "lat", "poses.tsv"))
              if not l.startswith("#")]
-    first_after = next(i for i, p in enumerate(poses) if p[0] >= 2)
+    first_after = next(i for i, p in enumerate(poses) if p[0] >= turn)
 
     def axes(p):  # the camera's forward and up axes in the world, from its quaternion
         x, y, z, w = p[4:8]

@@ -755,7 +755,13 @@ bool Session::Frame(double T, double display) {
     last_hud_ = hs;
   }
   rec_.Pose(T, p.camera_to_world, display);
-  if (o_.record_frames) rec_.Frame(rep_.frames, std::move(frames));
+  if (o_.record_frames) {  // as shown: each screen at the screen's size (nearest, as the window)
+    std::vector<Image> shown;
+    const int w = int(view_.screen().width), h = int(view_.screen().height);
+    for (const Image& f : frames)
+      shown.push_back(f.width == w && f.height == h ? f : Compose({&f}, w, h, nullptr));
+    rec_.Frame(rep_.frames, std::move(shown));
+  }
   ++rep_.frames;
   if (auto c = quality_.Update(Seconds(t_start, Clock::now()), T)) rep_.quality.push_back(*c);
   return !ended_ && T < t_end_;
