@@ -89,6 +89,11 @@ GroundPlacer::GroundPlacer(const MeshRaycaster& mesh, const RoadFrame& frame,
                            const CarGeometry& car)
     : mesh_(mesh), frame_(frame), car_(car) {}
 
+void GroundPlacer::StartFromGround(double height) {
+  first_ = false;
+  std::fill(last_, last_ + 4, height);
+}
+
 Placement GroundPlacer::Place(const PlanarPose& rear, double time) {
   static const char* kWheel[4] = {"rear-left", "rear-right", "front-left", "front-right"};
   const Eigen::Vector2d f(std::cos(rear.heading), std::sin(rear.heading));

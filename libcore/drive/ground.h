@@ -91,6 +91,10 @@ class GroundPlacer {
   GroundPlacer(const MeshRaycaster& mesh, const RoadFrame& frame, const CarGeometry& car);
   // The camera pose of the car at `rear_axle`; `time` only names the moment in errors.
   Placement Place(const PlanarPose& rear_axle, double time);
+  // Starts the next placement's rays as if the previous ground under every wheel were at
+  // `height` metres along up (a car put down elsewhere on the road: simulate's resets), instead
+  // of from the frame's origin.
+  void StartFromGround(double height);
 
   static constexpr double kClearance = 2.0;  // metres above the previous ground
   static constexpr double kMaxDrop = 20.0;   // metres below the ray's start

@@ -28,10 +28,14 @@ struct Chunk {
   GLint base_vertex = 0;
   size_t vertex_count = 0;
   size_t first_index = 0, index_count = 0;
-  // The simplified triangles (SetDetail), a tier per doubling of the distance, each with its
-  // own compacted vertices (a software rasteriser shades every vertex of the index range).
-  std::array<size_t, 4> lod_first{}, lod_count{};
-  std::array<GLint, 4> lod_base{};
+};
+
+// A chunk's simplified triangles at one cell size (SetDetail), a tier per doubling of the
+// distance, each with its own compacted vertices (a software rasteriser shades every vertex of
+// the index range it is given).
+struct ChunkLod {
+  std::array<size_t, 4> first{}, count{};
+  std::array<GLint, 4> base{};
 };
 
 void CheckGlError(const char* where) {
@@ -104,61 +108,78 @@ struct Renderer::Impl {
   std::vector<float> verts;
   std::vector<uint32_t> indices;
   std::vector<uint8_t> border;
-  double lod_distance = 0, lod_cell = 0;
+  double lod_distance = 0;
   bool lod_allowed = false;  // Render's surface pass only, never RenderDepth
+  // Every cell size built so far (kept: a live renderer moves between levels), and what the
+  // GPU buffers hold: the full mesh, then each built cell size's tiers.
+  std::map<double, std::vector<ChunkLod>> lods;
+  const std::vector<ChunkLod>* lod = nullptr;  // the cell size in use
+  std::vector<float> gpu_verts;
+  std::vector<uint32_t> gpu_indices;
 
   // Vertex clustering (Rossignac & Borrel 1993) of each chunk on grids of `cell` · 2^tier model
   // units: every vertex off the border moves to the first vertex of its cell, degenerate
   // triangles go, and the vertices still used are copied into the tier's own compact range.
   void BuildLod(double cell) {
-    std::vector<float> all_verts(verts);
-    std::vector<uint32_t> all(indices);
-    for (Chunk& ch : chunks)
-      for (size_t tier = 0; tier < ch.lod_first.size(); ++tier) {
-        const double c = cell * double(1 << tier);
-        std::map<std::array<int64_t, 3>, uint32_t> first;
-        std::vector<uint32_t> rep(ch.vertex_count);
-        for (uint32_t v = 0; v < ch.vertex_count; ++v) {
-          const size_t g = size_t(ch.base_vertex) + v;
-          rep[v] = v;
-          if (border[g]) continue;
-          std::array<int64_t, 3> key;
-          for (int k = 0; k < 3; ++k)
-            key[k] = int64_t(std::floor((double(verts[6 * g + size_t(k)]) + ch.origin[k]) / c));
-          rep[v] = first.emplace(key, v).first->second;
-        }
-        ch.lod_base[tier] = GLint(all_verts.size() / 6);
-        std::vector<uint32_t> compact(ch.vertex_count, UINT32_MAX);
-        auto local = [&](uint32_t v) {  // the tier's index of chunk vertex v, copied on first use
-          if (compact[v] == UINT32_MAX) {
-            compact[v] = uint32_t(all_verts.size() / 6) - uint32_t(ch.lod_base[tier]);
-            const size_t g = 6 * (size_t(ch.base_vertex) + v);
-            all_verts.insert(all_verts.end(), verts.begin() + long(g), verts.begin() + long(g + 6));
-          }
-          return compact[v];
-        };
-        ch.lod_first[tier] = all.size();
-        for (size_t i = ch.first_index; i + 2 < ch.first_index + ch.index_count; i += 3) {
-          const uint32_t a = rep[indices[i]], b = rep[indices[i + 1]], d = rep[indices[i + 2]];
-          if (a != b && b != d && a != d) all.insert(all.end(), {local(a), local(b), local(d)});
-        }
-        ch.lod_count[tier] = all.size() - ch.lod_first[tier];
-      }
+    if (gpu_verts.empty()) {
+      gpu_verts = verts;
+      gpu_indices = indices;
+    }
+    std::vector<ChunkLod> out(chunks.size());
+    for (size_t ci = 0; ci < chunks.size(); ++ci)
+      for (size_t tier = 0; tier < 4; ++tier)
+        Simplify(chunks[ci], cell * double(1 << tier), tier, out[ci]);
     glBindVertexArray(vao);
     glBindBuffer(GL_ARRAY_BUFFER, vbo);
-    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(all_verts.size() * sizeof(float)),
-                 all_verts.data(), GL_STATIC_DRAW);
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(gpu_verts.size() * sizeof(float)),
+                 gpu_verts.data(), GL_STATIC_DRAW);
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo);
-    glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(all.size() * sizeof(uint32_t)),
-                 all.data(), GL_STATIC_DRAW);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+                 static_cast<GLsizeiptr>(gpu_indices.size() * sizeof(uint32_t)), gpu_indices.data(),
+                 GL_STATIC_DRAW);
     glBindVertexArray(0);
     CheckGlError("level of detail");
-    lod_cell = cell;
+    lods[cell] = std::move(out);
+  }
+
+  // One tier of a chunk clustered on cells of `c`, appended to the GPU arrays.
+  void Simplify(const Chunk& ch, double c, size_t tier, ChunkLod& out) {
+    std::unordered_map<uint64_t, uint32_t> first;
+    std::vector<uint32_t> rep(ch.vertex_count);
+    for (uint32_t v = 0; v < ch.vertex_count; ++v) {
+      const size_t g = size_t(ch.base_vertex) + v;
+      rep[v] = v;
+      if (border[g]) continue;
+      uint64_t key = 0;  // 21 bits per axis: a chunk spans far fewer cells
+      for (int k = 0; k < 3; ++k)
+        key =
+            (key << 21) |
+            (uint64_t(int64_t(std::floor((double(verts[6 * g + size_t(k)]) + ch.origin[k]) / c))) &
+             0x1FFFFF);
+      rep[v] = first.emplace(key, v).first->second;
+    }
+    out.base[tier] = GLint(gpu_verts.size() / 6);
+    std::vector<uint32_t> compact(ch.vertex_count, UINT32_MAX);
+    auto local = [&](uint32_t v) {  // the tier's index of chunk vertex v, copied on first use
+      if (compact[v] == UINT32_MAX) {
+        compact[v] = uint32_t(gpu_verts.size() / 6) - uint32_t(out.base[tier]);
+        const size_t g = 6 * (size_t(ch.base_vertex) + v);
+        gpu_verts.insert(gpu_verts.end(), verts.begin() + long(g), verts.begin() + long(g + 6));
+      }
+      return compact[v];
+    };
+    out.first[tier] = gpu_indices.size();
+    for (size_t i = ch.first_index; i + 2 < ch.first_index + ch.index_count; i += 3) {
+      const uint32_t a = rep[indices[i]], b = rep[indices[i + 1]], d = rep[indices[i + 2]];
+      if (a != b && b != d && a != d)
+        gpu_indices.insert(gpu_indices.end(), {local(a), local(b), local(d)});
+    }
+    out.count[tier] = gpu_indices.size() - out.first[tier];
   }
 
   // The detail tier of a chunk `d` model units away: -1 full, else 0..3 (one per doubling).
   int Tier(double d) const {
-    if (!lod_allowed || lod_distance <= 0 || d <= lod_distance) return -1;
+    if (!lod_allowed || lod_distance <= 0 || !lod || d <= lod_distance) return -1;
     return std::min(3, int(std::floor(std::log2(d / lod_distance))));
   }
 
@@ -302,9 +323,10 @@ struct Renderer::Impl {
       glUniform3fv(off, 1, o.data());
       const int tier = Tier(BoxDistance(*ch, C));
       const size_t t = size_t(std::max(tier, 0));
-      const size_t first = tier < 0 ? ch->first_index : ch->lod_first[t];
-      const size_t count = tier < 0 ? ch->index_count : ch->lod_count[t];
-      const GLint base = tier < 0 ? ch->base_vertex : ch->lod_base[t];
+      const ChunkLod* l = tier < 0 ? nullptr : &(*lod)[size_t(ch - chunks.data())];
+      const size_t first = l ? l->first[t] : ch->first_index;
+      const size_t count = l ? l->count[t] : ch->index_count;
+      const GLint base = l ? l->base[t] : ch->base_vertex;
       glDrawElementsBaseVertex(GL_TRIANGLES, static_cast<GLsizei>(count), GL_UNSIGNED_INT,
                                reinterpret_cast<void*>(first * sizeof(uint32_t)), base);
       tris += count / 3;
@@ -592,7 +614,8 @@ void Renderer::SetDetail(double distance, double cell) {
   Impl& m = *impl_;
   if (!(distance >= 0) || (distance > 0 && !(cell > 0)))
     throw Error("level of detail: the distance must be >= 0 and the cell > 0");
-  if (distance > 0 && cell != m.lod_cell) m.BuildLod(cell);
+  if (distance > 0 && !m.lods.count(cell)) m.BuildLod(cell);
+  m.lod = distance > 0 ? &m.lods.at(cell) : nullptr;
   m.lod_distance = distance;
 }
 

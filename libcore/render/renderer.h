@@ -101,7 +101,8 @@ class Renderer {
   // vertices on a chunk's border never move, so chunks of different levels meet without
   // cracks. The mesh's own open edges may move by up to a cell (a fused mesh is ragged: keeping
   // them would keep most of it). Distance 0: full detail everywhere (the default). The
-  // simplified meshes are built once per cell size.
+  // simplified meshes are built once per cell size and kept (the first call with a cell size
+  // costs a pass over the mesh; later ones with it cost nothing).
   // Throws Error for a negative distance or a cell <= 0 with a distance.
   void SetDetail(double distance, double cell);
 

@@ -24,8 +24,8 @@ AxisMap ReadAxis(const nlohmann::json& j, AxisMap m, const std::string& path,
   if (!j.is_object()) throw Error(path, 0, "'" + key + "' must be an object");
   for (const auto& [k, v] : j.items()) {
     const std::string where = "'" + key + "." + k + "'";
-    if (k == "axis" && v.is_number_integer() && v.get<int>() >= 0 && v.get<int>() < 64)
-      m.axis = v.get<int>();
+    if (k == "axis" && v.is_number_integer() && v.get<int64_t>() >= 0 && v.get<int64_t>() < 64)
+      m.axis = int(v.get<int64_t>());
     else if (k == "invert" && v.is_boolean())
       m.invert = v.get<bool>();
     else if (k == "dead_zone" && v.is_number() && v.get<double>() >= 0 && v.get<double>() < 1)
@@ -43,6 +43,15 @@ AxisMap ReadAxis(const nlohmann::json& j, AxisMap m, const std::string& path,
   return m;
 }
 
+// A finite number in the classic locale, else Error("FILE:LINE: bad WHAT: TEXT").
+double Number(const std::string& text, const std::string& path, long line, const char* what) {
+  try {
+    return ParseDoubleArg(text, what);
+  } catch (const std::exception&) {
+    throw Error(path, line, std::string("bad ") + what + ": '" + text + "'");
+  }
+}
+
 }  // namespace
 
 InputMapping ReadInputMapping(const std::string& path) {
@@ -51,6 +60,7 @@ InputMapping ReadInputMapping(const std::string& path) {
   const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
   if (j.is_discarded() || !j.is_object()) throw Error(path, 0, "not a JSON object");
   InputMapping m;
+  m.given = true;
   for (const auto& [k, v] : j.items()) {
     if (k == "steer")
       m.steer = ReadAxis(v, m.steer, path, k);
@@ -59,8 +69,9 @@ InputMapping ReadInputMapping(const std::string& path) {
     else if (k == "brake")
       m.brake = ReadAxis(v, m.brake, path, k);
     else if (k == "reverse" && v.is_object() && v.size() == 1 && v.contains("button") &&
-             v["button"].is_number_integer() && v["button"].get<int>() >= 0)
-      m.reverse_button = v["button"].get<int>();
+             v["button"].is_number_integer() && v["button"].get<int64_t>() >= 0 &&
+             v["button"].get<int64_t>() < 256)
+      m.reverse_button = int(v["button"].get<int64_t>());
     else
       throw Error(path, 0,
                   "'" + k +
@@ -94,7 +105,7 @@ std::vector<VirtualRow> ReadVirtualScript(const std::string& path) {
     }
     VirtualRow r;
     r.line = n;
-    r.time = ParseDoubleArg(f[0], path + ":" + std::to_string(n) + ": time");
+    r.time = Number(f[0], path, n, "time");
     if (f.size() == 2 && (f[1] == "detach" || f[1] == "attach")) {
       r.kind = f[1] == "detach" ? VirtualRow::kDetach : VirtualRow::kAttach;
     } else {
@@ -102,7 +113,7 @@ std::vector<VirtualRow> ReadVirtualScript(const std::string& path) {
         throw Error(path, n,
                     "expected " + std::to_string(axes + 1) + " fields (or 'TIME detach|attach')");
       for (size_t k = 1; k < f.size(); ++k) {
-        const double v = ParseDoubleArg(f[k], path + ":" + std::to_string(n) + ": axis");
+        const double v = Number(f[k], path, n, "axis value");
         if (!(v >= -32768 && v <= 32767) || v != std::floor(v))
           throw Error(path, n, "an axis value is an integer in -32768 .. 32767: " + f[k]);
         r.axes.push_back(static_cast<int>(v));
@@ -117,28 +128,36 @@ std::vector<VirtualRow> ReadVirtualScript(const std::string& path) {
 
 Devices::Devices(InputMapping mapping, std::vector<VirtualRow> script, bool keyboard)
     : map_(mapping), script_(std::move(script)), keyboard_(keyboard) {
-  if (!script_.empty()) {
-    size_t axes = 0;
-    for (const VirtualRow& r : script_) axes = std::max(axes, r.axes.size());
-    virtual_index_ = SDL_JoystickAttachVirtual(SDL_JOYSTICK_TYPE_WHEEL, int(axes), 8, 0);
-    if (virtual_index_ < 0)
-      throw Error(std::string("cannot attach SDL's virtual joystick: ") + SDL_GetError());
-    OpenDevice(virtual_index_, nullptr);
-  } else {
-    for (int i = 0; i < SDL_NumJoysticks() && !joystick_; ++i) OpenDevice(i, nullptr);
-  }
+  if (!script_.empty())
+    OpenDevice(AttachVirtual(), nullptr);
+  else
+    OpenAny(nullptr);
 }
 
 Devices::~Devices() {
-  if (controller_)
-    SDL_GameControllerClose(static_cast<SDL_GameController*>(controller_));
-  else if (joystick_)
-    SDL_JoystickClose(static_cast<SDL_Joystick*>(joystick_));
+  CloseDevice(nullptr, "");
+  for (int i = 0; virtual_instance_ >= 0 && i < SDL_NumJoysticks(); ++i)
+    if (SDL_JoystickGetDeviceInstanceID(i) == virtual_instance_) SDL_JoystickDetachVirtual(i);
+}
+
+int Devices::AttachVirtual() {
+  size_t axes = 0;
+  for (const VirtualRow& r : script_) axes = std::max(axes, r.axes.size());
+  const int index = SDL_JoystickAttachVirtual(SDL_JOYSTICK_TYPE_WHEEL, int(axes), 8, 0);
+  if (index < 0)
+    throw Error(std::string("cannot attach SDL's virtual joystick: ") + SDL_GetError());
+  virtual_instance_ = SDL_JoystickGetDeviceInstanceID(index);
+  return index;
+}
+
+void Devices::OpenAny(InputEvents* ev) {
+  for (int i = 0; i < SDL_NumJoysticks() && !joystick_; ++i) OpenDevice(i, ev);
 }
 
 void Devices::OpenDevice(int index, InputEvents* ev) {
   if (joystick_) return;
-  if (SDL_IsGameController(index) && index != virtual_index_) {
+  const bool is_virtual = SDL_JoystickGetDeviceInstanceID(index) == virtual_instance_;
+  if (SDL_IsGameController(index) && !is_virtual && !map_.given) {
     auto* c = SDL_GameControllerOpen(index);
     if (!c) return;
     controller_ = c;
@@ -175,8 +194,10 @@ InputEvents Devices::Poll() {
     if (e.type == SDL_QUIT) ev.quit = true;
     if (e.type == SDL_WINDOWEVENT && e.window.event == SDL_WINDOWEVENT_CLOSE) ev.quit = true;
     if (e.type == SDL_JOYDEVICEADDED && !joystick_) OpenDevice(e.jdevice.which, &ev);
-    if (e.type == SDL_JOYDEVICEREMOVED && e.jdevice.which == instance_)
+    if (e.type == SDL_JOYDEVICEREMOVED && e.jdevice.which == instance_) {
       CloseDevice(&ev, "unplugged");
+      OpenAny(&ev);
+    }
     if (e.type == SDL_KEYDOWN && keyboard_ && !e.key.repeat) {
       const SDL_Keycode k = e.key.keysym.sym;
       if (k == SDLK_ESCAPE || k == SDLK_q) ev.quit = true;
@@ -216,24 +237,27 @@ double Pedal(double x, const AxisMap& m) {
 Pedals Devices::Sample(double t, double dt) {
   while (next_row_ < script_.size() && script_[next_row_].time <= t) {
     const VirtualRow& r = script_[next_row_++];
-    if (r.kind == VirtualRow::kDetach && virtual_index_ >= 0) {
-      CloseDevice(&pending_, "unplugged");
-      SDL_JoystickDetachVirtual(virtual_index_);
-      virtual_index_ = -1;
-    } else if (r.kind == VirtualRow::kAttach && virtual_index_ < 0) {
-      size_t axes = 0;
-      for (const VirtualRow& s : script_) axes = std::max(axes, s.axes.size());
-      virtual_index_ = SDL_JoystickAttachVirtual(SDL_JOYSTICK_TYPE_WHEEL, int(axes), 8, 0);
-      if (virtual_index_ >= 0) OpenDevice(virtual_index_, &pending_);
-    } else if (r.kind == VirtualRow::kAxes && joystick_ && virtual_index_ >= 0) {
+    const bool on_virtual = joystick_ && instance_ == virtual_instance_;
+    if (r.kind == VirtualRow::kDetach && virtual_instance_ >= 0) {
+      if (on_virtual) CloseDevice(&pending_, "unplugged");
+      for (int i = 0; i < SDL_NumJoysticks(); ++i)
+        if (SDL_JoystickGetDeviceInstanceID(i) == virtual_instance_) SDL_JoystickDetachVirtual(i);
+      virtual_instance_ = -1;
+      OpenAny(&pending_);
+    } else if (r.kind == VirtualRow::kAttach && virtual_instance_ < 0) {
+      const int index = AttachVirtual();
+      if (!joystick_) OpenDevice(index, &pending_);
+    } else if (r.kind == VirtualRow::kAxes && on_virtual) {
       for (size_t k = 0; k < r.axes.size(); ++k)
         SDL_JoystickSetVirtualAxis(static_cast<SDL_Joystick*>(joystick_), int(k),
                                    static_cast<Sint16>(r.axes[k]));
     }
   }
   SDL_JoystickUpdate();
-  if (joystick_ && !SDL_JoystickGetAttached(static_cast<SDL_Joystick*>(joystick_)))
+  if (joystick_ && !SDL_JoystickGetAttached(static_cast<SDL_Joystick*>(joystick_))) {
     CloseDevice(&pending_, "unplugged");
+    OpenAny(&pending_);
+  }
   Pedals p;
   if (controller_) {
     auto* c = static_cast<SDL_GameController*>(controller_);

@@ -10,7 +10,9 @@
 //    ±450 °), axis 1 the throttle and axis 2 the brake, each 0 (and below) released … 32767
 //    pressed ("range": "half"; a wheel's pedals that span the whole axis want "full").
 //  * A game controller SDL knows (SDL_GameController): left stick x steers (full = ±450 °), the
-//    right trigger is the throttle, the left the brake, button B toggles reverse.
+//    right trigger is the throttle, the left the brake, button B toggles reverse. With a mapping
+//    file every device, game controllers too, is read as a raw joystick through it.
+//  When the device in use is unplugged, the next one connected (if any) takes over.
 //  A device's pedals and wheel add to the keyboard's (clamped): either drives.
 // Mapping file (JSON): {"steer": {"axis": 0, "invert": false, "dead_zone": 0.02,
 //   "degrees": 450}, "throttle": {"axis": 1, "invert": false, "dead_zone": 0.02,
@@ -46,6 +48,7 @@ struct InputMapping {
   AxisMap throttle{1, false, 0.02, true, 450};
   AxisMap brake{2, false, 0.02, true, 450};
   int reverse_button = 4;
+  bool given = false;  // read from a file: every device is then a raw joystick read through it
 };
 
 // Reads a mapping file (Error "FILE: what" when malformed).
@@ -89,6 +92,8 @@ class Devices {
 
  private:
   void OpenDevice(int index, InputEvents* ev);
+  void OpenAny(InputEvents* ev);  // the first connected device, when none is open
+  int AttachVirtual();            // the virtual device's index (Error when SDL refuses)
   void CloseDevice(InputEvents* ev, const std::string& why);
   double Axis(const AxisMap& m) const;
 
@@ -96,7 +101,7 @@ class Devices {
   std::vector<VirtualRow> script_;
   size_t next_row_ = 0;
   bool keyboard_;
-  int virtual_index_ = -1;      // the virtual device's index while attached
+  int virtual_instance_ = -1;   // the virtual device's instance id while attached
   void* joystick_ = nullptr;    // SDL_Joystick*
   void* controller_ = nullptr;  // SDL_GameController*
   int instance_ = -1;           // its instance id

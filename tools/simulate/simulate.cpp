@@ -215,11 +215,13 @@ Eigen::Vector2d FootOf(const PlanarPose& rear, const CarGeometry& car) {
 class LiveCar {
  public:
   LiveCar(const Road& road, const PlanarPose& rear, double t) : road_(road) { Restart(rear, t); }
-  // Puts the car at `rear`, standing, from time t: a new segment.
-  void Restart(const PlanarPose& rear, double t) {
+  // Puts the car at `rear`, standing, from time t: a new segment. `ground` (metres along up;
+  // NaN: the start's) is the ground height there, where the wheels' rays start from.
+  void Restart(const PlanarPose& rear, double t, double ground = std::nan("")) {
     path_ = std::make_unique<SteeredPath>(std::vector<ControlSample>{{t, 0, 0, 0}}, road_.bicycle,
                                           rear);
     placer_ = std::make_unique<GroundPlacer>(*road_.ray, road_.frame, road_.car);
+    if (!std::isnan(ground)) placer_->StartFromGround(ground);
     speed_ = 0;
     steer_ = 0;
   }
@@ -278,6 +280,12 @@ class Recorder {
     pending_time_ = t;
     pending_row_ = FormatDouble(t) + '\t' + FormatDouble(steer) + '\t' + FormatDouble(speed) +
                    '\t' + FormatDouble(p.throttle) + '\t' + FormatDouble(p.brake) + '\n';
+  }
+  // A reset at t: a pending row at t (the car's controls before it) is dropped, so the row the
+  // reset writes next is the only one at t.
+  void Restart(double t) {
+    if (pending_ && pending_time_ >= t) pending_ = false;
+    Flush();
   }
   void Comment(const std::string& text) {
     if (!on()) return;
@@ -365,6 +373,15 @@ class Quality {
   double scale() const { return levels_[size_t(level_)].scale; }
   int projectors() const { return levels_[size_t(level_)].projectors; }
   double lod_m() const { return levels_[size_t(level_)].lod_m; }
+  // The level-of-detail distances the session may use (all levels' when adapting).
+  std::vector<double> DetailDistances() const {
+    std::vector<double> d;
+    for (size_t i = 0; i < levels_.size(); ++i)
+      if (levels_[i].lod_m > 0 && (adapt_ || int(i) == level_)) d.push_back(levels_[i].lod_m);
+    std::sort(d.begin(), d.end());
+    d.erase(std::unique(d.begin(), d.end()), d.end());
+    return d;
+  }
   int level() const { return level_; }
   int levels() const { return int(levels_.size()); }
   // After a frame that took `seconds` (render and show): a change, or none.
@@ -440,6 +457,15 @@ class LiveView {
     screen_yaw_ = o.screen_yaw > 0 ? o.screen_yaw : hfov;
   }
   const Camera& screen() const { return screen_; }
+  // Builds the simplified meshes of these level-of-detail distances (metres) now, so a level
+  // change in the session costs no rebuild. The seconds it took.
+  double PrepareDetail(const std::vector<double>& distances_m) {
+    const auto t0 = Clock::now();
+    for (double d : distances_m) renderer_.SetDetail(d * scale_, d * scale_ / 25);
+    renderer_.SetDetail(0, 0);
+    lod_m_ = 0;
+    return Seconds(t0, Clock::now());
+  }
   // The survey and plan from the start view and recorded views along the drive.
   void Plan(const Rigid3d& start_c2w, const std::vector<Rigid3d>& recorded_w2c);
   const SceneSurvey& survey() const { return survey_; }
@@ -607,14 +633,21 @@ class Session {
         car_(road, road.rear[road.rec.start], t0_) {
     lp_ = o.car;
     lp_.max_speed = o.max_speed / 3.6;
-    t_end_ = log              ? log->samples.back().time
-             : o.duration > 0 ? t0_ + o.duration
-                              : std::numeric_limits<double>::infinity();
+    t_end_ = log ? log->samples.back().time : std::numeric_limits<double>::infinity();
+    if (o.duration > 0) t_end_ = std::min(t_end_, t0_ + o.duration);
     t_last_ = t0_;
+    last_shown_ = t0_;
     last_good_ = road.rear[road.rec.start];
     hud_ = !o.no_hud;
     rec_.Control(t0_, 0, 0, Pedals());
     if (log_) Apply(log_->samples[next_sample_++]);
+    const std::vector<double> detail = quality_.DetailDistances();
+    if (!detail.empty()) {
+      char note[96];
+      std::snprintf(note, sizeof note, "levels of detail for %zu distances prepared in %.2f s",
+                    detail.size(), view_.PrepareDetail(detail));
+      rep_.log.push_back(note);
+    }
   }
   void Run();
 
@@ -650,6 +683,8 @@ class Session {
   size_t next_sample_ = 0;
   Pedals pedals_;
   PlanarPose last_good_;
+  double last_ground_ = std::nan("");  // metres along up under the rear axle, last frame
+  double last_shown_ = 0;              // the simulation time of the last frame shown
   bool hud_ = true, ended_ = false;
   std::vector<Image> last_frames_;  // --screenshot without a window: the last frame's screens
   HudState last_hud_;
@@ -699,14 +734,18 @@ void Session::Step(double t) {
 
 void Session::Reset(double t, const std::string& why, bool to_start) {
   PlanarPose at = last_good_;
+  double ground = last_ground_;
   std::string where = "where it last was on the road";
   if (to_start || o_.off_road == OffRoad::kReset) {
     const size_t i = to_start ? road_.rec.start
                               : road_.along[road_.path->Nearest(FootOf(car_.At(t), road_.car))];
     at = road_.rear[i];
     where = road_.rec.images[i]->name;
+    // The recorded camera's height less the car's camera height: the ground under it.
+    ground = road_.frame.Height(road_.rec.w2c[i].Centre()) - road_.car.camera_offset.z();
   }
-  car_.Restart(at, t);
+  car_.Restart(at, t, ground);
+  rec_.Restart(t);  // this step's row (if any) is the car's before the reset: dropped
   // A replayed log goes on with its current sample (its speed is taken as it is) from the pose
   // the car was put at; stopped (--off-road stop), the car stands until the log's next sample.
   if (log_ && next_sample_ > 0 && (to_start || o_.off_road == OffRoad::kReset)) {
@@ -741,6 +780,7 @@ bool Session::Frame(double T, double display) {
     p = car_.Place(T);
   }
   last_good_ = car_.At(T);
+  last_ground_ = road_.frame.Height(p.rear_ground);
   const auto t_render = Clock::now();
   std::vector<Image> frames = view_.Render(
       p.camera_to_world, quality_, std::max(0.0, car_.speed()) * 0.5 * road_.scale, rep_.log);
@@ -755,6 +795,7 @@ bool Session::Frame(double T, double display) {
     last_hud_ = hs;
   }
   rec_.Pose(T, p.camera_to_world, display);
+  last_shown_ = T;
   if (o_.record_frames) {  // as shown: each screen at the screen's size (nearest, as the window)
     std::vector<Image> shown;
     const int w = int(view_.screen().width), h = int(view_.screen().height);
@@ -795,6 +836,8 @@ void Session::Run() {
     }
   }
   // The log ends at the last frame shown, so drive's path ends where the session did.
+  // (A quit ends at the frame before it: the quitting frame is never shown.)
+  T = last_shown_;
   if (!log_ && T > car_.segment_start() && car_.Control(T, car_.steer(), car_.speed(), true))
     rec_.Control(T, car_.steer(), car_.speed(), pedals_);
   rep_.sim_start = t0_;

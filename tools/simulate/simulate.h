@@ -37,7 +37,8 @@
 // end: --at-end stop ends the session, loop puts the car back at the start image.
 //
 // Recording (--record OUT): OUT/controls.tsv (drive's format: time steer speed, then throttle
-// brake; a reset is a '# reset' comment and starts a new segment that drive does not join),
+// brake; a reset is a '# reset' comment: drive skips it and drives on from where the car was,
+// so drive reproduces a session only up to its first reset),
 // OUT/poses.tsv (a '#' header, then per frame shown: the simulation time, tx ty tz qx qy qz qw of
 // the camera-to-world pose (TUM), the display time in wall seconds since the start), the same
 // rows as a plain TUM file OUT/poses.tum (for ptmrender --poses and gazemap), OUT/summary.json
