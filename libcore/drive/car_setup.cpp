@@ -84,4 +84,18 @@ CarGeometry MakeCar(double wheelbase, double track, const std::string& camera_of
   return car;
 }
 
+CarOnRoad SetUpCar(const Workspace& ws, const MeshRaycaster& mesh, const CarOptions& o,
+                   const std::string& tool) {
+  CarOnRoad c;
+  c.rec = LoadRecordedDrive(ws, o.pass, o.start);
+  const Eigen::Vector3d up = RecordedUp(c.rec.w2c);
+  const std::vector<double> heights = CameraHeights(mesh, c.rec.w2c, up);
+  c.height_cameras = heights.size();
+  c.scale = ResolveScale(o.scale, o.metric, ws, heights, tool, c.scale_source);
+  c.car = MakeCar(o.wheelbase, o.track, o.camera_offset, ws, heights, c.scale,
+                  &c.height_from_workspace);
+  c.frame = FrameAtCamera(c.rec.w2c[c.rec.start], up, c.scale);
+  return c;
+}
+
 }  // namespace mvtm

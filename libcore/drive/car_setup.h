@@ -48,4 +48,30 @@ CarGeometry MakeCar(double wheelbase, double track, const std::string& camera_of
                     const Workspace& ws, const std::vector<double>& heights, double scale,
                     bool* from_workspace);
 
+// What sets a car on the road (drive's and simulate's options of the same names).
+struct CarOptions {
+  double scale = 0;  // model units per metre; 0: not given
+  bool metric = false;
+  double wheelbase = 2.7, track = 1.6;
+  std::string camera_offset;  // "" for the recorded height
+  std::string pass, start;
+};
+
+// The car set on the road: the recorded drive, the road frame at the start image, the car and
+// the scale, with where the scale and height came from.
+struct CarOnRoad {
+  RecordedDrive rec;
+  RoadFrame frame;
+  CarGeometry car;
+  double scale = 1;
+  std::string scale_source;
+  size_t height_cameras = 0;  // recorded cameras above the mesh
+  bool height_from_workspace = false;
+};
+
+// LoadRecordedDrive, the recorded up axis and camera heights over `mesh`, ResolveScale (for
+// `tool`), MakeCar and FrameAtCamera at the start image, in that order.
+CarOnRoad SetUpCar(const Workspace& ws, const MeshRaycaster& mesh, const CarOptions& o,
+                   const std::string& tool);
+
 }  // namespace mvtm

@@ -33,6 +33,16 @@ Eigen::Vector3d Rigid3d::ViewDirection() const { return q.conjugate() * Eigen::V
 
 Eigen::Vector3d Rigid3d::Up() const { return -(q.conjugate() * Eigen::Vector3d::UnitY()); }
 
+Rigid3d MovedAndTurned(const Rigid3d& w2c, double lateral_left, double yaw_left_deg) {
+  Rigid3d c2w = w2c.Inverse();
+  const Eigen::Matrix3d R = c2w.R();
+  c2w.t -= lateral_left * R.col(0);
+  const Eigen::Vector3d up = w2c.Up();
+  c2w.q = Eigen::Quaterniond(Eigen::AngleAxisd(yaw_left_deg * M_PI / 180.0, up)) * c2w.q;
+  c2w.q.normalize();
+  return c2w.Inverse();
+}
+
 Eigen::Vector3d UpSum(const std::vector<Rigid3d>& world_to_camera) {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   for (const Rigid3d& p : world_to_camera) sum += Rigid3d(p.q.normalized(), p.t).Up();

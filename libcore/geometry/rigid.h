@@ -45,6 +45,11 @@ struct Rigid3d {
   static Rigid3d FromMatrix(const Eigen::Matrix<double, 3, 4>& m);
 };
 
+// A world-to-camera pose moved `lateral_left` along the camera's left (−x) and turned
+// `yaw_left_deg` degrees to the left about its up axis (−y in the world): a lane change and a
+// turn of a level camera (ptmrender --lateral/--yaw, simulate's side screens).
+Rigid3d MovedAndTurned(const Rigid3d& w2c, double lateral_left, double yaw_left_deg);
+
 // Σ Up() over world-to-camera poses, unnormalised: its length against the count says how well the
 // cameras agree (n when all are parallel, near 0 when they cancel out).
 Eigen::Vector3d UpSum(const std::vector<Rigid3d>& world_to_camera);

@@ -199,16 +199,17 @@ Trajectory ReadTrajectory(const std::string& path, TrajectoryFormat format) {
   return ReadTrajectory(in, path, format);
 }
 
+std::string TumRow(double time, const Rigid3d& c2w) {
+  std::string row = FormatDouble(time);
+  for (double v : {c2w.t.x(), c2w.t.y(), c2w.t.z(), c2w.q.x(), c2w.q.y(), c2w.q.z(), c2w.q.w()})
+    row += ' ' + FormatDouble(v);
+  return row;
+}
+
 void WriteTum(const std::string& path, const std::vector<StampedPose>& c2w) {
   WriteTextAtomic(path, [&](std::ostream& f) {
     f << "# timestamp tx ty tz qx qy qz qw (camera-to-world)\n";
-    for (const auto& p : c2w) {
-      const auto& q = p.pose.q;
-      const auto& t = p.pose.t;
-      f << FormatDouble(p.time) << ' ' << FormatDouble(t.x()) << ' ' << FormatDouble(t.y()) << ' '
-        << FormatDouble(t.z()) << ' ' << FormatDouble(q.x()) << ' ' << FormatDouble(q.y()) << ' '
-        << FormatDouble(q.z()) << ' ' << FormatDouble(q.w()) << '\n';
-    }
+    for (const auto& p : c2w) f << TumRow(p.time, p.pose) << '\n';
   });
 }
 

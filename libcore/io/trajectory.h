@@ -49,6 +49,9 @@ Trajectory ReadTrajectory(const std::string& path,
 Trajectory ReadTrajectory(std::istream& in, const std::string& name,
                           TrajectoryFormat format = TrajectoryFormat::kAuto);
 void WriteTum(const std::string& path, const std::vector<StampedPose>& c2w);
+// One TUM line without its newline: "timestamp tx ty tz qx qy qz qw" of a camera-to-world pose,
+// numbers that read back exactly (WriteTum's rows; simulate streams them).
+std::string TumRow(double time, const Rigid3d& c2w);
 void WriteKittiPoses(const std::string& path, const std::vector<StampedPose>& c2w);
 
 struct TimedName {

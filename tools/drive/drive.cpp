@@ -152,16 +152,18 @@ std::vector<fs::path> DriveInputs(const DriveOptions& o, const Workspace& ws) {
 // Drives the car and writes OUT.
 void MakeDrive(const DriveOptions& o, const Workspace& ws, const ControlsLog& log,
                DriveReport& rep) {
-  const Recorded r = LoadRecordedDrive(ws, o.pass, o.start);
   const MeshRaycaster mesh(ReadMesh(ws.MeshPath().string()));
-  const Eigen::Vector3d up = RecordedUp(r.w2c);
-  const std::vector<double> heights = CameraHeights(mesh, r.w2c, up);
-  rep.height_cameras = heights.size();
-  rep.scale = ResolveScale(o.scale, o.metric, ws, heights, "drive", rep.scale_source);
-  const CarGeometry car = MakeCar(o.wheelbase, o.track, o.camera_offset, ws, heights, rep.scale,
-                                  &rep.height_from_workspace);
+  const CarOnRoad set = SetUpCar(
+      ws, mesh, {o.scale, o.metric, o.wheelbase, o.track, o.camera_offset, o.pass, o.start},
+      "drive");
+  const Recorded& r = set.rec;
+  const CarGeometry& car = set.car;
+  const RoadFrame& frame = set.frame;
+  rep.height_cameras = set.height_cameras;
+  rep.scale = set.scale;
+  rep.scale_source = set.scale_source;
+  rep.height_from_workspace = set.height_from_workspace;
   rep.camera_height = car.camera_offset.z();
-  const RoadFrame frame = FrameAtCamera(r.w2c[r.start], up, rep.scale);
   const CarPath path = o.lane_change.empty()
                            ? SteeredCarPath(log, o, car, PlanarCamera(frame, r.w2c[r.start]), rep)
                            : LaneChangeCarPath(r, frame, o, car);

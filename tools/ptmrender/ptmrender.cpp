@@ -145,17 +145,6 @@ fs::path ProvenanceMapPath(const PtmRenderOptions& o, const RenderPose& pose) {
   return pp;
 }
 
-// Lane change and turn, about the camera's own axes: left = −x, up = −y (level cameras: world up).
-Rigid3d Offset(const Rigid3d& w2c, double lateral_left, double yaw_left_deg) {
-  Rigid3d c2w = w2c.Inverse();
-  Eigen::Matrix3d R = c2w.R();
-  c2w.t -= lateral_left * R.col(0);
-  const Eigen::Vector3d up = w2c.Up();
-  c2w.q = Eigen::Quaterniond(Eigen::AngleAxisd(yaw_left_deg * M_PI / 180.0, up)) * c2w.q;
-  c2w.q.normalize();
-  return c2w.Inverse();
-}
-
 Scene LoadScene(const Workspace& ws) {
   Scene s;
   s.rec = ReadColmapModel(ws.SparseDir().string());
@@ -182,7 +171,7 @@ std::vector<RenderPose> LoadRenderPoses(const PtmRenderOptions& o, const Scene& 
           {FrameName(scene.images[i]->name, o.exr), scene.images[i]->world_to_camera, i});
   }
   if (o.lateral != 0 || o.yaw != 0)
-    for (auto& p : poses) p.w2c = Offset(p.w2c, o.lateral, o.yaw);
+    for (auto& p : poses) p.w2c = MovedAndTurned(p.w2c, o.lateral, o.yaw);
   return poses;
 }
 

@@ -26,6 +26,7 @@
 #include "image/async_writer.h"
 #include "index/view_selection.h"
 #include "io/mesh_io.h"
+#include "io/trajectory.h"
 #include "render/effects_plan.h"
 #include "render/renderer.h"
 #include "screen.h"
@@ -164,14 +165,10 @@ double Seconds(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double>(b - a).count();
 }
 
-// The road the car drives: the recorded drive on the mesh, in metres.
-struct Road {
-  RecordedDrive rec;
+// The road the car drives: the car set on it as drive sets it (CarOnRoad), the mesh it is
+// placed on, and the recorded drive as a path in metres.
+struct Road : CarOnRoad {
   std::unique_ptr<MeshRaycaster> ray;
-  double scale = 1;
-  std::string scale_source;
-  CarGeometry car;
-  RoadFrame frame;
   std::unique_ptr<RecordedPath> path;  // the recorded camera feet
   std::vector<PlanarPose> rear;        // the rear axle under each recorded camera
   std::vector<size_t> along;           // the recorded images the path runs through
@@ -180,13 +177,10 @@ struct Road {
 
 Road LoadRoad(const SimulateOptions& o, const Workspace& ws, const Mesh& mesh) {
   Road r;
-  r.rec = LoadRecordedDrive(ws, o.pass, o.start);
   r.ray = std::make_unique<MeshRaycaster>(mesh);
-  const Eigen::Vector3d up = RecordedUp(r.rec.w2c);
-  const std::vector<double> heights = CameraHeights(*r.ray, r.rec.w2c, up);
-  r.scale = ResolveScale(o.scale, o.metric, ws, heights, "simulate", r.scale_source);
-  r.car = MakeCar(o.wheelbase, o.track, o.camera_offset, ws, heights, r.scale, nullptr);
-  r.frame = FrameAtCamera(r.rec.w2c[r.rec.start], up, r.scale);
+  static_cast<CarOnRoad&>(r) = SetUpCar(
+      ws, *r.ray, {o.scale, o.metric, o.wheelbase, o.track, o.camera_offset, o.pass, o.start},
+      "simulate");
   // The car is set up as drive sets it up (the up axis and height from every recorded image of
   // --pass), but the path it is measured against is the start image's own drive (its name's
   // prefix before '_', without --pass), not every drive of the road in name order.
@@ -294,9 +288,7 @@ class Recorder {
   }
   void Pose(double t, const Rigid3d& c2w, double display) {
     if (!on()) return;
-    std::string row = FormatDouble(t);
-    for (double v : {c2w.t.x(), c2w.t.y(), c2w.t.z(), c2w.q.x(), c2w.q.y(), c2w.q.z(), c2w.q.w()})
-      row += ' ' + FormatDouble(v);
+    const std::string row = TumRow(t, c2w);
     poses_ << row << ' ' << FormatDouble(display) << '\n';
     tum_ << row << '\n';
     if (Clock::now() - flushed_ > std::chrono::seconds(1)) {  // a crash keeps all but a second
@@ -427,16 +419,6 @@ Camera ScreenCamera(const Reconstruction& rec, const std::string& size) {
   c.params = {base.fx() * k, base.fy() * k, s.width / 2.0 + (base.cx() - base.width / 2.0) * k,
               s.height / 2.0 + (base.cy() - base.height / 2.0) * k};
   return c;
-}
-
-// Turned `yaw_left_deg` about the camera's own up axis.
-Rigid3d Yawed(const Rigid3d& c2w, double yaw_left_deg) {
-  if (yaw_left_deg == 0) return c2w;
-  Rigid3d r = c2w;
-  const Eigen::Vector3d up = -(c2w.R().col(1));
-  r.q = Eigen::Quaterniond(Eigen::AngleAxisd(yaw_left_deg * M_PI / 180, up)) * c2w.q;
-  r.q.normalize();
-  return r;
 }
 
 // ptmrender's rendering of the workspace, for live views.
@@ -570,8 +552,8 @@ std::vector<Image> LiveView::Render(const Rigid3d& c2w, const Quality& q, double
   const bool survey = !(plan_.skybox && plan_.fill) && !(o_.no_skybox && o_.no_fill);
   for (int i = 0; i < o_.screens; ++i) {
     const double yaw = ((o_.screens - 1) / 2.0 - i) * screen_yaw_;
-    frames.push_back(
-        RenderOne(Yawed(c2w, yaw).Inverse(), cam, q.projectors(), survey && i == 0, log));
+    frames.push_back(RenderOne(yaw == 0 ? c2w.Inverse() : MovedAndTurned(c2w.Inverse(), 0, yaw),
+                               cam, q.projectors(), survey && i == 0, log));
   }
   // Read ahead: the projectors of where the car will be (straight on) in half a second.
   Rigid3d ahead = c2w;

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 
 #include "base/error.h"
@@ -24,23 +25,34 @@ Camera Cam(int w = 64, int h = 48, double f = 50) {
                          std::to_string(w / 2.0) + " " + std::to_string(h / 2.0));
 }
 
-// A square [−s, s]² in the plane z = depth of world coordinates, offset by `o`, as a grid of
-// n×n quads with vertex colour (r, g, b).
-Mesh Plane(double s, double depth, const Eigen::Vector3d& o = Eigen::Vector3d::Zero(), int n = 4,
-           std::array<uint8_t, 3> rgb = {10, 200, 30}) {
+// A grid of nx×ny quads (two triangles each) over vertices at(i, j), coloured rgb(i, j).
+Mesh Grid(int nx, int ny, const std::function<Eigen::Vector3d(int, int)>& at,
+          const std::function<std::array<uint8_t, 3>(int, int)>& rgb) {
   Mesh m;
-  for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i) {
-      m.vertices.push_back(o + Eigen::Vector3d(-s + 2 * s * i / n, -s + 2 * s * j / n, depth));
-      m.colors.push_back(rgb);
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i) {
+      m.vertices.push_back(at(i, j));
+      m.colors.push_back(rgb(i, j));
     }
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      uint32_t a = j * (nx + 1) + i, b = a + 1, c = a + nx + 1, d = c + 1;
       m.faces.push_back({a, b, d});
       m.faces.push_back({a, d, c});
     }
   return m;
+}
+
+// A square [−s, s]² in the plane z = depth of world coordinates, offset by `o`, as a grid of
+// n×n quads with vertex colour (r, g, b).
+Mesh Plane(double s, double depth, const Eigen::Vector3d& o = Eigen::Vector3d::Zero(), int n = 4,
+           std::array<uint8_t, 3> rgb = {10, 200, 30}) {
+  return Grid(
+      n, n,
+      [&](int i, int j) {
+        return Eigen::Vector3d(o + Eigen::Vector3d(-s + 2 * s * i / n, -s + 2 * s * j / n, depth));
+      },
+      [&](int, int) { return rgb; });
 }
 
 // A test pattern with a distinct value per pixel (colour), so a wrong texel shows.
@@ -417,21 +429,15 @@ TEST_F(RenderTest, FillLeavesNoPixelAtTheBackground) {
 // A ground y = 1.5 + bump(x, z) below a camera at the origin looking down +z (y down): x in
 // [-60, 60], z in [0, 120], quads of 0.5 m (115k triangles).
 Mesh Ground(double bump) {
-  Mesh m;
-  const int nx = 240, nz = 240;
-  for (int j = 0; j <= nz; ++j)
-    for (int i = 0; i <= nx; ++i) {
-      const double x = -60 + 0.5 * i, z = 0.5 * j;
-      m.vertices.emplace_back(x, 1.5 + bump * std::sin(x / 3) * std::sin(z / 4), z);
-      m.colors.push_back({uint8_t(100 + i % 50), 120, uint8_t(60 + j % 90)});
-    }
-  for (int j = 0; j < nz; ++j)
-    for (int i = 0; i < nx; ++i) {
-      uint32_t a = j * (nx + 1) + i, b = a + 1, c = a + nx + 1, d = c + 1;
-      m.faces.push_back({a, b, d});
-      m.faces.push_back({a, d, c});
-    }
-  return m;
+  return Grid(
+      240, 240,
+      [bump](int i, int j) {
+        const double x = -60 + 0.5 * i, z = 0.5 * j;
+        return Eigen::Vector3d(x, 1.5 + bump * std::sin(x / 3) * std::sin(z / 4), z);
+      },
+      [](int i, int j) {
+        return std::array<uint8_t, 3>{uint8_t(100 + i % 50), 120, uint8_t(60 + j % 90)};
+      });
 }
 
 TEST_F(RenderTest, LevelOfDetailKeepsTheSurfaceWithoutCracks) {
