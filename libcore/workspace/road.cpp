@@ -1,0 +1,149 @@
+#include "workspace/road.h"
+
+#include <algorithm>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "base/atomic_file.h"
+#include "base/error.h"
+#include "base/text.h"
+#include "io/colmap_model.h"
+#include "workspace/workspace.h"
+
+namespace mvtm {
+
+namespace {
+
+// The image names of a workspace's model (text: images.txt alone is read).
+std::set<std::string> ModelImageNames(const fs::path& sparse) {
+  std::set<std::string> names;
+  const fs::path text = sparse / "images.txt";
+  if (fs::exists(text)) {
+    std::ifstream in(text, std::ios::binary);
+    if (!in) throw Error(text.string(), 0, "cannot open");
+    ForEachColmapImageText(in, text.string(), [&](ImageRecord&& r, long) { names.insert(r.name); });
+  } else {
+    for (const auto& [id, im] : ReadColmapModel(sparse.string()).images) names.insert(im.name);
+  }
+  return names;
+}
+
+void ReadRecord(RoadFragment& f) {
+  const fs::path p = Road::RecordPath(f.dir);
+  std::ifstream in(p, std::ios::binary);
+  if (!in) throw Error(p.string(), 0, "cannot open (every fragment of a road has one)");
+  const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+  auto bad = [&](const std::string& what) { throw Error(p.string(), 0, what); };
+  if (j.is_discarded() || !j.is_object()) bad("not a JSON object");
+  if (!j.contains("images") || !j["images"].is_array()) bad("\"images\" must be an array of names");
+  for (const auto& n : j["images"]) {
+    if (!n.is_string()) bad("\"images\" must be an array of names");
+    f.owned_images.push_back(n.get<std::string>());
+  }
+  if (!j.contains("owned_faces") || !j["owned_faces"].is_number_unsigned())
+    bad("\"owned_faces\" must be a count");
+  f.owned_faces = j["owned_faces"].get<size_t>();
+  if (!j.contains("s") || !j["s"].is_array() || j["s"].size() != 2 || !j["s"][0].is_number() ||
+      !j["s"][1].is_number())
+    bad("\"s\" must be [BEGIN, END] in metres");
+  f.s_begin = j["s"][0].get<double>();
+  f.s_end = j["s"][1].get<double>();
+  f.overlap = j.value("overlap", 0.0);
+}
+
+}  // namespace
+
+bool Road::IsRoad(const fs::path& dir) { return fs::is_regular_file(GraphPathOf(dir)); }
+
+Road::Road(fs::path root) : root_(std::move(root)) {
+  const fs::path graph = GraphPathOf(root_);
+  LineReader r(graph.string());
+  // First pass: the nodes (so a neighbour may be named before its own line).
+  struct Line {
+    long no;
+    std::vector<std::string> tokens;
+  };
+  std::vector<Line> lines;
+  std::map<std::string, size_t> index;
+  for (std::string line; r.Next(line);) {
+    Line l{r.line(), {}};
+    for (auto t : SplitBlank(line)) l.tokens.emplace_back(t);
+    if (l.tokens.size() % 2 != 1)
+      r.Fail("expected NODE then NEIGHBOUR POSE pairs, found " + std::to_string(l.tokens.size()) +
+             " fields");
+    RoadFragment f;
+    f.id = l.tokens[0];
+    f.dir = FragmentDir(root_, f.id);
+    if (!index.emplace(f.id, fragments_.size()).second) r.Fail(f.id + ": named twice as a node");
+    fragments_.push_back(std::move(f));
+    lines.push_back(std::move(l));
+  }
+  if (fragments_.empty()) throw Error(graph.string(), 0, "the graph has no fragments");
+  auto fail = [&](long no, const std::string& what) { throw Error(graph.string(), no, what); };
+  std::vector<std::set<std::string>> names(fragments_.size());
+  for (size_t i = 0; i < fragments_.size(); ++i) {
+    RoadFragment& f = fragments_[i];
+    const Workspace ws(f.dir);
+    if (!fs::is_directory(f.dir) || !HasColmapModel(ws.SparseDir().string()))
+      fail(lines[i].no, f.id + ": no fragment workspace at " + f.dir.string());
+    ReadRecord(f);
+    names[i] = ModelImageNames(ws.SparseDir());
+    for (const std::string& n : f.owned_images)
+      if (!names[i].count(n))
+        throw Error(RecordPath(f.dir).string(), 0, n + ": owned but not in the fragment's model");
+  }
+  for (size_t i = 0; i < fragments_.size(); ++i) {
+    const Line& l = lines[i];
+    for (size_t k = 1; k + 1 < l.tokens.size(); k += 2) {
+      auto it = index.find(l.tokens[k]);
+      if (it == index.end()) fail(l.no, l.tokens[k] + ": not a fragment of the graph");
+      if (it->second == i) fail(l.no, l.tokens[k] + ": a fragment cannot neighbour itself");
+      const std::string& pose = l.tokens[k + 1];
+      if (!names[i].count(pose) || !names[it->second].count(pose))
+        fail(l.no, pose + ": not an image of both " + fragments_[i].id + " and " + l.tokens[k]);
+      fragments_[i].links.push_back({it->second, pose});
+    }
+  }
+  for (size_t i = 0; i < fragments_.size(); ++i)
+    for (const RoadLink& link : fragments_[i].links)
+      if (!Adjacent(link.to, i))
+        fail(lines[i].no, fragments_[link.to].id + " does not list " + fragments_[i].id +
+                              " back (links are mutual)");
+}
+
+bool Road::Adjacent(size_t a, size_t b) const {
+  for (const RoadLink& l : fragments_[a].links)
+    if (l.to == b) return true;
+  return false;
+}
+
+std::vector<size_t> Road::Resident(size_t home) const {
+  std::vector<size_t> out{home};
+  for (const RoadLink& l : fragments_[home].links)
+    if (std::find(out.begin(), out.end(), l.to) == out.end()) out.push_back(l.to);
+  return out;
+}
+
+void WriteRoadGraph(const fs::path& root, const std::vector<RoadFragment>& fragments) {
+  WriteTextAtomic(Road::GraphPathOf(root), [&](std::ostream& s) {
+    s << "# mvtm road graph (man 5 mvtm-workspace): NODE then NEIGHBOUR POSE pairs\n";
+    for (const RoadFragment& f : fragments) {
+      s << f.id;
+      for (const RoadLink& l : f.links) s << ' ' << fragments[l.to].id << ' ' << l.pose;
+      s << '\n';
+    }
+  });
+}
+
+void WriteFragmentRecord(const RoadFragment& f) {
+  nlohmann::json j;
+  j["images"] = f.owned_images;
+  j["owned_faces"] = f.owned_faces;
+  j["s"] = {f.s_begin, f.s_end};
+  j["overlap"] = f.overlap;
+  WriteTextAtomic(Road::RecordPath(f.dir), [&](std::ostream& s) { s << j.dump(1) << '\n'; });
+}
+
+}  // namespace mvtm
