@@ -519,15 +519,14 @@ Renderer::Renderer(const Mesh& mesh, double chunk_size) : impl_(std::make_unique
   if (mesh.faces.empty() || mesh.vertices.empty()) throw Error("the mesh has no triangles");
   Impl& m = *impl_;
   mesh.Bounds(m.lo, m.hi);
-  // Bin triangles by centroid into cubes of chunk_size metres.
+  // Bin triangles by centroid into the cubes of chunk_size metres of a grid fixed in the world.
   std::map<std::array<int64_t, 3>, std::vector<uint32_t>> bins;
   for (uint32_t f = 0; f < mesh.faces.size(); ++f) {
     Eigen::Vector3d c = (mesh.vertices[mesh.faces[f][0]] + mesh.vertices[mesh.faces[f][1]] +
                          mesh.vertices[mesh.faces[f][2]]) /
                         3;
     std::array<int64_t, 3> key;
-    for (int k = 0; k < 3; ++k)
-      key[k] = static_cast<int64_t>(std::floor((c[k] - m.lo[k]) / chunk_size));
+    for (int k = 0; k < 3; ++k) key[k] = static_cast<int64_t>(std::floor(c[k] / chunk_size));
     bins[key].push_back(f);
   }
   std::vector<float>& verts = m.verts;  // x y z r g b
@@ -546,7 +545,9 @@ Renderer::Renderer(const Mesh& mesh, double chunk_size) : impl_(std::make_unique
         ch.lo = ch.lo.cwiseMin(mesh.vertices[vi]);
         ch.hi = ch.hi.cwiseMax(mesh.vertices[vi]);
       }
-    ch.origin = (ch.lo + ch.hi) / 2;
+    // The cell's centre: a triangle's float vertices then depend only on where it is, not on
+    // which other triangles share the mesh (a road's fragments render alike alone or together).
+    for (int k = 0; k < 3; ++k) ch.origin[k] = (static_cast<double>(key[k]) + 0.5) * chunk_size;
     ch.base_vertex = static_cast<GLint>(verts.size() / 6);
     ch.vertex_count = order.size();
     for (uint32_t vi : order) {

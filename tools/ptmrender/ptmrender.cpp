@@ -1,6 +1,10 @@
 #include "ptmrender.h"
 
+#include <algorithm>
 #include <chrono>
+#include <future>
+#include <limits>
+#include <memory>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -11,6 +15,7 @@
 
 #include "base/atomic_file.h"
 #include "base/error.h"
+#include "base/text.h"
 #include "cli/progress.h"
 #include "image/async_writer.h"
 #include "image/mask.h"
@@ -22,6 +27,7 @@
 #include "render/effects_plan.h"
 #include "run/ledger.h"
 #include "workspace/projector_sources.h"
+#include "workspace/road.h"
 #include "workspace/workspace.h"
 
 namespace mvtm {
@@ -253,8 +259,9 @@ bool GreySources(const Workspace& ws, const Scene& scene, const std::set<size_t>
 // The files frame i is made from beyond the run's inputs: its projectors' images, masks and depth
 // maps (absent ones count: a mask that appears makes the frame stale).
 std::vector<fs::path> FrameInputs(const PtmRenderOptions& o, const Workspace& ws,
-                                  const Scene& scene, const ProjectorPicks& picks, size_t i) {
-  std::vector<fs::path> in;
+                                  const Scene& scene, const ProjectorPicks& picks, size_t i,
+                                  const std::vector<fs::path>& extra) {
+  std::vector<fs::path> in = extra;
   for (const auto& c : picks.per_pose[i]) {
     const std::string& name = scene.images[c.index]->name;
     in.push_back(ws.SourceImagePath(name));
@@ -267,10 +274,11 @@ std::vector<fs::path> FrameInputs(const PtmRenderOptions& o, const Workspace& ws
 std::vector<size_t> FramesToRender(const PtmRenderOptions& o, const Workspace& ws,
                                    const Scene& scene, const std::vector<RenderPose>& poses,
                                    const ProjectorPicks& picks, const std::vector<size_t>& chosen,
-                                   Ledger& ledger, PtmRenderReport& rep) {
+                                   const std::vector<fs::path>& extra, Ledger& ledger,
+                                   PtmRenderReport& rep) {
   std::vector<size_t> todo;
   for (size_t i : chosen) {
-    const std::vector<fs::path> in = FrameInputs(o, ws, scene, picks, i);
+    const std::vector<fs::path> in = FrameInputs(o, ws, scene, picks, i, extra);
     bool stale = !ledger.Stale(fs::path(o.outdir) / poses[i].name, in, o.force).empty();
     if (o.provenance)
       stale = !ledger.Stale(ProvenanceMapPath(o, poses[i]), in, o.force).empty() || stale;
@@ -303,6 +311,7 @@ struct FrameJob {
   const std::vector<RenderPose>& poses;
   const ProjectorPicks& picks;
   Ledger& ledger;
+  const std::vector<fs::path>& extra_inputs;  // a road's fragment files every frame depends on
 };
 
 std::vector<Projector> FrameProjectors(const FrameJob& job, const EffectsPlan& plan, size_t i,
@@ -371,7 +380,8 @@ void RenderFrames(const FrameJob& job, Renderer& renderer, const std::vector<siz
     auto t3 = Clock::now();
     // Frames are photo-like: the fast PNG settings encode them 3x faster than the default
     // (the writer thread was the frame loop's limit) and smaller; provenance maps are flat.
-    const std::vector<fs::path> in = FrameInputs(job.o, job.ws, job.scene, job.picks, i);
+    const std::vector<fs::path> in =
+        FrameInputs(job.o, job.ws, job.scene, job.picks, i, job.extra_inputs);
     writer.Push((outdir / job.poses[i].name).string(), std::move(colour), PngCompression::kFast,
                 [&ledger = job.ledger, in](const std::string& p) { ledger.Done(p, in); });
     if (job.o.provenance)
@@ -406,10 +416,242 @@ Mesh LoadMesh(const Workspace& ws, bool ptm) {
   return mesh;
 }
 
+
+// ---- a road (ROAD/Graph.txt): fragments streamed by the graph --------------------------------
+
+// A frame of a road render: the fragment the camera is in (its projectors and plan), the pose.
+struct RoadFrameJob {
+  size_t home = 0;
+  RenderPose pose;
+  std::string image;  // the recorded image at this pose ("" for --poses)
+};
+
+// Each fragment's own triangles (the first owned_faces of its mesh), read on demand or ahead on a
+// second thread, and dropped when no longer resident or about to be.
+class FragmentMeshes {
+ public:
+  explicit FragmentMeshes(const Road& road) : road_(road) {}
+
+  // Starts reading the fragments `ks` not held yet.
+  void Prefetch(const std::vector<size_t>& ks) {
+    for (size_t k : ks)
+      if (!held_.count(k))
+        held_[k] = std::async(std::launch::async, [this, k] { return Own(k); }).share();
+  }
+  // The union of the fragments `ks` (read now unless prefetched); every other fragment but
+  // those in `keep` is dropped.
+  Mesh Union(const std::vector<size_t>& ks, const std::vector<size_t>& keep) {
+    Prefetch(ks);
+    for (auto it = held_.begin(); it != held_.end();)
+      if (std::find(ks.begin(), ks.end(), it->first) == ks.end() &&
+          std::find(keep.begin(), keep.end(), it->first) == keep.end())
+        it = held_.erase(it);
+      else
+        ++it;
+    Mesh out;
+    bool colours = true, normals = true;
+    std::vector<std::shared_ptr<const Mesh>> parts;
+    for (size_t k : ks) {
+      parts.push_back(held_.at(k).get());
+      colours = colours && (parts.back()->faces.empty() || parts.back()->has_colors());
+      normals = normals && (parts.back()->faces.empty() || parts.back()->has_normals());
+    }
+    for (const auto& m : parts) {
+      const auto base = static_cast<uint32_t>(out.vertices.size());
+      out.vertices.insert(out.vertices.end(), m->vertices.begin(), m->vertices.end());
+      if (colours) out.colors.insert(out.colors.end(), m->colors.begin(), m->colors.end());
+      if (normals) out.normals.insert(out.normals.end(), m->normals.begin(), m->normals.end());
+      for (const auto& f : m->faces) out.faces.push_back({f[0] + base, f[1] + base, f[2] + base});
+    }
+    return out;
+  }
+
+ private:
+  std::shared_ptr<const Mesh> Own(size_t k) const {
+    const RoadFragment& f = road_.fragments()[k];
+    auto m = std::make_shared<Mesh>();
+    if (f.owned_faces == 0) return m;
+    const Workspace ws(f.dir);
+    *m = ReadMesh(ws.MeshPath().string());
+    if (m->faces.size() < f.owned_faces)
+      throw Error(Road::RecordPath(f.dir).string(), 0,
+                  "owned_faces " + std::to_string(f.owned_faces) + " exceeds the " +
+                      std::to_string(m->faces.size()) + " triangles of " +
+                      ws.MeshPath().string());
+    m->faces.resize(f.owned_faces);
+    return m;
+  }
+
+  const Road& road_;
+  std::map<size_t, std::shared_future<std::shared_ptr<const Mesh>>> held_;
+};
+
+// The road's recorded frames in order: each fragment's own images, fragments in Graph.txt's
+// order; or the poses of --poses, each in the fragment of its nearest recorded image, walking
+// the graph (a pose whose nearest fragment is neither the current one nor a neighbour leaves
+// the graph: an error).
+std::vector<RoadFrameJob> RoadFrames(const PtmRenderOptions& o, const Road& road) {
+  std::vector<RoadFrameJob> frames;
+  for (size_t k = 0; k < road.fragments().size(); ++k) {
+    const RoadFragment& f = road.fragments()[k];
+    const Reconstruction rec = ReadColmapModel(Workspace(f.dir).SparseDir().string());
+    for (const std::string& name : f.owned_images)
+      frames.push_back({k, {FrameName(name, o.exr), rec.FindImage(name)->world_to_camera}, name});
+  }
+  if (o.poses.empty()) {
+    if (o.lateral != 0 || o.yaw != 0)
+      for (auto& fr : frames) fr.pose.w2c = MovedAndTurned(fr.pose.w2c, o.lateral, o.yaw);
+    return frames;
+  }
+  const Trajectory tr = ReadTrajectory(o.poses);
+  std::vector<RoadFrameJob> out;
+  size_t home = 0;
+  for (size_t i = 0; i < tr.poses.size(); ++i) {
+    const Rigid3d w2c = tr.poses[i].pose.Inverse();
+    const Eigen::Vector3d c = w2c.Centre();
+    size_t best = 0;
+    double best_d = std::numeric_limits<double>::infinity();
+    for (size_t j = 0; j < frames.size(); ++j) {
+      const double d = (frames[j].pose.w2c.Centre() - c).norm();
+      if (d < best_d) best_d = d, best = j;
+    }
+    const RoadFragment& near = road.fragments()[frames[best].home];
+    const double reach = std::max(near.overlap, (near.s_end - near.s_begin) / 2);
+    const std::string at = o.poses + ": pose " + std::to_string(i + 1);
+    if (best_d > reach)
+      throw Error(at + " is " + FormatDouble(best_d) + " from the nearest recorded image (" +
+                  frames[best].image + "): it leaves the road");
+    const size_t k = frames[best].home;
+    if (i > 0 && k != home && !road.Adjacent(home, k))
+      throw Error(at + " leaves the graph: it is nearest " + near.id + ", not " +
+                  road.fragments()[home].id + " or a neighbour of it");
+    home = k;
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%06zu", i);
+    const std::string name = i < tr.names.size() ? tr.names[i] : buf;
+    out.push_back({home, {FrameName(name, o.exr), MovedAndTurned(w2c, o.lateral, o.yaw)}, ""});
+  }
+  return out;
+}
+
+// The files a road frame depends on beyond its projectors: the home fragment's model and record,
+// and every resident fragment's mesh and record.
+std::vector<fs::path> ResidentInputs(const Road& road, size_t home) {
+  const Workspace ws(road.fragments()[home].dir);
+  std::vector<fs::path> in = ws.SparseModelFiles();
+  in.push_back(ws.ExposurePath());
+  for (size_t k : road.Resident(home)) {
+    const Workspace r(road.fragments()[k].dir);
+    in.push_back(r.MeshPath());
+    in.push_back(Road::RecordPath(r.root()));
+  }
+  return in;
+}
+
+// One run of consecutive frames in the same fragment, rendered like a workspace of its own with
+// the resident fragments' mesh.
+struct RoadGroup {
+  size_t home = 0;
+  std::vector<size_t> frames;  // indices into the road's frames
+};
+
+std::vector<RoadGroup> GroupByHome(const std::vector<RoadFrameJob>& frames,
+                                   const std::vector<size_t>& chosen) {
+  std::vector<RoadGroup> groups;
+  for (size_t i : chosen) {
+    if (groups.empty() || groups.back().home != frames[i].home) groups.push_back({frames[i].home, {}});
+    groups.back().frames.push_back(i);
+  }
+  return groups;
+}
+
+struct RoadRun {
+  const PtmRenderOptions& o;
+  const Road& road;
+  const std::vector<RoadFrameJob>& frames;
+  Ledger& ledger;
+  GlContext& ctx;
+  FragmentMeshes& meshes;
+  nlohmann::json plans = nlohmann::json::object();
+};
+
+// Renders one group: the home fragment's scene, projectors and plan, the resident mesh.
+void RenderRoadGroup(RoadRun& run, const RoadGroup& g, const std::vector<size_t>& next_resident,
+                     PtmRenderReport& rep) {
+  const PtmRenderOptions& o = run.o;
+  const Workspace ws(run.road.fragments()[g.home].dir);
+  const Scene scene = LoadScene(ws);
+  std::vector<RenderPose> poses;
+  for (size_t i : g.frames) {
+    RenderPose p = run.frames[i].pose;
+    for (size_t k = 0; k < scene.images.size() && !run.frames[i].image.empty(); ++k)
+      if (scene.images[k]->name == run.frames[i].image) p.self = k;
+    poses.push_back(p);
+  }
+  std::vector<size_t> all(poses.size());
+  for (size_t i = 0; i < all.size(); ++i) all[i] = i;
+  const Camera cam = RenderCameraOf(o, scene);
+  const ProjectorPicks picks = PickProjectors(o, scene, poses);
+  SceneSurvey survey = StartSurvey(o, ws, scene, picks);
+  const std::vector<fs::path> extra = ResidentInputs(run.road, g.home);
+  PtmRenderReport part;
+  const std::vector<size_t> todo =
+      FramesToRender(o, ws, scene, poses, picks, all, extra, run.ledger, part);
+  rep.skipped += part.skipped;
+  const std::vector<size_t> resident = run.road.Resident(g.home);
+  if (todo.empty()) return;
+  const Mesh mesh = run.meshes.Union(resident, next_resident);
+  if (mesh.faces.empty()) throw Error(run.road.fragments()[g.home].id + ": no triangles resident");
+  if (!survey.ptm && !mesh.has_colors())
+    throw Error(run.road.fragments()[g.home].id + ": vertex mode needs vertex colours");
+  run.meshes.Prefetch(next_resident);  // read while this group renders
+  Renderer renderer(mesh);
+  EffectsPlan plan = PlanEffects(survey);
+  RenderFrames(FrameJob{o, ws, scene, cam, poses, picks, run.ledger, extra}, renderer, todo,
+               survey, plan, rep);
+  run.plans[run.road.fragments()[g.home].id] =
+      PlanJson(cam, poses.size(), rep.gl, survey, plan)["effects"];
+}
+
+PtmRenderReport RunRoadRender(const PtmRenderOptions& o) {
+  const Road road(o.workspace);
+  const std::vector<RoadFrameJob> frames = RoadFrames(o, road);
+  const std::vector<size_t> chosen = o.Select().Apply(frames.size());
+  PtmRenderReport rep;
+  rep.frames = chosen.size();
+  std::vector<fs::path> inputs{road.GraphPath()};
+  if (!o.poses.empty()) inputs.push_back(o.poses);
+  PtmRenderOptions resolved = o;
+  const OptionTable table = DeclareOptions(resolved);
+  Ledger ledger(o.outdir, o.ProvenanceName("ptmrender"), table, inputs, road.root());
+  RemoveStaleTemporaries(o.outdir);
+  if (o.provenance) RemoveStaleTemporaries(fs::path(o.outdir) / "provenance");
+  auto ctx = GlContext::Create(o.gl);
+  rep.gl = ctx->Describe();
+  FragmentMeshes meshes(road);
+  RoadRun run{o, road, frames, ledger, *ctx, meshes};
+  const std::vector<RoadGroup> groups = GroupByHome(frames, chosen);
+  auto t0 = Clock::now();
+  for (size_t n = 0; n < groups.size(); ++n) {
+    const std::vector<size_t> next =
+        n + 1 < groups.size() ? road.Resident(groups[n + 1].home) : std::vector<size_t>{};
+    RenderRoadGroup(run, groups[n], next, rep);
+  }
+  rep.depth_ms += rep.survey_ms;
+  rep.frames_ms = Ms(t0, Clock::now());
+  rep.why = ledger.Summary();
+  if (rep.rendered > 0) ledger.Write({{"plans", run.plans}, {"gl_used", rep.gl}});
+  return rep;
+}
 }  // namespace
 
 PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
   o.Check();
+  if (Road::IsRoad(o.workspace)) {
+    if (o.explain) throw UsageError("--explain: give one fragment's workspace, not a road");
+    if (o.exclude_self) throw UsageError("--exclude-self: give one fragment's workspace, not a road");
+    return RunRoadRender(o);
+  }
   Workspace ws(o.workspace);
   ws.Require("ptmrender", {WsItem::kSparse, WsItem::kMesh});
   const Scene scene = LoadScene(ws);
@@ -429,7 +671,7 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
   const OptionTable table = DeclareOptions(resolved);
   Ledger ledger(o.outdir, o.ProvenanceName("ptmrender"), table, inputs, ws.root());
   const std::vector<size_t> todo =
-      o.explain ? chosen : FramesToRender(o, ws, scene, poses, picks, chosen, ledger, rep);
+      o.explain ? chosen : FramesToRender(o, ws, scene, poses, picks, chosen, {}, ledger, rep);
   rep.why = ledger.Summary();
   if (!o.explain) {  // a killed run's leftovers go, even when every frame is up to date
     RemoveStaleTemporaries(o.outdir);
@@ -448,8 +690,9 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
     return rep;
   }
   EffectsPlan plan = PlanEffects(survey);
-  RenderFrames(FrameJob{o, ws, scene, cam, poses, picks, ledger}, renderer, todo, survey, plan,
-               rep);
+  const std::vector<fs::path> no_extra;
+  RenderFrames(FrameJob{o, ws, scene, cam, poses, picks, ledger, no_extra}, renderer, todo, survey,
+               plan, rep);
   rep.depth_ms += rep.survey_ms;
   rep.frames_ms = Ms(t_plan, Clock::now());
   const nlohmann::json plan_json = PlanJson(cam, chosen.size(), rep.gl, survey, plan);

@@ -1,0 +1,360 @@
+#include "roadsplit.h"
+
+#include <signal.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+
+#include "base/atomic_file.h"
+#include "base/error.h"
+#include "base/text.h"
+#include "cli/work.h"
+#include "index/path_index.h"
+#include "io/colmap_model.h"
+#include "io/exposure_tsv.h"
+#include "io/mesh_io.h"
+#include "workspace/road.h"
+#include "workspace/workspace.h"
+
+namespace mvtm {
+
+OptionTable DeclareOptions(RoadSplitOptions& o) {
+  OptionTable t("roadsplit");
+  t.Positional("WS", &o.workspace,
+               "Workspace to split (sparse/; images/, mesh.ply and every per-image folder go "
+               "with their images)")
+      .Dir();
+  t.Positional("ROAD", &o.road, "Road folder to create (Graph.txt, Models/SEQ/FRAGMENT/)").Dir();
+  t.Real("--length", &o.length,
+         "Target fragment length along the path, in the model's units (metres once georef'd); "
+         "the path is cut into equal fragments nearest this length")
+      .Range(1, 1e9);
+  t.Real("--overlap", &o.overlap,
+         "Length each fragment also holds of its neighbours' stretches (images and triangles), "
+         "model units")
+      .Range(0, 1e9);
+  t.Real("--junction-radius", &o.junction_radius,
+         "A junction is where the path passes within this distance of an earlier stretch of "
+         "itself (a loop), model units; 0: no junctions")
+      .Range(0, 1e9);
+  t.Flag("--force", &o.force, "Replace ROAD when it exists").Cosmetic();
+  DeclareQuietOption(t, o.quiet);
+  return t;
+}
+
+void RoadSplitOptions::Check() const {
+  CheckDeclared(*this);
+  std::error_code ec;
+  if (fs::exists(road) && fs::equivalent(workspace, road, ec))
+    throw UsageError("ROAD must not be WS");
+}
+
+namespace {
+
+// The sequence an image belongs to: its name's stem up to the last '_' ("A_0007.png" → "A"),
+// "" without one.
+std::string SequenceOf(const std::string& name) {
+  const std::string stem = fs::path(name).stem().string();
+  const size_t u = stem.rfind('_');
+  return u == std::string::npos ? "" : stem.substr(0, u);
+}
+
+struct Plan {
+  std::vector<const ImageRecord*> record;  // the path of record, in order
+  std::unique_ptr<PathIndex> path;
+  std::string seq;                 // its folder name under Models/
+  std::vector<double> bounds;      // fragment k owns s in [bounds[k], bounds[k+1])
+  std::vector<double> image_s;     // per image (ImagesByName order)
+  std::vector<std::set<size_t>> members;  // per fragment: image indices it holds
+  std::vector<size_t> owner;              // per image
+  std::vector<RoadFragment> fragments;
+};
+
+size_t FragmentAt(const Plan& p, double s) {
+  auto it = std::upper_bound(p.bounds.begin() + 1, p.bounds.end() - 1, s);
+  return static_cast<size_t>(it - (p.bounds.begin() + 1));
+}
+
+// The fragments whose stretch, grown by the overlap, holds s.
+std::vector<size_t> FragmentsNear(const Plan& p, double s, double overlap) {
+  std::vector<size_t> out;
+  for (size_t k = 0; k + 1 < p.bounds.size(); ++k)
+    if (s >= p.bounds[k] - overlap && s <= p.bounds[k + 1] + overlap) out.push_back(k);
+  return out;
+}
+
+void PlanPath(const RoadSplitOptions& o, const std::vector<const ImageRecord*>& images,
+              Plan& p) {
+  std::map<std::string, std::vector<const ImageRecord*>> seqs;
+  for (const ImageRecord* im : images) seqs[SequenceOf(im->name)].push_back(im);
+  for (auto& [key, list] : seqs)
+    if (list.size() >= 2) {
+      p.record = list;
+      p.seq = key.empty() ? "seq" : key;
+      break;
+    }
+  if (p.record.empty())
+    throw Error(o.workspace, 0, "no sequence of two or more images to take as the path");
+  std::vector<Eigen::Vector3d> centres;
+  for (const ImageRecord* im : p.record) centres.push_back(im->world_to_camera.Centre());
+  // Samples every 1/200 of a fragment: exact answers come from the segments around them.
+  p.path = std::make_unique<PathIndex>(centres, std::max(o.length / 200, 1e-9));
+  const double total = p.path->Length();
+  if (!(total > 0)) throw Error(o.workspace, 0, "the path of record does not move");
+  const size_t k = std::max<size_t>(1, size_t(std::llround(total / o.length)));
+  const double len = total / double(k);
+  if (k > 1 && len <= 2 * o.overlap)
+    throw UsageError("--overlap " + FormatDouble(o.overlap) + ": fragments of " +
+                     FormatDouble(len) +
+                     " would not be longer than twice the overlap (lengthen --length or "
+                     "shorten --overlap)");
+  for (size_t i = 0; i <= k; ++i) p.bounds.push_back(total * double(i) / double(k));
+}
+
+void AssignImages(const RoadSplitOptions& o, const std::vector<const ImageRecord*>& images,
+                  Plan& p) {
+  std::map<const ImageRecord*, double> record_s;
+  for (size_t i = 0; i < p.record.size(); ++i) record_s[p.record[i]] = p.path->ArcLength(i);
+  p.members.resize(p.bounds.size() - 1);
+  for (size_t i = 0; i < images.size(); ++i) {
+    auto it = record_s.find(images[i]);
+    const double s = it != record_s.end() ? it->second
+                                          : p.path->Locate(images[i]->world_to_camera.Centre()).s;
+    p.image_s.push_back(s);
+    p.owner.push_back(FragmentAt(p, s));
+    for (size_t f : FragmentsNear(p, s, o.overlap)) p.members[f].insert(i);
+  }
+}
+
+std::string FragmentName(size_t k) {
+  std::string n = std::to_string(k);
+  return std::string(n.size() < 3 ? 3 - n.size() : 0, '0') + n;
+}
+
+// Neighbours along the path, then junctions: record images within the radius of a record image
+// of a stretch more than a fragment and two overlaps away. Returns the junction count.
+size_t LinkFragments(const RoadSplitOptions& o, const std::vector<const ImageRecord*>& images,
+                     Plan& p) {
+  const size_t n = p.bounds.size() - 1;
+  std::map<const ImageRecord*, size_t> index;
+  for (size_t i = 0; i < images.size(); ++i) index[images[i]] = i;
+  auto link = [&](size_t a, size_t b, size_t image) {
+    for (const RoadLink& l : p.fragments[a].links)
+      if (l.to == b) return false;
+    p.fragments[a].links.push_back({b, images[image]->name});
+    p.fragments[b].links.push_back({a, images[image]->name});
+    p.members[a].insert(image);
+    p.members[b].insert(image);
+    return true;
+  };
+  for (size_t k = 0; k + 1 < n; ++k) {
+    // The pose where a drive passes on: the first image the next fragment owns.
+    size_t first = images.size();
+    for (size_t i = 0; i < images.size() && first == images.size(); ++i)
+      if (p.owner[i] == k + 1 && SequenceOf(images[i]->name) == SequenceOf(p.record[0]->name))
+        first = i;
+    if (first == images.size())
+      for (size_t i = 0; i < images.size() && first == images.size(); ++i)
+        if (p.owner[i] == k + 1) first = i;
+    if (first == images.size())
+      throw Error(o.workspace, 0, "fragment " + FragmentName(k + 1) + " owns no image");
+    link(k, k + 1, first);
+  }
+  size_t junctions = 0;
+  if (o.junction_radius <= 0) return 0;
+  const double apart = o.length + 2 * o.overlap;
+  for (size_t a = 0; a < p.record.size(); ++a)
+    for (size_t b = a + 1; b < p.record.size(); ++b) {
+      const double ds = p.path->ArcLength(b) - p.path->ArcLength(a);
+      if (ds <= apart) continue;
+      const Eigen::Vector3d ca = p.record[a]->world_to_camera.Centre();
+      const Eigen::Vector3d cb = p.record[b]->world_to_camera.Centre();
+      if ((ca - cb).norm() > o.junction_radius) continue;
+      const size_t ia = index[p.record[a]], ib = index[p.record[b]];
+      const size_t fa = p.owner[ia], fb = p.owner[ib];
+      if (fa == fb) continue;
+      p.members[fa].insert(ib);
+      p.members[fb].insert(ia);
+      if (link(fa, fb, ib)) ++junctions;
+    }
+  return junctions;
+}
+
+// The fragment's model: its images, the cameras they use, the points seen by two of them.
+Reconstruction SubModel(const Reconstruction& rec, const std::vector<const ImageRecord*>& images,
+                        const std::set<size_t>& members) {
+  Reconstruction out;
+  std::set<uint32_t> ids;
+  for (size_t i : members) {
+    ids.insert(images[i]->id);
+    out.images[images[i]->id] = *images[i];
+    out.cameras[images[i]->camera_id] = rec.cameras.at(images[i]->camera_id);
+  }
+  for (const auto& [id, pt] : rec.points3D) {
+    Point3D q = pt;
+    q.track.clear();
+    for (const TrackElement& t : pt.track)
+      if (ids.count(t.image_id)) q.track.push_back(t);
+    if (q.track.size() >= 2) out.points3D[id] = std::move(q);
+  }
+  for (auto& [id, im] : out.images)
+    for (Point2D& pt : im.points2D)
+      if (pt.point3D_id != kInvalidPoint3DId && !out.points3D.count(pt.point3D_id))
+        pt.point3D_id = kInvalidPoint3DId;
+  return out;
+}
+
+// Hard-links `from` to `to` (a copy across file systems); false when `from` does not exist.
+bool LinkFile(const fs::path& from, const fs::path& to, RoadSplitReport& rep) {
+  if (!fs::exists(from)) return false;
+  fs::create_directories(to.parent_path());
+  std::error_code ec;
+  fs::create_hard_link(from, to, ec);
+  if (!ec) {
+    ++rep.linked;
+    return true;
+  }
+  fs::copy_file(from, to, fs::copy_options::overwrite_existing, ec);
+  if (ec) throw Error(to.string() + ": cannot copy " + from.string() + ": " + ec.message());
+  ++rep.copied;
+  return true;
+}
+
+void LinkImageFiles(const Workspace& src, const Workspace& dst, const std::string& name,
+                    RoadSplitReport& rep) {
+  LinkFile(src.ImagePath(name), dst.ImagePath(name), rep);
+  LinkFile(src.TexturePath(name), dst.TexturePath(name), rep);
+  LinkFile(src.MaskPath(name), dst.MaskPath(name), rep);
+  LinkFile(src.LabelPath(name), dst.LabelPath(name), rep);
+  LinkFile(src.DynamicPath(name), dst.DynamicPath(name), rep);
+  LinkFile(src.DepthPath(name), dst.DepthPath(name), rep);
+  LinkFile(src.StereoDepthPath(name), dst.StereoDepthPath(name), rep);
+  LinkFile(src.StereoConfidencePath(name), dst.StereoConfidencePath(name), rep);
+}
+
+// Each fragment's mesh: its own triangles first, then its neighbours' within the overlap.
+void SplitMesh(const RoadSplitOptions& o, const Workspace& ws, const fs::path& tmp, Plan& p,
+               RoadSplitReport& rep) {
+  if (!fs::exists(ws.MeshPath())) return;
+  const Mesh mesh = ReadMesh(ws.MeshPath().string());
+  rep.triangles = mesh.faces.size();
+  const size_t n = p.fragments.size();
+  std::vector<std::vector<uint32_t>> own(n), near(n);
+  for (uint32_t f = 0; f < mesh.faces.size(); ++f) {
+    const auto& t = mesh.faces[f];
+    const Eigen::Vector3d c =
+        (mesh.vertices[t[0]] + mesh.vertices[t[1]] + mesh.vertices[t[2]]) / 3.0;
+    const double s = p.path->Locate(c).s;
+    const size_t k = FragmentAt(p, s);
+    own[k].push_back(f);
+    for (size_t j : FragmentsNear(p, s, o.overlap))
+      if (j != k) near[j].push_back(f);
+  }
+  for (size_t k = 0; k < n; ++k) {
+    Mesh out;
+    std::map<uint32_t, uint32_t> remap;
+    auto vertex = [&](uint32_t v) {
+      auto [it, added] = remap.emplace(v, uint32_t(out.vertices.size()));
+      if (added) {
+        out.vertices.push_back(mesh.vertices[v]);
+        if (mesh.has_normals()) out.normals.push_back(mesh.normals[v]);
+        if (mesh.has_colors()) out.colors.push_back(mesh.colors[v]);
+      }
+      return it->second;
+    };
+    for (const auto* list : {&own[k], &near[k]})
+      for (uint32_t f : *list)
+        out.faces.push_back({vertex(mesh.faces[f][0]), vertex(mesh.faces[f][1]),
+                             vertex(mesh.faces[f][2])});
+    p.fragments[k].owned_faces = own[k].size();
+    if (out.faces.empty()) continue;
+    const Workspace dst(tmp / "Models" / p.fragments[k].id);
+    WriteMesh((dst.root() / "mesh.ply").string(), out);
+  }
+}
+
+void WriteFragments(const RoadSplitOptions& o, const Workspace& ws, const Reconstruction& rec,
+                    const std::vector<const ImageRecord*>& images, const fs::path& tmp, Plan& p,
+                    RoadSplitReport& rep) {
+  std::map<std::string, ExposureRow> exposure;
+  if (fs::exists(ws.ExposurePath()))
+    for (auto& row : ReadExposureTsv(ws.ExposurePath().string())) exposure[row.image] = row;
+  for (size_t k = 0; k < p.fragments.size(); ++k) {
+    RoadFragment& f = p.fragments[k];
+    f.dir = tmp / "Models" / f.id;
+    const Workspace dst(f.dir);
+    fs::create_directories(dst.SparseDir());
+    WriteColmapText(SubModel(rec, images, p.members[k]), dst.SparseDir().string());
+    std::vector<ExposureRow> rows;
+    for (size_t i : p.members[k]) {
+      LinkImageFiles(ws, dst, images[i]->name, rep);
+      auto it = exposure.find(images[i]->name);
+      if (it != exposure.end()) rows.push_back(it->second);
+      if (p.owner[i] == k) f.owned_images.push_back(images[i]->name);
+    }
+    if (!rows.empty()) WriteExposureTsv(dst.ExposurePath().string(), rows);
+    f.s_begin = p.bounds[k];
+    f.s_end = p.bounds[k + 1];
+    f.overlap = o.overlap;
+  }
+  SplitMesh(o, ws, tmp, p, rep);
+  WriteRoadGraph(tmp, p.fragments);
+  for (RoadFragment& f : p.fragments) WriteFragmentRecord(f);
+}
+
+// ROAD.roadsplit-PID beside ROAD; a dead run's leftover goes first.
+fs::path TemporaryRoad(const fs::path& road) {
+  const fs::path parent = road.parent_path().empty() ? fs::path(".") : road.parent_path();
+  const std::string prefix = road.filename().string() + ".roadsplit-";
+  for (const auto& e : fs::directory_iterator(parent)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind(prefix, 0) != 0) continue;
+    const long pid = std::atol(name.c_str() + prefix.size());
+    if (pid > 0 && kill(static_cast<pid_t>(pid), 0) != 0) fs::remove_all(e.path());
+  }
+  return parent / (prefix + std::to_string(getpid()));
+}
+
+}  // namespace
+
+RoadSplitReport RunRoadSplit(const RoadSplitOptions& o) {
+  o.Check();
+  const fs::path road = fs::path(o.road).lexically_normal();
+  if (fs::exists(road) && !o.force)
+    throw UsageError(o.road + ": exists (--force replaces it)");
+  const Workspace ws(o.workspace);
+  ws.Require("roadsplit", {WsItem::kSparse});
+  const Reconstruction rec = ReadColmapModel(ws.SparseDir().string());
+  const std::vector<const ImageRecord*> images = rec.ImagesByName();
+  Plan p;
+  PlanPath(o, images, p);
+  AssignImages(o, images, p);
+  for (size_t k = 0; k + 1 < p.bounds.size(); ++k) {
+    RoadFragment f;
+    f.id = p.seq + "/" + FragmentName(k);
+    p.fragments.push_back(f);
+  }
+  RoadSplitReport rep;
+  rep.junctions = LinkFragments(o, images, p);
+  rep.fragments = p.fragments.size();
+  rep.images = images.size();
+  rep.path_length = p.path->Length();
+  rep.fragment_length = p.bounds[1] - p.bounds[0];
+  const fs::path tmp = TemporaryRoad(road);
+  try {
+    fs::create_directories(tmp);
+    WriteFragments(o, ws, rec, images, tmp, p, rep);
+    if (fs::exists(road)) fs::remove_all(road);
+    fs::rename(tmp, road);
+  } catch (...) {
+    std::error_code ec;
+    fs::remove_all(tmp, ec);
+    throw;
+  }
+  return rep;
+}
+
+}  // namespace mvtm
