@@ -14,8 +14,8 @@ namespace mvtm {
 
 struct PathIndex::Impl {
   using Dist = flann::L2_Simple<double>;
-  std::vector<double> flat;      // samples, x y z
-  std::vector<size_t> segment;   // the segment each sample lies on
+  std::vector<double> flat;     // samples, x y z
+  std::vector<size_t> segment;  // the segment each sample lies on
   std::unique_ptr<flann::KDTreeSingleIndex<Dist>> tree;
 };
 
@@ -35,7 +35,8 @@ PathIndex::PathIndex(std::vector<Eigen::Vector3d> points, double step)
   for (size_t i = 0; i + 1 < points_.size(); ++i) {
     const double len = s_[i + 1] - s_[i];
     const int n = std::max(1, static_cast<int>(std::ceil(len / step)));
-    for (int k = 1; k <= n; ++k) add(points_[i] + (points_[i + 1] - points_[i]) * (double(k) / n), i);
+    for (int k = 1; k <= n; ++k)
+      add(points_[i] + (points_[i + 1] - points_[i]) * (double(k) / n), i);
   }
   flann::Matrix<double> data(m.flat.data(), m.segment.size(), 3);
   m.tree = std::make_unique<flann::KDTreeSingleIndex<Impl::Dist>>(

@@ -2,12 +2,12 @@
 
 #include <algorithm>
 #include <chrono>
-#include <future>
-#include <limits>
-#include <memory>
 #include <cmath>
 #include <cstdio>
+#include <future>
+#include <limits>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <ostream>
@@ -416,7 +416,6 @@ Mesh LoadMesh(const Workspace& ws, bool ptm) {
   return mesh;
 }
 
-
 // ---- a road (ROAD/Graph.txt): fragments streamed by the graph --------------------------------
 
 // A frame of a road render: the fragment the camera is in (its projectors and plan), the pose.
@@ -476,8 +475,7 @@ class FragmentMeshes {
     if (m->faces.size() < f.owned_faces)
       throw Error(Road::RecordPath(f.dir).string(), 0,
                   "owned_faces " + std::to_string(f.owned_faces) + " exceeds the " +
-                      std::to_string(m->faces.size()) + " triangles of " +
-                      ws.MeshPath().string());
+                      std::to_string(m->faces.size()) + " triangles of " + ws.MeshPath().string());
     m->faces.resize(f.owned_faces);
     return m;
   }
@@ -559,7 +557,8 @@ std::vector<RoadGroup> GroupByHome(const std::vector<RoadFrameJob>& frames,
                                    const std::vector<size_t>& chosen) {
   std::vector<RoadGroup> groups;
   for (size_t i : chosen) {
-    if (groups.empty() || groups.back().home != frames[i].home) groups.push_back({frames[i].home, {}});
+    if (groups.empty() || groups.back().home != frames[i].home)
+      groups.push_back({frames[i].home, {}});
     groups.back().frames.push_back(i);
   }
   return groups;
@@ -607,8 +606,8 @@ void RenderRoadGroup(RoadRun& run, const RoadGroup& g, const std::vector<size_t>
   run.meshes.Prefetch(next_resident);  // read while this group renders
   Renderer renderer(mesh);
   EffectsPlan plan = PlanEffects(survey);
-  RenderFrames(FrameJob{o, ws, scene, cam, poses, picks, run.ledger, extra}, renderer, todo,
-               survey, plan, rep);
+  RenderFrames(FrameJob{o, ws, scene, cam, poses, picks, run.ledger, extra}, renderer, todo, survey,
+               plan, rep);
   run.plans[run.road.fragments()[g.home].id] =
       PlanJson(cam, poses.size(), rep.gl, survey, plan)["effects"];
 }
@@ -649,7 +648,8 @@ PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
   o.Check();
   if (Road::IsRoad(o.workspace)) {
     if (o.explain) throw UsageError("--explain: give one fragment's workspace, not a road");
-    if (o.exclude_self) throw UsageError("--exclude-self: give one fragment's workspace, not a road");
+    if (o.exclude_self)
+      throw UsageError("--exclude-self: give one fragment's workspace, not a road");
     return RunRoadRender(o);
   }
   Workspace ws(o.workspace);

@@ -18,7 +18,9 @@ int main(int argc, char** argv) {
   mvtm::RoadSplitOptions o;
   return mvtm::RunTool(mvtm::DeclareOptions(o), kAbout, argc, argv, [&] {
     const mvtm::RoadSplitReport r = mvtm::RunRoadSplit(o);
-    if (!o.quiet)
+    if (!o.quiet && r.up_to_date)
+      std::fprintf(stderr, "roadsplit: %s is up to date (--force rewrites)\n", o.road.c_str());
+    else if (!o.quiet)
       std::fprintf(stderr,
                    "roadsplit: %zu fragments of %.4g (path %.4g), %zu junctions, %zu images, "
                    "%zu triangles; %zu files linked, %zu copied\n",

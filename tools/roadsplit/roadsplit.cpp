@@ -16,6 +16,7 @@
 #include "io/colmap_model.h"
 #include "io/exposure_tsv.h"
 #include "io/mesh_io.h"
+#include "run/ledger.h"
 #include "workspace/road.h"
 #include "workspace/workspace.h"
 
@@ -40,7 +41,7 @@ OptionTable DeclareOptions(RoadSplitOptions& o) {
          "A junction is where the path passes within this distance of an earlier stretch of "
          "itself (a loop), model units; 0: no junctions")
       .Range(0, 1e9);
-  t.Flag("--force", &o.force, "Replace ROAD when it exists").Cosmetic();
+  t.Flag("--force", &o.force, "Rewrite the road even when it is up to date").Cosmetic();
   DeclareQuietOption(t, o.quiet);
   return t;
 }
@@ -65,9 +66,9 @@ std::string SequenceOf(const std::string& name) {
 struct Plan {
   std::vector<const ImageRecord*> record;  // the path of record, in order
   std::unique_ptr<PathIndex> path;
-  std::string seq;                 // its folder name under Models/
-  std::vector<double> bounds;      // fragment k owns s in [bounds[k], bounds[k+1])
-  std::vector<double> image_s;     // per image (ImagesByName order)
+  std::string seq;                        // its folder name under Models/
+  std::vector<double> bounds;             // fragment k owns s in [bounds[k], bounds[k+1])
+  std::vector<double> image_s;            // per image (ImagesByName order)
   std::vector<std::set<size_t>> members;  // per fragment: image indices it holds
   std::vector<size_t> owner;              // per image
   std::vector<RoadFragment> fragments;
@@ -86,8 +87,7 @@ std::vector<size_t> FragmentsNear(const Plan& p, double s, double overlap) {
   return out;
 }
 
-void PlanPath(const RoadSplitOptions& o, const std::vector<const ImageRecord*>& images,
-              Plan& p) {
+void PlanPath(const RoadSplitOptions& o, const std::vector<const ImageRecord*>& images, Plan& p) {
   std::map<std::string, std::vector<const ImageRecord*>> seqs;
   for (const ImageRecord* im : images) seqs[SequenceOf(im->name)].push_back(im);
   for (auto& [key, list] : seqs)
@@ -121,8 +121,8 @@ void AssignImages(const RoadSplitOptions& o, const std::vector<const ImageRecord
   p.members.resize(p.bounds.size() - 1);
   for (size_t i = 0; i < images.size(); ++i) {
     auto it = record_s.find(images[i]);
-    const double s = it != record_s.end() ? it->second
-                                          : p.path->Locate(images[i]->world_to_camera.Centre()).s;
+    const double s =
+        it != record_s.end() ? it->second : p.path->Locate(images[i]->world_to_camera.Centre()).s;
     p.image_s.push_back(s);
     p.owner.push_back(FragmentAt(p, s));
     for (size_t f : FragmentsNear(p, s, o.overlap)) p.members[f].insert(i);
@@ -267,8 +267,8 @@ void SplitMesh(const RoadSplitOptions& o, const Workspace& ws, const fs::path& t
     };
     for (const auto* list : {&own[k], &near[k]})
       for (uint32_t f : *list)
-        out.faces.push_back({vertex(mesh.faces[f][0]), vertex(mesh.faces[f][1]),
-                             vertex(mesh.faces[f][2])});
+        out.faces.push_back(
+            {vertex(mesh.faces[f][0]), vertex(mesh.faces[f][1]), vertex(mesh.faces[f][2])});
     p.fragments[k].owned_faces = own[k].size();
     if (out.faces.empty()) continue;
     const Workspace dst(tmp / "Models" / p.fragments[k].id);
@@ -318,17 +318,43 @@ fs::path TemporaryRoad(const fs::path& road) {
   return parent / (prefix + std::to_string(getpid()));
 }
 
+// Every file the road is made from: the model, the mesh, exposure.tsv and each image's files.
+std::vector<fs::path> RoadInputs(const Workspace& ws,
+                                 const std::vector<const ImageRecord*>& images) {
+  std::vector<fs::path> in = ws.SparseModelFiles();
+  in.push_back(ws.MeshPath());
+  in.push_back(ws.ExposurePath());
+  for (const ImageRecord* im : images) {
+    const std::string& n = im->name;
+    for (const fs::path& f :
+         {ws.ImagePath(n), ws.TexturePath(n), ws.MaskPath(n), ws.LabelPath(n), ws.DynamicPath(n),
+          ws.DepthPath(n), ws.StereoDepthPath(n), ws.StereoConfidencePath(n)})
+      if (fs::exists(f)) in.push_back(f);
+  }
+  return in;
+}
+
 }  // namespace
 
 RoadSplitReport RunRoadSplit(const RoadSplitOptions& o) {
   o.Check();
   const fs::path road = fs::path(o.road).lexically_normal();
-  if (fs::exists(road) && !o.force)
-    throw UsageError(o.road + ": exists (--force replaces it)");
   const Workspace ws(o.workspace);
   ws.Require("roadsplit", {WsItem::kSparse});
   const Reconstruction rec = ReadColmapModel(ws.SparseDir().string());
   const std::vector<const ImageRecord*> images = rec.ImagesByName();
+  RoadSplitOptions resolved = o;
+  const OptionTable table = DeclareOptions(resolved);
+  Ledger ledger(road, "roadsplit", table, RoadInputs(ws, images), ws.root());
+  const fs::path graph = Road::GraphPathOf(road);
+  RoadSplitReport rep;
+  rep.why = ledger.Stale(graph, {}, o.force);
+  if (rep.why.empty()) {
+    rep.up_to_date = true;
+    return rep;
+  }
+  if (fs::exists(road) && !fs::is_empty(road) && !fs::exists(graph))
+    throw UsageError(o.road + ": exists and is not a road (remove it or name another folder)");
   Plan p;
   PlanPath(o, images, p);
   AssignImages(o, images, p);
@@ -337,7 +363,6 @@ RoadSplitReport RunRoadSplit(const RoadSplitOptions& o) {
     f.id = p.seq + "/" + FragmentName(k);
     p.fragments.push_back(f);
   }
-  RoadSplitReport rep;
   rep.junctions = LinkFragments(o, images, p);
   rep.fragments = p.fragments.size();
   rep.images = images.size();
@@ -349,6 +374,8 @@ RoadSplitReport RunRoadSplit(const RoadSplitOptions& o) {
     WriteFragments(o, ws, rec, images, tmp, p, rep);
     if (fs::exists(road)) fs::remove_all(road);
     fs::rename(tmp, road);
+    ledger.Done(graph);
+    ledger.Write({{"fragments", rep.fragments}, {"junctions", rep.junctions}});
   } catch (...) {
     std::error_code ec;
     fs::remove_all(tmp, ec);

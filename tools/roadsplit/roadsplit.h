@@ -34,14 +34,18 @@ struct RoadSplitOptions {
 OptionTable DeclareOptions(RoadSplitOptions& o);
 
 struct RoadSplitReport {
+  bool up_to_date = false;
+  std::string why;  // why the road was (re)made ("" when new)
   size_t fragments = 0, junctions = 0, images = 0, triangles = 0;
   double path_length = 0, fragment_length = 0;
   size_t linked = 0, copied = 0;  // per-image files hard-linked or copied
 };
 
-// Writes ROAD (into a temporary folder beside it, renamed when complete). Throws UsageError
-// when ROAD exists (without --force) or the fragments would be too short for the overlap,
-// Error for a workspace that cannot be split.
+// Writes ROAD (into a temporary folder beside it, renamed when complete) unless it is up to date
+// (run/ledger.h: ROAD/provenance/roadsplit.json; the inputs are the model, the mesh,
+// exposure.tsv and every image's files). Throws UsageError when ROAD is a folder that is not a
+// road or the fragments would be too short for the overlap, Error for a workspace that cannot
+// be split.
 RoadSplitReport RunRoadSplit(const RoadSplitOptions& options);
 
 }  // namespace mvtm
