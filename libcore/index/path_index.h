@@ -3,8 +3,9 @@
 // A path is the polyline through camera centres in recording order. PathIndex answers "how far
 // along the path is the point nearest to X" for any point (a camera, a mesh triangle), exactly:
 // FLANN's exact KD-tree (flann::KDTreeSingleIndex) over samples of the polyline finds the
-// nearest sample, and the point is projected on the segments around it. A path that passes the
-// same place twice (a loop) answers with the nearer of the two passes.
+// nearest sample, and the point is projected on the segments around it, so the answer is exact
+// wherever one stretch of the path is nearer than any other by more than half the sample step.
+// A path that passes the same place twice (a loop) answers with the nearer of the two passes.
 //
 // Thread safety: Locate() may be called concurrently (FLANN's exact index is read-only).
 #pragma once
