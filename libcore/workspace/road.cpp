@@ -119,6 +119,13 @@ bool Road::Adjacent(size_t a, size_t b) const {
   return false;
 }
 
+std::vector<std::pair<size_t, std::string>> Road::RecordedFrames() const {
+  std::vector<std::pair<size_t, std::string>> out;
+  for (size_t k = 0; k < fragments_.size(); ++k)
+    for (const std::string& n : fragments_[k].owned_images) out.emplace_back(k, n);
+  return out;
+}
+
 std::vector<size_t> Road::Resident(size_t home) const {
   std::vector<size_t> out{home};
   for (const RoadLink& l : fragments_[home].links)

@@ -24,6 +24,7 @@
 
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace mvtm {
@@ -69,6 +70,9 @@ class Road {
   // the order of its links.
   std::vector<size_t> Resident(size_t home) const;
   bool Adjacent(size_t a, size_t b) const;
+  // The road's recorded frames in order (what --frames counts on a road): each fragment's own
+  // images, fragments in Graph.txt's order, as (fragment index, image name).
+  std::vector<std::pair<size_t, std::string>> RecordedFrames() const;
 
  private:
   fs::path root_;

@@ -2,6 +2,8 @@
 
 #include <chrono>
 #include <cmath>
+#include <memory>
+#include <set>
 
 #include "base/atomic_file.h"
 #include "base/error.h"
@@ -12,13 +14,18 @@
 #include "render/context.h"
 #include "render/renderer.h"
 #include "run/ledger.h"
+#include "workspace/road.h"
+#include "workspace/road_meshes.h"
 #include "workspace/workspace.h"
 
 namespace mvtm {
 
 OptionTable DeclareOptions(BakeDepthOptions& o) {
   OptionTable t("bakedepth");
-  t.Positional("WS", &o.workspace, "Workspace folder (sparse/, mesh.ply)").Dir();
+  t.Positional("WS", &o.workspace,
+               "Workspace folder (sparse/, mesh.ply), or a road (ROAD/Graph.txt: every "
+               "fragment's images, baked against the fragment's and its neighbours' triangles)")
+      .Dir();
   t.Real("--scale", &o.scale, "Depth map size relative to the image (0 < F <= 4)")
       .Range(0, 4, true)
       .Alternative("0.5");
@@ -29,8 +36,91 @@ OptionTable DeclareOptions(BakeDepthOptions& o) {
 
 void BakeDepthOptions::Check() const { CheckDeclared(*this); }
 
+namespace {
+
+// Bakes the images `todo` of a workspace with `renderer`, recording each map in the ledger.
+void BakeImages(const BakeDepthOptions& o, const Workspace& ws, const Reconstruction& rec,
+                const std::vector<const ImageRecord*>& todo, Renderer& renderer, Ledger& ledger,
+                const std::vector<fs::path>& item_inputs, BakeDepthReport& rep) {
+  Progress bar("bakedepth", todo.size(), o.quiet);
+  for (const ImageRecord* im : todo) {
+    const Camera& cam = rec.cameras.at(im->camera_id);
+    cam.RequireUndistorted();
+    uint64_t w =
+        std::max<uint64_t>(1, static_cast<uint64_t>(std::lround(double(cam.width) * o.scale)));
+    uint64_t h =
+        std::max<uint64_t>(1, static_cast<uint64_t>(std::lround(double(cam.height) * o.scale)));
+    View v{o.scale == 1.0 ? cam : cam.Scaled(w, h), im->world_to_camera};
+    auto t0 = std::chrono::steady_clock::now();
+    Image depth = renderer.RenderDepth(v);
+    auto t1 = std::chrono::steady_clock::now();
+    WriteImage(ws.DepthPath(im->name).string(), depth);
+    ledger.Done(ws.DepthPath(im->name), item_inputs);
+    auto t2 = std::chrono::steady_clock::now();
+    rep.render_ms += std::chrono::duration<double, std::milli>(t1 - t0).count();
+    rep.write_ms += std::chrono::duration<double, std::milli>(t2 - t1).count();
+    ++rep.written;
+    bar.Step();
+  }
+}
+
+// A road: each fragment's images (its own and its copies of the neighbours') baked against the
+// road's mesh around it (its own triangles and its neighbours'), fragment by fragment, the next
+// fragment's meshes read while one bakes. --frames and --shard count the road's recorded frames;
+// a frame chosen is baked in every fragment that holds it.
+BakeDepthReport RunRoadBake(const BakeDepthOptions& o) {
+  const Road road(o.workspace);
+  const auto frames = road.RecordedFrames();
+  std::set<std::string> names;
+  for (size_t i : o.Select().Apply(frames.size())) names.insert(frames[i].second);
+  BakeDepthReport rep;
+  rep.selected = names.size();
+  BakeDepthOptions resolved = o;
+  const OptionTable table = DeclareOptions(resolved);
+  RoadMeshes meshes(road);
+  std::unique_ptr<GlContext> ctx;
+  for (size_t k = 0; k < road.fragments().size(); ++k) {
+    const Workspace ws(road.fragments()[k].dir);
+    const Reconstruction rec = ReadColmapModel(ws.SparseDir().string());
+    std::vector<fs::path> inputs = ws.SparseModelFiles();
+    std::vector<fs::path> resident_inputs;
+    for (size_t r : road.Resident(k)) {
+      resident_inputs.push_back(Workspace(road.fragments()[r].dir).MeshPath());
+      resident_inputs.push_back(Road::RecordPath(road.fragments()[r].dir));
+    }
+    Ledger ledger(ws.root(), o.ProvenanceName("bakedepth"), table, inputs, road.root());
+    std::vector<const ImageRecord*> todo;
+    for (const ImageRecord* im : rec.ImagesByName())
+      if (names.count(im->name)) {
+        if (ledger.Stale(ws.DepthPath(im->name), resident_inputs, o.force).empty())
+          ++rep.skipped;
+        else
+          todo.push_back(im);
+      }
+    RemoveStaleTemporaries(ws.DepthDir());
+    if (rep.why.empty()) rep.why = ledger.Summary();  // the first fragment's reasons stand
+    if (todo.empty()) continue;
+    const std::vector<size_t> next =
+        k + 1 < road.fragments().size() ? road.Resident(k + 1) : std::vector<size_t>{};
+    const Mesh mesh = meshes.Union(road.Resident(k), next);
+    if (mesh.faces.empty()) throw Error(road.fragments()[k].id + ": no triangles resident");
+    meshes.Prefetch(next);
+    if (!ctx) {
+      ctx = GlContext::Create(o.gl);
+      rep.gl = ctx->Describe();
+    }
+    Renderer renderer(mesh);
+    BakeImages(o, ws, rec, todo, renderer, ledger, resident_inputs, rep);
+    ledger.Write({{"gl_used", rep.gl}});
+  }
+  return rep;
+}
+
+}  // namespace
+
 BakeDepthReport RunBakeDepth(const BakeDepthOptions& o) {
   o.Check();
+  if (Road::IsRoad(o.workspace)) return RunRoadBake(o);
   Workspace ws(o.workspace);
   ws.Require("bakedepth", {WsItem::kSparse, WsItem::kMesh});
   Selection sel = o.Select();
@@ -61,26 +151,7 @@ BakeDepthReport RunBakeDepth(const BakeDepthOptions& o) {
     auto ctx = GlContext::Create(o.gl);
     rep.gl = ctx->Describe();
     Renderer renderer(mesh);
-    Progress bar("bakedepth", todo.size(), o.quiet);
-    for (const ImageRecord* im : todo) {
-      const Camera& cam = rec.cameras.at(im->camera_id);
-      cam.RequireUndistorted();
-      uint64_t w =
-          std::max<uint64_t>(1, static_cast<uint64_t>(std::lround(double(cam.width) * o.scale)));
-      uint64_t h =
-          std::max<uint64_t>(1, static_cast<uint64_t>(std::lround(double(cam.height) * o.scale)));
-      View v{o.scale == 1.0 ? cam : cam.Scaled(w, h), im->world_to_camera};
-      auto t0 = std::chrono::steady_clock::now();
-      Image depth = renderer.RenderDepth(v);
-      auto t1 = std::chrono::steady_clock::now();
-      WriteImage(ws.DepthPath(im->name).string(), depth);
-      ledger.Done(ws.DepthPath(im->name));
-      auto t2 = std::chrono::steady_clock::now();
-      rep.render_ms += std::chrono::duration<double, std::milli>(t1 - t0).count();
-      rep.write_ms += std::chrono::duration<double, std::milli>(t2 - t1).count();
-      ++rep.written;
-      bar.Step();
-    }
+    BakeImages(o, ws, rec, todo, renderer, ledger, {}, rep);
     // Provenance is per run; with shards, each shard writes its own record.
     ledger.Write({{"gl_used", rep.gl}});
   }

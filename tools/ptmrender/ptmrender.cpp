@@ -28,6 +28,7 @@
 #include "run/ledger.h"
 #include "workspace/projector_sources.h"
 #include "workspace/road.h"
+#include "workspace/road_meshes.h"
 #include "workspace/workspace.h"
 
 namespace mvtm {
@@ -36,7 +37,7 @@ OptionTable DeclareOptions(PtmRenderOptions& o) {
   OptionTable t("ptmrender");
   t.Positional("WS", &o.workspace,
                "Workspace folder (sparse/, images/, mesh.ply; depth/, masks/, textures/ used "
-               "when present)")
+               "when present), or a road (ROAD/Graph.txt): streamed fragment by fragment")
       .Dir();
   t.Positional("OUTDIR", &o.outdir, "Folder for the frames (NAME.png)").Dir();
   t.Text("--poses", &o.poses, "Render poses: COLMAP images.txt, TUM or KITTI trajectory")
@@ -425,65 +426,6 @@ struct RoadFrameJob {
   std::string image;  // the recorded image at this pose ("" for --poses)
 };
 
-// Each fragment's own triangles (the first owned_faces of its mesh), read on demand or ahead on a
-// second thread, and dropped when no longer resident or about to be.
-class FragmentMeshes {
- public:
-  explicit FragmentMeshes(const Road& road) : road_(road) {}
-
-  // Starts reading the fragments `ks` not held yet.
-  void Prefetch(const std::vector<size_t>& ks) {
-    for (size_t k : ks)
-      if (!held_.count(k))
-        held_[k] = std::async(std::launch::async, [this, k] { return Own(k); }).share();
-  }
-  // The union of the fragments `ks` (read now unless prefetched); every other fragment but
-  // those in `keep` is dropped.
-  Mesh Union(const std::vector<size_t>& ks, const std::vector<size_t>& keep) {
-    Prefetch(ks);
-    for (auto it = held_.begin(); it != held_.end();)
-      if (std::find(ks.begin(), ks.end(), it->first) == ks.end() &&
-          std::find(keep.begin(), keep.end(), it->first) == keep.end())
-        it = held_.erase(it);
-      else
-        ++it;
-    Mesh out;
-    bool colours = true, normals = true;
-    std::vector<std::shared_ptr<const Mesh>> parts;
-    for (size_t k : ks) {
-      parts.push_back(held_.at(k).get());
-      colours = colours && (parts.back()->faces.empty() || parts.back()->has_colors());
-      normals = normals && (parts.back()->faces.empty() || parts.back()->has_normals());
-    }
-    for (const auto& m : parts) {
-      const auto base = static_cast<uint32_t>(out.vertices.size());
-      out.vertices.insert(out.vertices.end(), m->vertices.begin(), m->vertices.end());
-      if (colours) out.colors.insert(out.colors.end(), m->colors.begin(), m->colors.end());
-      if (normals) out.normals.insert(out.normals.end(), m->normals.begin(), m->normals.end());
-      for (const auto& f : m->faces) out.faces.push_back({f[0] + base, f[1] + base, f[2] + base});
-    }
-    return out;
-  }
-
- private:
-  std::shared_ptr<const Mesh> Own(size_t k) const {
-    const RoadFragment& f = road_.fragments()[k];
-    auto m = std::make_shared<Mesh>();
-    if (f.owned_faces == 0) return m;
-    const Workspace ws(f.dir);
-    *m = ReadMesh(ws.MeshPath().string());
-    if (m->faces.size() < f.owned_faces)
-      throw Error(Road::RecordPath(f.dir).string(), 0,
-                  "owned_faces " + std::to_string(f.owned_faces) + " exceeds the " +
-                      std::to_string(m->faces.size()) + " triangles of " + ws.MeshPath().string());
-    m->faces.resize(f.owned_faces);
-    return m;
-  }
-
-  const Road& road_;
-  std::map<size_t, std::shared_future<std::shared_ptr<const Mesh>>> held_;
-};
-
 // The road's recorded frames in order: each fragment's own images, fragments in Graph.txt's
 // order; or the poses of --poses, each in the fragment of its nearest recorded image, walking
 // the graph (a pose whose nearest fragment is neither the current one nor a neighbour leaves
@@ -534,10 +476,10 @@ std::vector<RoadFrameJob> RoadFrames(const PtmRenderOptions& o, const Road& road
 
 // The files a road frame depends on beyond its projectors: the home fragment's model and record,
 // and every resident fragment's mesh and record.
-std::vector<fs::path> ResidentInputs(const Road& road, size_t home) {
+std::vector<fs::path> ResidentInputs(const PtmRenderOptions& o, const Road& road, size_t home) {
   const Workspace ws(road.fragments()[home].dir);
   std::vector<fs::path> in = ws.SparseModelFiles();
-  in.push_back(ws.ExposurePath());
+  if (!o.no_exposure) in.push_back(ws.ExposurePath());
   for (size_t k : road.Resident(home)) {
     const Workspace r(road.fragments()[k].dir);
     in.push_back(r.MeshPath());
@@ -570,7 +512,7 @@ struct RoadRun {
   const std::vector<RoadFrameJob>& frames;
   Ledger& ledger;
   GlContext& ctx;
-  FragmentMeshes& meshes;
+  RoadMeshes& meshes;
   nlohmann::json plans = nlohmann::json::object();
 };
 
@@ -592,7 +534,7 @@ void RenderRoadGroup(RoadRun& run, const RoadGroup& g, const std::vector<size_t>
   const Camera cam = RenderCameraOf(o, scene);
   const ProjectorPicks picks = PickProjectors(o, scene, poses);
   SceneSurvey survey = StartSurvey(o, ws, scene, picks);
-  const std::vector<fs::path> extra = ResidentInputs(run.road, g.home);
+  const std::vector<fs::path> extra = ResidentInputs(o, run.road, g.home);
   PtmRenderReport part;
   const std::vector<size_t> todo =
       FramesToRender(o, ws, scene, poses, picks, all, extra, run.ledger, part);
@@ -627,7 +569,7 @@ PtmRenderReport RunRoadRender(const PtmRenderOptions& o) {
   if (o.provenance) RemoveStaleTemporaries(fs::path(o.outdir) / "provenance");
   auto ctx = GlContext::Create(o.gl);
   rep.gl = ctx->Describe();
-  FragmentMeshes meshes(road);
+  RoadMeshes meshes(road);
   RoadRun run{o, road, frames, ledger, *ctx, meshes};
   const std::vector<RoadGroup> groups = GroupByHome(frames, chosen);
   auto t0 = Clock::now();

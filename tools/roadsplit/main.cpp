@@ -23,9 +23,10 @@ int main(int argc, char** argv) {
     else if (!o.quiet)
       std::fprintf(stderr,
                    "roadsplit: %zu fragments of %.4g (path %.4g), %zu junctions, %zu images, "
-                   "%zu triangles; %zu files linked, %zu copied\n",
+                   "%zu triangles; %zu files linked, %zu copied%s\n",
                    r.fragments, r.fragment_length, r.path_length, r.junctions, r.images,
-                   r.triangles, r.linked, r.copied);
+                   r.triangles, r.linked, r.copied,
+                   r.why.empty() || r.why == "new" ? "" : (" [" + r.why + "]").c_str());
     return 0;
   });
 }

@@ -1,0 +1,39 @@
+// mvtm — the meshes of a road's fragments, streamed (thesis Appendix D.3): each fragment's own
+// triangles (the first owned_faces of its mesh.ply, workspace/road.h), read on demand or ahead
+// on a second thread, kept while resident and dropped after.
+//
+// Thread safety: one thread calls the methods; the reads run on std::async threads.
+#pragma once
+
+#include <future>
+#include <map>
+#include <memory>
+#include <vector>
+
+#include "scene/mesh.h"
+#include "workspace/road.h"
+
+namespace mvtm {
+
+class RoadMeshes {
+ public:
+  explicit RoadMeshes(const Road& road) : road_(road) {}
+
+  // Starts reading the fragments `ks` that are not held yet.
+  void Prefetch(const std::vector<size_t>& ks);
+  // The union of the own triangles of the fragments `ks` (read now unless prefetched), in that
+  // order; every held fragment not in `ks` or `keep` is dropped. Colours and normals are kept
+  // when every part with triangles has them. Throws Error for an unreadable mesh or an
+  // owned_faces beyond its triangles.
+  Mesh Union(const std::vector<size_t>& ks, const std::vector<size_t>& keep);
+  // Fragments held now (read or being read).
+  size_t held() const { return held_.size(); }
+
+ private:
+  std::shared_ptr<const Mesh> Own(size_t k) const;
+
+  const Road& road_;
+  std::map<size_t, std::shared_future<std::shared_ptr<const Mesh>>> held_;
+};
+
+}  // namespace mvtm
