@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <ctime>
 #include <fstream>
+#include <iomanip>
 #include <set>
 
 #include "base/atomic_file.h"
@@ -274,10 +275,12 @@ void Ledger::Write(const nlohmann::json& extra) {
   j["options"] = table_.Json();
   j["inputs"] = list;
   for (const auto& [k, v] : extra.items()) j[k] = v;
-  j["runs"] = pruned;
-  j["outputs"] = outputs;
+  // Moved, not copied, and streamed rather than dumped to a string: a record of thousands of
+  // outputs is the largest thing a long render holds (the flush every 10 s copied it twice).
+  j["runs"] = std::move(pruned);
+  j["outputs"] = std::move(outputs);
   WriteTextAtomic(root_ / "provenance" / (record_ + ".json"),
-                  [&](std::ostream& o) { o << j.dump(1) << "\n"; });
+                  [&](std::ostream& o) { o << std::setw(1) << j << "\n"; });
 }
 
 std::string Ledger::Summary() const {
