@@ -26,6 +26,9 @@ PathIndex::PathIndex(std::vector<Eigen::Vector3d> points, double step)
   s_.assign(points_.size(), 0.0);
   for (size_t i = 1; i < points_.size(); ++i)
     s_[i] = s_[i - 1] + (points_[i] - points_[i - 1]).norm();
+  if (s_.back() / step > 5e7)
+    throw Error("a path of " + std::to_string(s_.back()) + " units sampled every " +
+                std::to_string(step) + " would need more than 5e7 samples");
   Impl& m = *impl_;
   auto add = [&](const Eigen::Vector3d& p, size_t seg) {
     m.flat.insert(m.flat.end(), {p.x(), p.y(), p.z()});

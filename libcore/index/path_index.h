@@ -19,7 +19,8 @@ namespace mvtm {
 class PathIndex {
  public:
   // `points`: the polyline's vertices in order (>= 1). Samples are placed every `step` units
-  // (> 0) along each segment. Consecutive equal points are allowed (a stop).
+  // (> 0) along each segment. Consecutive equal points are allowed (a stop). Throws Error when
+  // the path would need more than 5e7 samples (a pose far from the others).
   PathIndex(std::vector<Eigen::Vector3d> points, double step);
   ~PathIndex();
   PathIndex(const PathIndex&) = delete;

@@ -19,8 +19,12 @@ namespace {
 // The image names of a workspace's model (text: images.txt alone is read).
 std::set<std::string> ModelImageNames(const fs::path& sparse) {
   std::set<std::string> names;
+  // The model ReadColmapModel reads: binary when all three .bin files exist, else text.
   const fs::path text = sparse / "images.txt";
-  if (fs::exists(text)) {
+  bool binary = true;
+  for (const char* f : {"cameras.bin", "images.bin", "points3D.bin"})
+    binary = binary && fs::exists(sparse / f);
+  if (!binary && fs::exists(text)) {
     std::ifstream in(text, std::ios::binary);
     if (!in) throw Error(text.string(), 0, "cannot open");
     ForEachColmapImageText(in, text.string(), [&](ImageRecord&& r, long) { names.insert(r.name); });
@@ -50,6 +54,7 @@ void ReadRecord(RoadFragment& f) {
     bad("\"s\" must be [BEGIN, END] in metres");
   f.s_begin = j["s"][0].get<double>();
   f.s_end = j["s"][1].get<double>();
+  if (j.contains("overlap") && !j["overlap"].is_number()) bad("\"overlap\" must be metres");
   f.overlap = j.value("overlap", 0.0);
 }
 

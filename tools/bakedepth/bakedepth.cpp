@@ -103,7 +103,8 @@ BakeDepthReport RunRoadBake(const BakeDepthOptions& o) {
     const std::vector<size_t> next =
         k + 1 < road.fragments().size() ? road.Resident(k + 1) : std::vector<size_t>{};
     const Mesh mesh = meshes.Union(road.Resident(k), next);
-    if (mesh.faces.empty()) throw Error(road.fragments()[k].id + ": no triangles resident");
+    if (mesh.faces.empty())
+      throw Error(ws.root().string(), 0, "no triangles in this fragment or its neighbours");
     meshes.Prefetch(next);
     if (!ctx) {
       ctx = GlContext::Create(o.gl);

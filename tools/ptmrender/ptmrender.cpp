@@ -435,9 +435,13 @@ std::vector<RoadFrameJob> RoadFrames(const PtmRenderOptions& o, const Road& road
   for (size_t k = 0; k < road.fragments().size(); ++k) {
     const RoadFragment& f = road.fragments()[k];
     const Reconstruction rec = ReadColmapModel(Workspace(f.dir).SparseDir().string());
-    for (const std::string& name : f.owned_images)
-      frames.push_back({k, {FrameName(name, o.exr), rec.FindImage(name)->world_to_camera}, name});
+    for (const std::string& name : f.owned_images) {
+      const ImageRecord* im = rec.FindImage(name);
+      if (!im) throw Error(Road::RecordPath(f.dir).string(), 0, name + ": not in the model");
+      frames.push_back({k, {FrameName(name, o.exr), im->world_to_camera}, name});
+    }
   }
+  if (frames.empty()) throw Error(road.GraphPath().string(), 0, "the road owns no images");
   if (o.poses.empty()) {
     if (o.lateral != 0 || o.yaw != 0)
       for (auto& fr : frames) fr.pose.w2c = MovedAndTurned(fr.pose.w2c, o.lateral, o.yaw);
@@ -511,7 +515,7 @@ struct RoadRun {
   const Road& road;
   const std::vector<RoadFrameJob>& frames;
   Ledger& ledger;
-  GlContext& ctx;
+  std::unique_ptr<GlContext>& ctx;
   RoadMeshes& meshes;
   nlohmann::json plans = nlohmann::json::object();
 };
@@ -542,9 +546,16 @@ void RenderRoadGroup(RoadRun& run, const RoadGroup& g, const std::vector<size_t>
   const std::vector<size_t> resident = run.road.Resident(g.home);
   if (todo.empty()) return;
   const Mesh mesh = run.meshes.Union(resident, next_resident);
-  if (mesh.faces.empty()) throw Error(run.road.fragments()[g.home].id + ": no triangles resident");
+  const fs::path home_dir = run.road.fragments()[g.home].dir;
+  if (mesh.faces.empty())
+    throw Error(home_dir.string(), 0, "no triangles in this fragment or its neighbours");
   if (!survey.ptm && !mesh.has_colors())
-    throw Error(run.road.fragments()[g.home].id + ": vertex mode needs vertex colours");
+    throw Error(home_dir.string(), 0,
+                "vertex mode needs vertex colours (a resident mesh has none)");
+  if (!run.ctx) {  // created on the first group with work: an up-to-date road needs no GL
+    run.ctx = GlContext::Create(o.gl);
+    rep.gl = run.ctx->Describe();
+  }
   run.meshes.Prefetch(next_resident);  // read while this group renders
   Renderer renderer(mesh);
   EffectsPlan plan = PlanEffects(survey);
@@ -567,10 +578,9 @@ PtmRenderReport RunRoadRender(const PtmRenderOptions& o) {
   Ledger ledger(o.outdir, o.ProvenanceName("ptmrender"), table, inputs, road.root());
   RemoveStaleTemporaries(o.outdir);
   if (o.provenance) RemoveStaleTemporaries(fs::path(o.outdir) / "provenance");
-  auto ctx = GlContext::Create(o.gl);
-  rep.gl = ctx->Describe();
+  std::unique_ptr<GlContext> ctx;
   RoadMeshes meshes(road);
-  RoadRun run{o, road, frames, ledger, *ctx, meshes};
+  RoadRun run{o, road, frames, ledger, ctx, meshes};
   const std::vector<RoadGroup> groups = GroupByHome(frames, chosen);
   auto t0 = Clock::now();
   for (size_t n = 0; n < groups.size(); ++n) {

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <map>
 #include <set>
@@ -55,12 +56,23 @@ void RoadSplitOptions::Check() const {
 
 namespace {
 
-// The sequence an image belongs to: its name's stem up to the last '_' ("A_0007.png" → "A"),
-// "" without one.
+// The sequence an image belongs to: its folder and its name's stem up to the last '_'
+// ("A_0007.png" → "A", "cam1/000001.png" → "cam1/"), "" for a bare name without one.
 std::string SequenceOf(const std::string& name) {
-  const std::string stem = fs::path(name).stem().string();
+  const fs::path p(name);
+  const std::string stem = p.stem().string();
   const size_t u = stem.rfind('_');
-  return u == std::string::npos ? "" : stem.substr(0, u);
+  const std::string dir = p.parent_path().empty() ? "" : p.parent_path().string() + "/";
+  return dir + (u == std::string::npos ? "" : stem.substr(0, u));
+}
+
+// A sequence's folder name under Models/: its key with '/' as '_' ("seq" for "").
+std::string SequenceFolder(const std::string& key) {
+  std::string f = key;
+  while (!f.empty() && f.back() == '/') f.pop_back();
+  for (char& c : f)
+    if (c == '/') c = '_';
+  return f.empty() ? "seq" : f;
 }
 
 struct Plan {
@@ -90,21 +102,29 @@ std::vector<size_t> FragmentsNear(const Plan& p, double s, double overlap) {
 void PlanPath(const RoadSplitOptions& o, const std::vector<const ImageRecord*>& images, Plan& p) {
   std::map<std::string, std::vector<const ImageRecord*>> seqs;
   for (const ImageRecord* im : images) seqs[SequenceOf(im->name)].push_back(im);
-  for (auto& [key, list] : seqs)
-    if (list.size() >= 2) {
+  for (auto& [key, list] : seqs)  // the longest sequence (the first by name among equals)
+    if (list.size() >= 2 && list.size() > p.record.size()) {
       p.record = list;
-      p.seq = key.empty() ? "seq" : key;
-      break;
+      p.seq = SequenceFolder(key);
     }
   if (p.record.empty())
     throw Error(o.workspace, 0, "no sequence of two or more images to take as the path");
   std::vector<Eigen::Vector3d> centres;
   for (const ImageRecord* im : p.record) centres.push_back(im->world_to_camera.Centre());
+  double length = 0;
+  for (size_t i = 1; i < centres.size(); ++i) length += (centres[i] - centres[i - 1]).norm();
+  if (length / o.length > 1e5)
+    throw Error(Workspace(o.workspace).SparseDir().string(), 0,
+                "the path of record is " + FormatDouble(length) + " long, " +
+                    FormatDouble(length / o.length) +
+                    " fragments of --length: is a camera far from the others?");
   // Samples every 1/200 of a fragment: exact answers come from the segments around them.
   p.path = std::make_unique<PathIndex>(centres, std::max(o.length / 200, 1e-9));
   const double total = p.path->Length();
   if (!(total > 0)) throw Error(o.workspace, 0, "the path of record does not move");
-  const size_t k = std::max<size_t>(1, size_t(std::llround(total / o.length)));
+  // At most one fragment per step of the path, so each owns an image of it.
+  const double want = std::min(std::round(total / o.length), double(p.record.size() - 1));
+  const size_t k = std::max<size_t>(1, static_cast<size_t>(want));
   const double len = total / double(k);
   if (k > 1 && len <= 2 * o.overlap)
     throw UsageError("--overlap " + FormatDouble(o.overlap) + ": fragments of " +
@@ -313,7 +333,8 @@ fs::path TemporaryRoad(const fs::path& road) {
     const std::string name = e.path().filename().string();
     if (name.rfind(prefix, 0) != 0) continue;
     const long pid = std::atol(name.c_str() + prefix.size());
-    if (pid > 0 && kill(static_cast<pid_t>(pid), 0) != 0) fs::remove_all(e.path());
+    if (pid > 0 && kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH)
+      fs::remove_all(e.path());
   }
   return parent / (prefix + std::to_string(getpid()));
 }
@@ -338,7 +359,8 @@ std::vector<fs::path> RoadInputs(const Workspace& ws,
 
 RoadSplitReport RunRoadSplit(const RoadSplitOptions& o) {
   o.Check();
-  const fs::path road = fs::path(o.road).lexically_normal();
+  fs::path road = fs::path(o.road).lexically_normal();
+  if (road.filename().empty()) road = road.parent_path();  // "road/"
   const Workspace ws(o.workspace);
   ws.Require("roadsplit", {WsItem::kSparse});
   const Reconstruction rec = ReadColmapModel(ws.SparseDir().string());

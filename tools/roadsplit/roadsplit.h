@@ -2,8 +2,9 @@
 // ROAD/Graph.txt and one workspace per fragment under ROAD/Models/SEQ/FRAGMENT/
 // (workspace/road.h).
 //
-// The path of record is the first sequence of images (names SEQ_NNNN...: the part before the
-// last '_'; names without one form one sequence) in name order, through its camera centres.
+// The path of record is the longest sequence of images (a sequence: the folder and the name's
+// stem up to its last '_', SEQ_NNNN...; bare names without one form one) in name order, through
+// its camera centres.
 // Every image and mesh triangle gets the arc length of its nearest point on that path
 // (index/path_index.h). The path is cut into fragments of equal length near --length; a
 // fragment owns the images and triangles of its own stretch and holds copies of those within
