@@ -1,5 +1,7 @@
 #include "ptmrender.h"
 
+#include <malloc.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -587,6 +589,9 @@ PtmRenderReport RunRoadRender(const PtmRenderOptions& o) {
     const std::vector<size_t> next =
         n + 1 < groups.size() ? road.Resident(groups[n + 1].home) : std::vector<size_t>{};
     RenderRoadGroup(run, groups[n], next, rep);
+    // The group's meshes, images and renderer are gone: hand the freed heap back, so a long road
+    // does not grow the process by the fragmentation the reader threads leave.
+    malloc_trim(0);
   }
   rep.depth_ms += rep.survey_ms;
   rep.frames_ms = Ms(t0, Clock::now());
