@@ -54,13 +54,16 @@ void CreateFolder(const fs::path& dir) {
   if (ec) throw Error(dir.string(), 0, "cannot create folder: " + ec.message());
 }
 
+fs::path TemporaryPathFor(const fs::path& final_path) {
+  return final_path.parent_path() /
+         ("." + final_path.stem().string() + ".tmp-" + std::to_string(getpid()) + "-" +
+          std::to_string(g_counter++) + "@" + ProcessSpace() + final_path.extension().string());
+}
+
 AtomicFile::AtomicFile(const fs::path& final_path) : final_(final_path) {
   fs::path dir = final_.parent_path();
   if (!dir.empty()) CreateFolder(dir);
-  std::string name = "." + final_.stem().string() + ".tmp-" + std::to_string(getpid()) + "-" +
-                     std::to_string(g_counter++) + "@" + ProcessSpace() +
-                     final_.extension().string();
-  temp_ = dir / name;
+  temp_ = TemporaryPathFor(final_);
 }
 
 AtomicFile::~AtomicFile() {
@@ -154,7 +157,7 @@ void RemoveStaleTemporaries(const fs::path& dir) {
       const auto written = it->last_write_time(age_ec);
       dead = !age_ec && fs::file_time_type::clock::now() - written > kForeignTemporaryAge;
     }
-    if (dead) fs::remove(it->path(), ec);
+    if (dead) fs::remove_all(it->path(), ec);
   }
 }
 

@@ -56,10 +56,15 @@ void CreateFolder(const fs::path& dir);
 // True when `output` exists and is at least as new as every existing input.
 bool IsUpToDate(const fs::path& output, const std::vector<fs::path>& inputs);
 
-// Removes stale temporary files ".STEM.tmp-PID-N@SPACE.EXT" left in `dir` by processes that
-// died: of this host and namespace when process PID is gone; of another (a cluster node or a
-// container sharing the folder, where PID says nothing) when untouched for an hour. A name
-// without "@SPACE" counts as this host's.
+// A temporary name for `final_path` in its folder, ".STEM.tmp-PID-N@SPACE.EXT", unique to this
+// process and call (what AtomicFile writes to; a tool building a whole folder at once, such as
+// roadsplit's road, builds it under such a name and renames it into place).
+fs::path TemporaryPathFor(const fs::path& final_path);
+
+// Removes stale temporaries ".STEM.tmp-PID-N@SPACE.EXT" (files, or folders with what they hold)
+// left in `dir` by processes that died: of this host and namespace when process PID is gone; of
+// another (a cluster node or a container sharing the folder, where PID says nothing) when
+// untouched for an hour. A name without "@SPACE" counts as this host's.
 void RemoveStaleTemporaries(const fs::path& dir);
 
 // This process's SPACE: host name and pid-namespace inode, letters, digits, '-' and '~'.

@@ -41,10 +41,14 @@ std::vector<std::string> ColmapModelFiles(const std::string& dir) {
   return files;
 }
 
-Reconstruction ReadColmapModel(const std::string& dir) {
+bool IsColmapBinaryModel(const std::string& dir) {
   bool bin = true;
   for (const auto& f : ColmapModelFileNames(true)) bin = bin && fs::exists(fs::path(dir) / f);
-  if (bin) return ReadColmapBinary(dir);
+  return bin;
+}
+
+Reconstruction ReadColmapModel(const std::string& dir) {
+  if (IsColmapBinaryModel(dir)) return ReadColmapBinary(dir);
   if (!fs::exists(fs::path(dir) / "images.txt"))
     throw Error(dir, 0, "no COLMAP model here (need cameras, images, points3D as .txt or .bin)");
   return ReadColmapText(dir);

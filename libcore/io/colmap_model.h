@@ -45,6 +45,8 @@ void ForEachColmapImageText(std::istream& in, const std::string& name,
 // Writes the three files atomically (each to a temporary name, then renamed).
 void WriteColmapText(const Reconstruction& r, const std::string& dir);
 void WriteColmapBinary(const Reconstruction& r, const std::string& dir);
+// True when DIR's model is read as binary: all three .bin files exist (ReadColmapModel's rule).
+bool IsColmapBinaryModel(const std::string& dir);
 // True when DIR holds a model (text or binary).
 bool HasColmapModel(const std::string& dir);
 // The model's file names for a format: {"cameras.bin", "images.bin", "points3D.bin"} or .txt.

@@ -16,15 +16,12 @@ namespace mvtm {
 
 namespace {
 
-// The image names of a workspace's model (text: images.txt alone is read).
+// The image names of a workspace's model.
 std::set<std::string> ModelImageNames(const fs::path& sparse) {
   std::set<std::string> names;
-  // The model ReadColmapModel reads: binary when all three .bin files exist, else text.
+  // The model ReadColmapModel reads (text: images.txt alone is read).
   const fs::path text = sparse / "images.txt";
-  bool binary = true;
-  for (const char* f : {"cameras.bin", "images.bin", "points3D.bin"})
-    binary = binary && fs::exists(sparse / f);
-  if (!binary && fs::exists(text)) {
+  if (!IsColmapBinaryModel(sparse.string()) && fs::exists(text)) {
     std::ifstream in(text, std::ios::binary);
     if (!in) throw Error(text.string(), 0, "cannot open");
     ForEachColmapImageText(in, text.string(), [&](ImageRecord&& r, long) { names.insert(r.name); });
@@ -122,6 +119,15 @@ bool Road::Adjacent(size_t a, size_t b) const {
   for (const RoadLink& l : fragments_[a].links)
     if (l.to == b) return true;
   return false;
+}
+
+std::vector<fs::path> Road::ResidentFiles(size_t home) const {
+  std::vector<fs::path> out;
+  for (size_t k : Resident(home)) {
+    out.push_back(Workspace(fragments_[k].dir).MeshPath());
+    out.push_back(RecordPath(fragments_[k].dir));
+  }
+  return out;
 }
 
 std::vector<std::pair<size_t, std::string>> Road::RecordedFrames() const {

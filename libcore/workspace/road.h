@@ -70,6 +70,9 @@ class Road {
   // the order of its links.
   std::vector<size_t> Resident(size_t home) const;
   bool Adjacent(size_t a, size_t b) const;
+  // The files the road around `home` is made of: each resident fragment's mesh and
+  // fragment.json (what a render or a depth map made there depends on).
+  std::vector<fs::path> ResidentFiles(size_t home) const;
   // The road's recorded frames in order (what --frames counts on a road): each fragment's own
   // images, fragments in Graph.txt's order, as (fragment index, image name).
   std::vector<std::pair<size_t, std::string>> RecordedFrames() const;

@@ -14,13 +14,14 @@ void RoadMeshes::Prefetch(const std::vector<size_t>& ks) {
       held_[k] = std::async(std::launch::async, [this, k] { return Own(k); }).share();
 }
 
-Mesh RoadMeshes::Union(const std::vector<size_t>& ks, const std::vector<size_t>& keep) {
+Mesh RoadMeshes::Union(const std::vector<size_t>& ks, const std::vector<size_t>& next) {
   Prefetch(ks);
+  Prefetch(next);
   auto listed = [](const std::vector<size_t>& v, size_t k) {
     return std::find(v.begin(), v.end(), k) != v.end();
   };
   for (auto it = held_.begin(); it != held_.end();)
-    if (!listed(ks, it->first) && !listed(keep, it->first))
+    if (!listed(ks, it->first) && !listed(next, it->first))
       it = held_.erase(it);
     else
       ++it;

@@ -22,10 +22,11 @@ class RoadMeshes {
   // Starts reading the fragments `ks` that are not held yet.
   void Prefetch(const std::vector<size_t>& ks);
   // The union of the own triangles of the fragments `ks` (read now unless prefetched), in that
-  // order; every held fragment not in `ks` or `keep` is dropped. Colours and normals are kept
-  // when every part with triangles has them. Throws Error for an unreadable mesh or an
-  // owned_faces beyond its triangles.
-  Mesh Union(const std::vector<size_t>& ks, const std::vector<size_t>& keep);
+  // order; the fragments `next` (those resident next) start reading on second threads, and
+  // every other held fragment is dropped. Colours and normals are kept when every part with
+  // triangles has them. Throws Error for an unreadable mesh or an owned_faces beyond its
+  // triangles.
+  Mesh Union(const std::vector<size_t>& ks, const std::vector<size_t>& next);
   // Fragments held now (read or being read).
   size_t held() const { return held_.size(); }
 

@@ -82,13 +82,9 @@ BakeDepthReport RunRoadBake(const BakeDepthOptions& o) {
   for (size_t k = 0; k < road.fragments().size(); ++k) {
     const Workspace ws(road.fragments()[k].dir);
     const Reconstruction rec = ReadColmapModel(ws.SparseDir().string());
-    std::vector<fs::path> inputs = ws.SparseModelFiles();
-    std::vector<fs::path> resident_inputs;
-    for (size_t r : road.Resident(k)) {
-      resident_inputs.push_back(Workspace(road.fragments()[r].dir).MeshPath());
-      resident_inputs.push_back(Road::RecordPath(road.fragments()[r].dir));
-    }
-    Ledger ledger(ws.root(), o.ProvenanceName("bakedepth"), table, inputs, road.root());
+    const std::vector<fs::path> resident_inputs = road.ResidentFiles(k);
+    Ledger ledger(ws.root(), o.ProvenanceName("bakedepth"), table, ws.SparseModelFiles(),
+                  road.root());
     std::vector<const ImageRecord*> todo;
     for (const ImageRecord* im : rec.ImagesByName())
       if (names.count(im->name)) {
@@ -105,7 +101,6 @@ BakeDepthReport RunRoadBake(const BakeDepthOptions& o) {
     const Mesh mesh = meshes.Union(road.Resident(k), next);
     if (mesh.faces.empty())
       throw Error(ws.root().string(), 0, "no triangles in this fragment or its neighbours");
-    meshes.Prefetch(next);
     if (!ctx) {
       ctx = GlContext::Create(o.gl);
       rep.gl = ctx->Describe();

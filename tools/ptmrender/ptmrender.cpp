@@ -147,6 +147,13 @@ std::string FrameName(const std::string& name, bool exr) {
   return p.string();
 }
 
+// The frame of --poses row i: named as in the file (images.txt), else 000000, 000001, ...
+std::string PoseFrameName(const Trajectory& tr, size_t i, bool exr) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%06zu", i);
+  return FrameName(i < tr.names.size() ? tr.names[i] : buf, exr);
+}
+
 // OUTDIR/provenance/NAME.png: which projector coloured each pixel (--provenance).
 fs::path ProvenanceMapPath(const PtmRenderOptions& o, const RenderPose& pose) {
   fs::path pp = fs::path(o.outdir) / "provenance" / pose.name;
@@ -168,12 +175,8 @@ std::vector<RenderPose> LoadRenderPoses(const PtmRenderOptions& o, const Scene& 
   std::vector<RenderPose> poses;
   if (!o.poses.empty()) {
     Trajectory tr = ReadTrajectory(o.poses);
-    char buf[32];
-    for (size_t i = 0; i < tr.poses.size(); ++i) {
-      std::snprintf(buf, sizeof buf, "%06zu", i);
-      std::string name = i < tr.names.size() ? tr.names[i] : buf;
-      poses.push_back({FrameName(name, o.exr), tr.poses[i].pose.Inverse(), kNoImage});
-    }
+    for (size_t i = 0; i < tr.poses.size(); ++i)
+      poses.push_back({PoseFrameName(tr, i, o.exr), tr.poses[i].pose.Inverse(), kNoImage});
   } else {
     for (size_t i = 0; i < scene.images.size(); ++i)
       poses.push_back(
@@ -472,10 +475,7 @@ std::vector<RoadFrameJob> RoadFrames(const PtmRenderOptions& o, const Road& road
       throw Error(at + " leaves the graph: it is nearest " + near.id + ", not " +
                   road.fragments()[home].id + " or a neighbour of it");
     home = k;
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%06zu", i);
-    const std::string name = i < tr.names.size() ? tr.names[i] : buf;
-    out.push_back({home, {FrameName(name, o.exr), MovedAndTurned(w2c, o.lateral, o.yaw)}, ""});
+    out.push_back({home, {PoseFrameName(tr, i, o.exr), MovedAndTurned(w2c, o.lateral, o.yaw)}, ""});
   }
   return out;
 }
@@ -486,11 +486,7 @@ std::vector<fs::path> ResidentInputs(const PtmRenderOptions& o, const Road& road
   const Workspace ws(road.fragments()[home].dir);
   std::vector<fs::path> in = ws.SparseModelFiles();
   if (!o.no_exposure) in.push_back(ws.ExposurePath());
-  for (size_t k : road.Resident(home)) {
-    const Workspace r(road.fragments()[k].dir);
-    in.push_back(r.MeshPath());
-    in.push_back(Road::RecordPath(r.root()));
-  }
+  for (fs::path& p : road.ResidentFiles(home)) in.push_back(std::move(p));
   return in;
 }
 
@@ -558,7 +554,6 @@ void RenderRoadGroup(RoadRun& run, const RoadGroup& g, const std::vector<size_t>
     run.ctx = GlContext::Create(o.gl);
     rep.gl = run.ctx->Describe();
   }
-  run.meshes.Prefetch(next_resident);  // read while this group renders
   Renderer renderer(mesh);
   EffectsPlan plan = PlanEffects(survey);
   RenderFrames(FrameJob{o, ws, scene, cam, poses, picks, run.ledger, extra}, renderer, todo, survey,

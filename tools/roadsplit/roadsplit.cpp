@@ -1,10 +1,6 @@
 #include "roadsplit.h"
 
-#include <signal.h>
-#include <unistd.h>
-
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <map>
 #include <set>
@@ -325,20 +321,6 @@ void WriteFragments(const RoadSplitOptions& o, const Workspace& ws, const Recons
   for (RoadFragment& f : p.fragments) WriteFragmentRecord(f);
 }
 
-// ROAD.roadsplit-PID beside ROAD; a dead run's leftover goes first.
-fs::path TemporaryRoad(const fs::path& road) {
-  const fs::path parent = road.parent_path().empty() ? fs::path(".") : road.parent_path();
-  const std::string prefix = road.filename().string() + ".roadsplit-";
-  for (const auto& e : fs::directory_iterator(parent)) {
-    const std::string name = e.path().filename().string();
-    if (name.rfind(prefix, 0) != 0) continue;
-    const long pid = std::atol(name.c_str() + prefix.size());
-    if (pid > 0 && kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH)
-      fs::remove_all(e.path());
-  }
-  return parent / (prefix + std::to_string(getpid()));
-}
-
 // Every file the road is made from: the model, the mesh, exposure.tsv and each image's files.
 std::vector<fs::path> RoadInputs(const Workspace& ws,
                                  const std::vector<const ImageRecord*>& images) {
@@ -390,7 +372,11 @@ RoadSplitReport RunRoadSplit(const RoadSplitOptions& o) {
   rep.images = images.size();
   rep.path_length = p.path->Length();
   rep.fragment_length = p.bounds[1] - p.bounds[0];
-  const fs::path tmp = TemporaryRoad(road);
+  // Built under a temporary name beside ROAD (a dead run's leftover goes first), renamed when
+  // complete.
+  const fs::path parent = road.parent_path().empty() ? fs::path(".") : road.parent_path();
+  RemoveStaleTemporaries(parent);
+  const fs::path tmp = TemporaryPathFor(parent / road.filename());
   try {
     fs::create_directories(tmp);
     WriteFragments(o, ws, rec, images, tmp, p, rep);

@@ -77,7 +77,13 @@ TEST(AtomicFile, RemovesTemporariesOfDeadProcesses) {
   std::ofstream(d / ".f.tmp-999999999-3@node7~4026531836.png") << "x";
   fs::last_write_time(d / ".f.tmp-999999999-3@node7~4026531836.png",
                       fs::file_time_type::clock::now() - std::chrono::minutes(61));
+  // A folder built under a temporary name (roadsplit's road) goes with what it holds.
+  fs::create_directories(d / ".g.tmp-999999999-4" / "Models" / "A");
+  std::ofstream(d / ".g.tmp-999999999-4" / "Models" / "A" / "x.txt") << "x";
+  fs::create_directories(d / (".h.tmp-" + std::to_string(getpid()) + "-5" + here) / "Models");
   RemoveStaleTemporaries(d);
+  EXPECT_FALSE(fs::exists(d / ".g.tmp-999999999-4"));
+  EXPECT_TRUE(fs::exists(d / (".h.tmp-" + std::to_string(getpid()) + "-5" + here)));
   EXPECT_FALSE(fs::exists(d / ".a.tmp-999999999-0.png"));
   EXPECT_TRUE(fs::exists(d / (".b.tmp-" + std::to_string(getpid()) + "-0.png")));
   EXPECT_FALSE(fs::exists(d / (".c.tmp-999999999-1" + here + ".exr")));
