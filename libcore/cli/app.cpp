@@ -1,5 +1,6 @@
 #include "cli/app.h"
 
+#include <CLI/CLI.hpp>
 #include <clocale>
 #include <filesystem>
 #include <iostream>

@@ -5,13 +5,18 @@
 // to exit statuses and one-line messages on stderr:
 //   0 success; 1 Error (data, I/O); 2 UsageError or a command-line error.
 // Tools with verdicts (ssim) may return further documented codes from `run`.
+// CLI11 is only declared here: a tool's main() that calls RunTool does not parse CLI11's
+// headers (8-15 s of compile time each).
 #pragma once
 
-#include <CLI/CLI.hpp>
 #include <functional>
 #include <string>
 
 #include "run/option_table.h"
+
+namespace CLI {
+class App;
+}
 
 namespace mvtm {
 

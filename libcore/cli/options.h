@@ -2,12 +2,15 @@
 // reads and validates alike in every program and --help says what the table says.
 #pragma once
 
-#include <CLI/CLI.hpp>
 #include <string>
 #include <vector>
 
 #include "cli/work.h"
 #include "run/option_table.h"
+
+namespace CLI {
+class App;  // <CLI/CLI.hpp>: included by the code that makes an app
+}
 
 namespace mvtm {
 

@@ -87,7 +87,7 @@ PlanarPose RearAxleUnder(const PlanarPose& foot, const CarGeometry& car) {
 
 GroundPlacer::GroundPlacer(const MeshRaycaster& mesh, const RoadFrame& frame,
                            const CarGeometry& car)
-    : mesh_(mesh), frame_(frame), car_(car) {}
+    : mesh_(&mesh), frame_(frame), car_(car) {}
 
 void GroundPlacer::StartFromGround(double height) {
   first_ = false;
@@ -107,7 +107,7 @@ Placement GroundPlacer::Place(const PlanarPose& rear, double time) {
     const double start = first_ ? 0.0 : last_[k] + kClearance;
     const Eigen::Vector3d o = frame_.ToWorld(wheel[k].x(), wheel[k].y(), start);
     const double reach = (first_ ? kMaxDrop : kClearance + kMaxDrop) * frame_.scale;
-    const auto hit = mesh_.Closest(o, -frame_.up, 0, reach);
+    const auto hit = mesh_->Closest(o, -frame_.up, 0, reach);
     if (!hit) {
       char where[160];
       std::snprintf(where, sizeof where, " wheel at x = %.2f, y = %.2f m from the start",

@@ -95,12 +95,15 @@ class GroundPlacer {
   // `height` metres along up (a car put down elsewhere on the road: simulate's resets), instead
   // of from the frame's origin.
   void StartFromGround(double height);
+  // Places the next cars on `mesh` (a road's ground as the car moves between fragments: the
+  // previous ground heights are kept). `mesh` must outlive its use.
+  void UseMesh(const MeshRaycaster& mesh) { mesh_ = &mesh; }
 
   static constexpr double kClearance = 2.0;  // metres above the previous ground
   static constexpr double kMaxDrop = 20.0;   // metres below the ray's start
 
  private:
-  const MeshRaycaster& mesh_;
+  const MeshRaycaster* mesh_;
   RoadFrame frame_;
   CarGeometry car_;
   bool first_ = true;

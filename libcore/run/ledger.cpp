@@ -5,7 +5,6 @@
 #include <cstdio>
 #include <ctime>
 #include <fstream>
-#include <iomanip>
 #include <set>
 
 #include "base/atomic_file.h"
@@ -16,7 +15,8 @@ namespace mvtm {
 
 struct Ledger::Record {
   std::string file;  // record file name ("ptmrender.json")
-  nlohmann::json runs, outputs;
+  nlohmann::json runs;
+  std::map<std::string, Entry> outputs;  // by rel path
 };
 
 namespace {
@@ -54,7 +54,6 @@ Ledger::Ledger(fs::path root, std::string record, const OptionTable& table,
       tool_(table.tool()),
       table_(table),
       options_key_(table.OutputJson()),
-      kept_(nlohmann::json::object()),
       kept_runs_(nlohmann::json::object()) {
   std::sort(inputs.begin(), inputs.end());
   inputs.erase(std::unique(inputs.begin(), inputs.end()), inputs.end());
@@ -75,7 +74,14 @@ Ledger::Ledger(fs::path root, std::string record, const OptionTable& table,
     if (j.is_null() || !j.contains("outputs") || !j["outputs"].is_object() || !j.contains("runs") ||
         !j["runs"].is_object())
       continue;  // a record of an older mvtm, or damaged: it vouches for nothing
-    records_.push_back({f, std::move(j["runs"]), std::move(j["outputs"])});
+    Record r{f, std::move(j["runs"]), {}};
+    for (auto& [rel, e] : j["outputs"].items())
+      if (e.is_object()) {
+        const nlohmann::json* run = e.contains("run") ? &e["run"] : nullptr;
+        r.outputs[rel] = {run && run->is_string() ? run->get<std::string>() : "", e.dump()};
+        e = nullptr;  // freed as it is taken
+      }
+    records_.push_back(std::move(r));
   }
 }
 
@@ -175,22 +181,23 @@ std::string Ledger::Stale(const fs::path& output, const std::vector<fs::path>& i
 std::string Ledger::StaleExisting(const std::string& rel, const fs::path& output,
                                   const FileStamp& now, const std::vector<fs::path>& item_inputs) {
   // The record whose entry matches the file as it is made it.
-  const nlohmann::json* entry = nullptr;
+  nlohmann::json entry;
   const Record* maker = nullptr;
   std::string sum;
   for (const Record& r : records_) {
     auto it = r.outputs.find(rel);
-    if (it == r.outputs.end() || !it->is_object() || it->value("bytes", uint64_t(0)) != now.bytes)
-      continue;
-    bool match = it->value("mtime_ns", int64_t(0)) == now.mtime_ns;
+    if (it == r.outputs.end()) continue;
+    nlohmann::json e = nlohmann::json::parse(it->second.text, nullptr, false);
+    if (!e.is_object() || e.value("bytes", uint64_t(0)) != now.bytes) continue;
+    bool match = e.value("mtime_ns", int64_t(0)) == now.mtime_ns;
     if (!match) {
       if (sum.empty()) sum = FileChecksum(output);
-      match = it->value("fnv1a64", std::string()) == sum;
+      match = e.value("fnv1a64", std::string()) == sum;
     }
-    if (match) entry = &*it, maker = &r;
+    if (match) entry = std::move(e), maker = &r;
   }
-  if (!entry) return "no record";
-  const std::string run = entry->value("run", std::string());
+  if (!maker) return "no record";
+  const std::string run = entry.value("run", std::string());
   auto v = run_verdicts_.find(run);
   if (v == run_verdicts_.end()) {
     auto rit = maker->runs.find(run);
@@ -198,7 +205,7 @@ std::string Ledger::StaleExisting(const std::string& rel, const fs::path& output
             .first;
   }
   if (!v->second.empty()) return v->second;
-  const nlohmann::json in = entry->contains("in") ? (*entry)["in"] : nlohmann::json::object();
+  const nlohmann::json in = entry.contains("in") ? entry["in"] : nlohmann::json::object();
   if (!in.is_object()) return "no record";
   std::set<std::string> names;
   for (const fs::path& p : item_inputs) {
@@ -210,9 +217,8 @@ std::string Ledger::StaleExisting(const std::string& rel, const fs::path& output
   for (const auto& [n, s] : in.items())
     if (!names.count(n)) return "input changed: " + n;
   // Up to date: it stays in this run's record, with its own run.
-  nlohmann::json e = *entry;
-  e["mtime_ns"] = now.mtime_ns;
-  kept_[rel] = e;
+  entry["mtime_ns"] = now.mtime_ns;
+  kept_[rel] = {run, entry.dump()};
   kept_runs_[run] = maker->runs.at(run);
   return "";
 }
@@ -226,11 +232,12 @@ void Ledger::Done(const fs::path& output, const std::vector<fs::path>& item_inpu
     const std::string n = Name(p, base_);
     if (Current(n, p, false).exists) in[n] = StampJson(n, p);
   }
-  kept_[Name(output, root_)] = {{"run", RunId()},
-                                {"bytes", s.bytes},
-                                {"mtime_ns", s.mtime_ns},
-                                {"fnv1a64", FileChecksum(output)},
-                                {"in", in}};
+  const nlohmann::json e = {{"run", RunId()},
+                            {"bytes", s.bytes},
+                            {"mtime_ns", s.mtime_ns},
+                            {"fnv1a64", FileChecksum(output)},
+                            {"in", std::move(in)}};
+  kept_[Name(output, root_)] = {RunId(), e.dump()};
   MaybeFlush();
 }
 
@@ -252,15 +259,18 @@ void Ledger::Write(const nlohmann::json& extra) {
         {{"path", name}, {"bytes", stamps_[name].bytes}, {"fnv1a64", stamps_[name].fnv1a64}});
   }
   // This record's earlier entries are carried forward; this run's checks and outputs override.
-  nlohmann::json outputs = nlohmann::json::object(), runs = nlohmann::json::object();
+  std::map<std::string, const Entry*> outputs;
+  nlohmann::json runs = nlohmann::json::object();
   for (const Record& r : records_)
-    if (r.file == record_ + ".json") outputs = r.outputs, runs = r.runs;
-  for (const auto& [k, v] : kept_.items()) outputs[k] = v;
+    if (r.file == record_ + ".json") {
+      for (const auto& [k, v] : r.outputs) outputs[k] = &v;
+      runs = r.runs;
+    }
+  for (const auto& [k, v] : kept_) outputs[k] = &v;
   for (const auto& [k, v] : kept_runs_.items()) runs[k] = v;
   runs[RunId()] = run;
   std::set<std::string> used;
-  for (const auto& [k, v] : outputs.items())
-    if (v.is_object()) used.insert(v.value("run", std::string()));
+  for (const auto& [k, v] : outputs) used.insert(v->run);
   nlohmann::json pruned = nlohmann::json::object();
   for (const auto& [k, v] : runs.items())
     if (used.count(k)) pruned[k] = v;
@@ -275,12 +285,21 @@ void Ledger::Write(const nlohmann::json& extra) {
   j["options"] = table_.Json();
   j["inputs"] = list;
   for (const auto& [k, v] : extra.items()) j[k] = v;
-  // Moved, not copied, and streamed rather than dumped to a string: a record of thousands of
-  // outputs is the largest thing a long render holds (the flush every 10 s copied it twice).
   j["runs"] = std::move(pruned);
-  j["outputs"] = std::move(outputs);
-  WriteTextAtomic(root_ / "provenance" / (record_ + ".json"),
-                  [&](std::ostream& o) { o << std::setw(1) << j << "\n"; });
+  // The outputs are streamed from their kept text, one line each, after the other members: a
+  // record of thousands of outputs is the largest thing a long render holds.
+  std::string head = j.dump(1);
+  head.resize(head.rfind('}'));  // the closing brace goes after the outputs
+  head.resize(head.find_last_not_of(" \n") + 1);
+  WriteTextAtomic(root_ / "provenance" / (record_ + ".json"), [&](std::ostream& o) {
+    o << head << ",\n \"outputs\": {";
+    bool first = true;
+    for (const auto& [k, v] : outputs) {
+      o << (first ? "\n  " : ",\n  ") << nlohmann::json(k).dump() << ": " << v->text;
+      first = false;
+    }
+    o << "\n }\n}\n";
+  });
 }
 
 std::string Ledger::Summary() const {

@@ -82,6 +82,12 @@ class Ledger {
 
  private:
   struct Record;
+  // One output's entry, kept as its compact JSON text: a long render holds thousands, and a
+  // parsed entry costs about 7 times its text in memory (issue 22's flat-memory target).
+  struct Entry {
+    std::string run;   // the run that made it
+    std::string text;  // {"run", "bytes", "mtime_ns", "fnv1a64", "in"} as JSON
+  };
   std::string Name(const fs::path& p, const fs::path& base) const;
   std::string StaleExisting(const std::string& rel, const fs::path& output, const FileStamp& now,
                             const std::vector<fs::path>& item_inputs);
@@ -100,8 +106,8 @@ class Ledger {
   std::vector<Record> records_;                      // this tool's records in ROOT/provenance
   std::map<std::string, std::string> run_verdicts_;  // record run id → "" or a reason
   std::map<std::string, FileStamp> stamps_;          // this run's view of files, by name
-  nlohmann::json kept_;       // entries carried into this run's record: rel path → entry
-  nlohmann::json kept_runs_;  // the runs those entries refer to
+  std::map<std::string, Entry> kept_;  // entries carried into this run's record, by rel path
+  nlohmann::json kept_runs_;           // the runs those entries refer to
   std::string run_id_;
   std::map<std::string, size_t> reasons_;
   std::set<fs::path> swept_;  // output folders whose stale temporaries are gone

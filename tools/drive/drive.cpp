@@ -7,6 +7,7 @@
 #include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "base/atomic_file.h"
 #include "base/error.h"
@@ -22,6 +23,9 @@
 #include "io/trajectory.h"
 #include "raycast/mesh_raycaster.h"
 #include "run/ledger.h"
+#include "workspace/road.h"
+#include "workspace/road_locator.h"
+#include "workspace/road_meshes.h"
 #include "workspace/workspace.h"
 
 namespace mvtm {
@@ -85,12 +89,18 @@ CarPath LaneChangeCarPath(const Recorded& r, const RoadFrame& frame, const Drive
   return c;
 }
 
+// `follow` (a road): called after each placement with the camera's centre and time; returns the
+// ground the next placements are on.
+using FollowGround = std::function<const MeshRaycaster*(const Eigen::Vector3d&, double)>;
+
 std::vector<StampedPose> Place(const MeshRaycaster& mesh, const RoadFrame& frame,
-                               const CarGeometry& car, const CarPath& path, DriveReport& rep) {
+                               const CarGeometry& car, const CarPath& path, DriveReport& rep,
+                               const FollowGround& follow = nullptr) {
   GroundPlacer placer(mesh, frame, car);
   std::vector<StampedPose> poses;
   for (double t : path.times) {
     const Placement p = placer.Place(path.at(t), t);
+    if (follow) placer.UseMesh(*follow(p.camera_to_world.t, t));
     rep.max_pitch_deg = std::max(rep.max_pitch_deg, std::abs(p.pitch) * 180 / M_PI);
     rep.max_roll_deg = std::max(rep.max_roll_deg, std::abs(p.roll) * 180 / M_PI);
     poses.push_back({t, p.camera_to_world, 0});
@@ -125,15 +135,14 @@ std::vector<fs::path> OutputFiles(const DriveOptions& o) {
   return {d / "cameras.txt", d / "images.txt", d / "points3D.txt"};
 }
 
-// Where drive's record goes: the workspace when OUT is inside it (WS/provenance/drive.json), else
-// the folder OUT's files are in (OUT itself for a COLMAP model).
-fs::path RecordRoot(const DriveOptions& o, const Workspace& ws) {
+// Where drive's record goes: the workspace (or road) when OUT is inside it
+// (WS/provenance/drive.json), else the folder OUT's files are in (OUT itself for a COLMAP model).
+fs::path RecordRoot(const DriveOptions& o, const fs::path& root) {
   fs::path dir = o.format == DriveFormat::kColmap ? fs::path(o.out) : fs::path(o.out).parent_path();
   if (dir.empty()) dir = ".";
-  const fs::path rel =
-      fs::weakly_canonical(dir).lexically_relative(fs::weakly_canonical(ws.root()));
+  const fs::path rel = fs::weakly_canonical(dir).lexically_relative(fs::weakly_canonical(root));
   const bool inside = !rel.empty() && rel.begin()->string() != "..";
-  return inside ? ws.root() : dir;
+  return inside ? root : dir;
 }
 
 // Every file OUT depends on: the sparse model, the mesh, CONTROLS, and the metric record when
@@ -173,11 +182,139 @@ void MakeDrive(const DriveOptions& o, const Workspace& ws, const ControlsLog& lo
   WriteOutput(o, r, poses);
 }
 
+// ---- a road (ROAD/Graph.txt): the ground of the fragment the car is in and its neighbours ----
+
+// The road's recorded drive: its recorded frames in the road's order (Graph.txt), names starting
+// with --pass, from --start. The images point into `where`'s models.
+RecordedDrive RoadRecordedDrive(const RoadLocator& where, const DriveOptions& o,
+                                std::vector<size_t>& homes) {
+  RecordedDrive r;
+  for (const RoadRecordedFrame& f : where.frames())
+    if (f.image->name.compare(0, o.pass.size(), o.pass) == 0) {
+      r.images.push_back(f.image);
+      r.w2c.emplace_back(NormalizedQuaternion(f.image->world_to_camera.q),
+                         f.image->world_to_camera.t);
+      homes.push_back(f.home);
+    }
+  if (r.images.empty())
+    throw Error(where.road().GraphPath().string(), 0,
+                "no image of the road's fragments starts with '" + o.pass + "' (--pass)");
+  if (!o.start.empty()) {
+    while (r.start < r.images.size() && r.images[r.start]->name != o.start) ++r.start;
+    if (r.start == r.images.size())
+      throw UsageError("--start: no image '" + o.start + "' owned by a fragment of the road" +
+                       (o.pass.empty() ? "" : " whose name starts with '" + o.pass + "'"));
+  }
+  const Reconstruction& home = where.model(homes[r.start]);
+  r.rec.cameras = home.cameras;  // the camera a COLMAP OUT is written with
+  return r;
+}
+
+// The ground along a road: the own triangles of the fragment the car is in and of its
+// neighbours. When the car enters another fragment (its nearest recorded image is owned there),
+// that fragment's ground replaces it; the fragments two steps away are read ahead on a second
+// thread, and the others are dropped.
+class RoadGround {
+ public:
+  RoadGround(const RoadLocator& where, size_t home) : where_(where), meshes_(where.road()) {
+    Enter(home);
+  }
+  const MeshRaycaster& ray() const { return *ray_; }
+  size_t home() const { return home_; }
+  size_t entered() const { return entered_; }
+  // The ground after the camera reached `centre` at time t (the fragment it is in now).
+  const MeshRaycaster* Follow(const Eigen::Vector3d& centre, double t) {
+    const size_t k = where_.Locate(centre, home_, "the car at t = " + FormatDouble(t) + " s");
+    if (k != home_) Enter(k);
+    return ray_.get();
+  }
+
+ private:
+  void Enter(size_t k) {
+    const Road& road = where_.road();
+    const std::vector<size_t> resident = road.Resident(k);
+    auto listed = [](const std::vector<size_t>& v, size_t x) {
+      return std::find(v.begin(), v.end(), x) != v.end();
+    };
+    std::vector<size_t> next;
+    for (size_t n : resident)
+      for (size_t m : road.Resident(n))
+        if (!listed(resident, m) && !listed(next, m)) next.push_back(m);
+    Mesh mesh = meshes_.Union(resident, next);
+    if (mesh.faces.empty())
+      throw Error(road.fragments()[k].dir.string(), 0,
+                  "no triangles in this fragment or its neighbours");
+    ray_ = std::make_unique<MeshRaycaster>(mesh);
+    mesh_ = std::move(mesh);  // (a moved vector keeps its storage)
+    home_ = k;
+    ++entered_;
+  }
+
+  const RoadLocator& where_;
+  RoadMeshes meshes_;
+  Mesh mesh_;
+  std::unique_ptr<MeshRaycaster> ray_;
+  size_t home_ = 0, entered_ = 0;
+};
+
+// Every file OUT depends on, on a road: Graph.txt, each fragment's model, mesh and record,
+// CONTROLS, and the start fragment's metric record when the scale comes from it.
+std::vector<fs::path> RoadDriveInputs(const DriveOptions& o, const Road& road) {
+  std::vector<fs::path> inputs{road.GraphPath()};
+  for (const RoadFragment& f : road.fragments()) {
+    const Workspace ws(f.dir);
+    for (fs::path& p : ws.SparseModelFiles()) inputs.push_back(std::move(p));
+    inputs.push_back(ws.MeshPath());
+    inputs.push_back(Road::RecordPath(f.dir));
+    if (o.scale == 0 && !o.metric && !ws.MetricRecord("drive").empty())
+      inputs.push_back(ws.MetricRecord("drive"));
+  }
+  if (!o.controls.empty()) inputs.emplace_back(o.controls);
+  return inputs;
+}
+
+// Drives the car along a road and writes OUT. The car is set up as on a workspace (drive/
+// car_setup.h) with the road's recorded drive: up from all of its cameras, the height from those
+// over the start's ground, the scale from the start fragment's workspace.
+void MakeRoadDrive(const DriveOptions& o, const Road& road, const ControlsLog& log,
+                   DriveReport& rep) {
+  const RoadLocator where(road);
+  std::vector<size_t> homes;
+  const RecordedDrive r = RoadRecordedDrive(where, o, homes);
+  RoadGround ground(where, homes[r.start]);
+  const Workspace ws(road.fragments()[ground.home()].dir);
+  const Eigen::Vector3d up = RecordedUp(r.w2c);
+  const std::vector<size_t> resident = road.Resident(ground.home());
+  std::vector<Rigid3d> near;
+  for (size_t i = 0; i < r.w2c.size(); ++i)
+    if (std::find(resident.begin(), resident.end(), homes[i]) != resident.end())
+      near.push_back(r.w2c[i]);
+  const std::vector<double> heights = CameraHeights(ground.ray(), near, up);
+  rep.height_cameras = heights.size();
+  rep.scale = ResolveScale(o.scale, o.metric, ws, heights, "drive", rep.scale_source);
+  const CarGeometry car = MakeCar(o.wheelbase, o.track, o.camera_offset, ws, heights, rep.scale,
+                                  &rep.height_from_workspace);
+  const RoadFrame frame = FrameAtCamera(r.w2c[r.start], up, rep.scale);
+  rep.camera_height = car.camera_offset.z();
+  const CarPath path = o.lane_change.empty()
+                           ? SteeredCarPath(log, o, car, PlanarCamera(frame, r.w2c[r.start]), rep)
+                           : LaneChangeCarPath(r, frame, o, car);
+  const std::vector<StampedPose> poses =
+      Place(ground.ray(), frame, car, path, rep,
+            [&ground](const Eigen::Vector3d& c, double t) { return ground.Follow(c, t); });
+  rep.poses = poses.size();
+  rep.fragments = ground.entered();
+  rep.duration = path.times.back() - path.times.front();
+  WriteOutput(o, r, poses);
+}
+
 }  // namespace
 
 OptionTable DeclareOptions(DriveOptions& o) {
   OptionTable t("drive");
-  t.Positional("WS", &o.workspace, "Workspace folder (sparse/, mesh.ply)").Dir();
+  t.Positional("WS", &o.workspace,
+               "Workspace folder (sparse/, mesh.ply), or a road folder (Graph.txt: roadsplit)")
+      .Dir();
   t.OptionalPositional("CONTROLS", &o.controls,
                        "Controls log: a header naming 'time steer speed' (s, steering-wheel "
                        "degrees, m/s), then one row per sample; omitted with --lane-change")
@@ -242,13 +379,21 @@ DriveReport RunDrive(const DriveOptions& o) {
   ControlsLog log;
   if (o.lane_change.empty()) log = ReadControlsTsv(o.controls);  // a bad log fails first, fast
   rep.ignored_columns = log.ignored;
-  const Workspace ws(o.workspace);
-  ws.Require("drive", {WsItem::kSparse, WsItem::kMesh});
+  std::optional<Road> road;
+  std::optional<Workspace> ws;
+  if (Road::IsRoad(o.workspace)) {
+    road.emplace(o.workspace);
+  } else {
+    ws.emplace(o.workspace);
+    ws->Require("drive", {WsItem::kSparse, WsItem::kMesh});
+  }
+  const fs::path root = road ? road->root() : ws->root();
   const std::vector<fs::path> outputs = OutputFiles(o);
   rep.output = outputs.size() == 1 ? outputs[0].string() : outputs[1].string();
   DriveOptions resolved = o;
   const OptionTable table = DeclareOptions(resolved);
-  Ledger ledger(RecordRoot(o, ws), "drive", table, DriveInputs(o, ws), ws.root());
+  Ledger ledger(RecordRoot(o, root), "drive", table,
+                road ? RoadDriveInputs(o, *road) : DriveInputs(o, *ws), root);
   bool stale = false;
   for (const fs::path& p : outputs) stale = !ledger.Stale(p, {}, o.force).empty() || stale;
   rep.why = ledger.Summary();
@@ -256,7 +401,10 @@ DriveReport RunDrive(const DriveOptions& o) {
     rep.up_to_date = true;
     return rep;
   }
-  MakeDrive(o, ws, log, rep);
+  if (road)
+    MakeRoadDrive(o, *road, log, rep);
+  else
+    MakeDrive(o, *ws, log, rep);
   for (const fs::path& p : outputs) ledger.Done(p);
   ledger.Write({{"scale_used", rep.scale},
                 {"scale_source", rep.scale_source},

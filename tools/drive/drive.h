@@ -15,6 +15,10 @@
 // from unchanged inputs (the sparse model, the mesh, CONTROLS, and the metric record when the
 // scale comes from it). The record (run/ledger.h) is WS/provenance/drive.json when OUT is inside
 // the workspace, else provenance/drive.json in the folder OUT's files are in.
+// A road (ROAD/Graph.txt, roadsplit) in place of WS: the recorded drive is the road's recorded
+// frames in order; the car drives on the own triangles of the fragment it is in and its graph
+// neighbours (the fragment of its nearest recorded image), the next ones read ahead; a car that
+// leaves the road or the graph is an error (workspace/road_locator.h).
 #pragma once
 
 #include <string>
@@ -74,6 +78,7 @@ struct DriveReport {
   size_t height_cameras = 0;  // recorded cameras above the mesh (for the default height)
   double max_pitch_deg = 0, max_roll_deg = 0;  // largest |pitch|, |roll| of the car
   std::string output;                          // the file written (colmap: OUT/images.txt)
+  size_t fragments = 0;  // a road: the fragments the car was in (entered), else 0
 };
 
 DriveReport RunDrive(const DriveOptions& options);

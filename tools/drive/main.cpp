@@ -41,6 +41,7 @@ int RunAndReport(mvtm::DriveOptions& o) {
                r.poses, r.duration, length, r.output.c_str(), r.scale, r.scale_source.c_str(),
                r.camera_height, r.height_from_workspace ? " (recorded)" : "", r.max_pitch_deg,
                r.max_roll_deg);
+  if (r.fragments) std::fprintf(stderr, "; %zu fragments of the road entered", r.fragments);
   if (!r.why.empty()) std::fprintf(stderr, " [%s]", r.why.c_str());
   std::fprintf(stderr, "\n");
   return 0;

@@ -30,6 +30,7 @@
 #include "run/ledger.h"
 #include "workspace/projector_sources.h"
 #include "workspace/road.h"
+#include "workspace/road_locator.h"
 #include "workspace/road_meshes.h"
 #include "workspace/workspace.h"
 
@@ -436,17 +437,11 @@ struct RoadFrameJob {
 // the graph (a pose whose nearest fragment is neither the current one nor a neighbour leaves
 // the graph: an error).
 std::vector<RoadFrameJob> RoadFrames(const PtmRenderOptions& o, const Road& road) {
+  const RoadLocator where(road);
   std::vector<RoadFrameJob> frames;
-  for (size_t k = 0; k < road.fragments().size(); ++k) {
-    const RoadFragment& f = road.fragments()[k];
-    const Reconstruction rec = ReadColmapModel(Workspace(f.dir).SparseDir().string());
-    for (const std::string& name : f.owned_images) {
-      const ImageRecord* im = rec.FindImage(name);
-      if (!im) throw Error(Road::RecordPath(f.dir).string(), 0, name + ": not in the model");
-      frames.push_back({k, {FrameName(name, o.exr), im->world_to_camera}, name});
-    }
-  }
-  if (frames.empty()) throw Error(road.GraphPath().string(), 0, "the road owns no images");
+  for (const RoadRecordedFrame& f : where.frames())
+    frames.push_back(
+        {f.home, {FrameName(f.image->name, o.exr), f.image->world_to_camera}, f.image->name});
   if (o.poses.empty()) {
     if (o.lateral != 0 || o.yaw != 0)
       for (auto& fr : frames) fr.pose.w2c = MovedAndTurned(fr.pose.w2c, o.lateral, o.yaw);
@@ -454,28 +449,12 @@ std::vector<RoadFrameJob> RoadFrames(const PtmRenderOptions& o, const Road& road
   }
   const Trajectory tr = ReadTrajectory(o.poses);
   std::vector<RoadFrameJob> out;
-  size_t home = 0;
+  std::optional<size_t> home;
   for (size_t i = 0; i < tr.poses.size(); ++i) {
     const Rigid3d w2c = tr.poses[i].pose.Inverse();
-    const Eigen::Vector3d c = w2c.Centre();
-    size_t best = 0;
-    double best_d = std::numeric_limits<double>::infinity();
-    for (size_t j = 0; j < frames.size(); ++j) {
-      const double d = (frames[j].pose.w2c.Centre() - c).norm();
-      if (d < best_d) best_d = d, best = j;
-    }
-    const RoadFragment& near = road.fragments()[frames[best].home];
-    const double reach = std::max(near.overlap, (near.s_end - near.s_begin) / 2);
-    const std::string at = o.poses + ": pose " + std::to_string(i + 1);
-    if (best_d > reach)
-      throw Error(at + " is " + FormatDouble(best_d) + " from the nearest recorded image (" +
-                  frames[best].image + "): it leaves the road");
-    const size_t k = frames[best].home;
-    if (i > 0 && k != home && !road.Adjacent(home, k))
-      throw Error(at + " leaves the graph: it is nearest " + near.id + ", not " +
-                  road.fragments()[home].id + " or a neighbour of it");
-    home = k;
-    out.push_back({home, {PoseFrameName(tr, i, o.exr), MovedAndTurned(w2c, o.lateral, o.yaw)}, ""});
+    home = where.Locate(w2c.Centre(), home, o.poses + ": pose " + std::to_string(i + 1));
+    out.push_back(
+        {*home, {PoseFrameName(tr, i, o.exr), MovedAndTurned(w2c, o.lateral, o.yaw)}, ""});
   }
   return out;
 }

@@ -312,6 +312,9 @@ void WriteFragments(const RoadSplitOptions& o, const Workspace& ws, const Recons
       if (p.owner[i] == k) f.owned_images.push_back(images[i]->name);
     }
     if (!rows.empty()) WriteExposureTsv(dst.ExposurePath().string(), rows);
+    // A metric workspace's fragments are metric (drive and simulate read the record).
+    const fs::path metric = ws.MetricRecord("");
+    if (!metric.empty()) LinkFile(metric, dst.root() / metric.lexically_relative(ws.root()), rep);
     f.s_begin = p.bounds[k];
     f.s_end = p.bounds[k + 1];
     f.overlap = o.overlap;
@@ -327,6 +330,7 @@ std::vector<fs::path> RoadInputs(const Workspace& ws,
   std::vector<fs::path> in = ws.SparseModelFiles();
   in.push_back(ws.MeshPath());
   in.push_back(ws.ExposurePath());
+  if (!ws.MetricRecord("").empty()) in.push_back(ws.MetricRecord(""));
   for (const ImageRecord* im : images) {
     const std::string& n = im->name;
     for (const fs::path& f :

@@ -2,6 +2,7 @@
 // the flag that set it, through the declared option table, and exits 2.
 #include <gtest/gtest.h>
 
+#include <CLI/CLI.hpp>
 #include <sstream>
 
 #include "base/error.h"

@@ -148,6 +148,25 @@ TEST_F(LedgerTest, TheRecordIsTheProvenance) {
   EXPECT_EQ(j["outputs"]["f0.png"]["in"].begin().key(), "images/a.png");
 }
 
+// The outputs are written from their kept text, after the other members: names that JSON must
+// escape, and a record without outputs, read back as JSON.
+TEST_F(LedgerTest, TheRecordStaysJsonWithEscapedNamesAndNoOutputs) {
+  const std::string odd = "a \"b\"\\c\t\xc3\xa9.png";
+  EXPECT_EQ(Run({0, 1}, {odd, "g.png"}), (V{"new", "new"}));
+  EXPECT_EQ(Run({0, 1}, {odd, "g.png"}), (V{"", ""}));
+  std::ifstream in(dir_ / "out/provenance/demo.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["outputs"].size(), 2u);
+  EXPECT_TRUE(j["outputs"].contains(odd));
+  EXPECT_EQ(j["runs"].size(), 1u);
+  Opts o;
+  OptionTable t = Declare(o);
+  Ledger(dir_ / "empty", "demo", t, {}, dir_ / "ws").Write();
+  std::ifstream in2(dir_ / "empty/provenance/demo.json");
+  const nlohmann::json e = nlohmann::json::parse(in2);
+  EXPECT_TRUE(e["outputs"].is_object() && e["outputs"].empty());
+}
+
 TEST_F(LedgerTest, AKilledRunsTemporariesGoEvenWhenAllIsUpToDate) {
   Run({}, {"f0.png", "sub/f1.png"});
   // What kill -9 leaves: a half-written record and half-written outputs (pid 999999999: dead).
