@@ -1,5 +1,6 @@
 #include "drive/car_setup.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "base/error.h"
@@ -8,27 +9,38 @@
 
 namespace mvtm {
 
-RecordedDrive LoadRecordedDrive(const Workspace& ws, const std::string& pass,
-                                const std::string& start) {
+RecordedDrive SelectRecordedDrive(std::vector<const ImageRecord*> images, const std::string& pass,
+                                  const std::string& start, const std::string& file,
+                                  const std::string& held) {
+  std::sort(images.begin(), images.end(),
+            [](const ImageRecord* a, const ImageRecord* b) { return a->name < b->name; });
   RecordedDrive r;
-  r.rec = ReadColmapModel(ws.SparseDir().string());
-  for (const ImageRecord* im : r.rec.ImagesByName())
+  for (const ImageRecord* im : images)
     if (im->name.compare(0, pass.size(), pass) == 0) {
       r.images.push_back(im);
       r.w2c.emplace_back(NormalizedQuaternion(im->world_to_camera.q), im->world_to_camera.t);
     }
   if (r.images.empty())
-    throw Error(ws.SparseDir().string(), 0,
+    throw Error(file, 0,
                 pass.empty() ? "the model has no images"
                              : "no image name starts with '" + pass + "' (--pass)");
   if (!start.empty()) {
     size_t i = 0;
     while (i < r.images.size() && r.images[i]->name != start) ++i;
     if (i == r.images.size())
-      throw UsageError("--start: no image '" + start + "' in the workspace" +
+      throw UsageError("--start: no image '" + start + "' " + held +
                        (pass.empty() ? "" : " whose name starts with '" + pass + "'"));
     r.start = i;
   }
+  return r;
+}
+
+RecordedDrive LoadRecordedDrive(const Workspace& ws, const std::string& pass,
+                                const std::string& start) {
+  Reconstruction rec = ReadColmapModel(ws.SparseDir().string());
+  RecordedDrive r = SelectRecordedDrive(rec.ImagesByName(), pass, start, ws.SparseDir().string(),
+                                        "in the workspace");
+  r.rec = std::move(rec);  // (a moved std::map keeps its nodes: r.images stay valid)
   return r;
 }
 

@@ -27,8 +27,14 @@ struct RecordedDrive {
   size_t start = 0;
 };
 
-// `pass`: image names starting with it ("" all); `start`: the start image's name ("" the first).
-// Throws Error (no images) or UsageError (no such start image).
+// The recorded drive among `images` (any order): names starting with `pass` ("" all), in name
+// order, from the image named `start` ("" the first). Throws Error naming `file` (no images) or
+// UsageError ("--start: no image 'NAME' HELD ...": HELD says where it was looked for).
+RecordedDrive SelectRecordedDrive(std::vector<const ImageRecord*> images, const std::string& pass,
+                                  const std::string& start, const std::string& file,
+                                  const std::string& held);
+
+// The workspace's recorded drive (SelectRecordedDrive over its model). Throws as it does.
 RecordedDrive LoadRecordedDrive(const Workspace& ws, const std::string& pass,
                                 const std::string& start);
 

@@ -5,9 +5,11 @@
 #include <cstdio>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <set>
 
 #include "base/atomic_file.h"
 #include "base/error.h"
@@ -184,27 +186,20 @@ void MakeDrive(const DriveOptions& o, const Workspace& ws, const ControlsLog& lo
 
 // ---- a road (ROAD/Graph.txt): the ground of the fragment the car is in and its neighbours ----
 
-// The road's recorded drive: its recorded frames in the road's order (Graph.txt), names starting
-// with --pass, from --start. The images point into `where`'s models.
+// The road's recorded drive: its recorded frames whose names start with --pass, in name order,
+// from --start. The images point into `where`'s models.
 RecordedDrive RoadRecordedDrive(const RoadLocator& where, const DriveOptions& o,
                                 std::vector<size_t>& homes) {
-  RecordedDrive r;
-  for (const RoadRecordedFrame& f : where.frames())
-    if (f.image->name.compare(0, o.pass.size(), o.pass) == 0) {
-      r.images.push_back(f.image);
-      r.w2c.emplace_back(NormalizedQuaternion(f.image->world_to_camera.q),
-                         f.image->world_to_camera.t);
-      homes.push_back(f.home);
-    }
-  if (r.images.empty())
-    throw Error(where.road().GraphPath().string(), 0,
-                "no image of the road's fragments starts with '" + o.pass + "' (--pass)");
-  if (!o.start.empty()) {
-    while (r.start < r.images.size() && r.images[r.start]->name != o.start) ++r.start;
-    if (r.start == r.images.size())
-      throw UsageError("--start: no image '" + o.start + "' owned by a fragment of the road" +
-                       (o.pass.empty() ? "" : " whose name starts with '" + o.pass + "'"));
+  std::vector<const ImageRecord*> images;
+  std::map<const ImageRecord*, size_t> home_of;
+  for (const RoadRecordedFrame& f : where.frames()) {
+    images.push_back(f.image);
+    home_of[f.image] = f.home;
   }
+  // Name order, as on a workspace: a pass driven against the path of record is in its own order.
+  RecordedDrive r = SelectRecordedDrive(images, o.pass, o.start, where.road().GraphPath().string(),
+                                        "owned by a fragment of the road");
+  for (const ImageRecord* im : r.images) homes.push_back(home_of.at(im));
   const Reconstruction& home = where.model(homes[r.start]);
   r.rec.cameras = home.cameras;  // the camera a COLMAP OUT is written with
   return r;
@@ -221,7 +216,7 @@ class RoadGround {
   }
   const MeshRaycaster& ray() const { return *ray_; }
   size_t home() const { return home_; }
-  size_t entered() const { return entered_; }
+  size_t entered() const { return entered_.size(); }  // distinct fragments the car was in
   // The ground after the camera reached `centre` at time t (the fragment it is in now).
   const MeshRaycaster* Follow(const Eigen::Vector3d& centre, double t) {
     const size_t k = where_.Locate(centre, home_, "the car at t = " + FormatDouble(t) + " s");
@@ -244,17 +239,16 @@ class RoadGround {
     if (mesh.faces.empty())
       throw Error(road.fragments()[k].dir.string(), 0,
                   "no triangles in this fragment or its neighbours");
-    ray_ = std::make_unique<MeshRaycaster>(mesh);
-    mesh_ = std::move(mesh);  // (a moved vector keeps its storage)
+    ray_ = std::make_unique<MeshRaycaster>(mesh);  // (it copies the mesh)
     home_ = k;
-    ++entered_;
+    entered_.insert(k);
   }
 
   const RoadLocator& where_;
   RoadMeshes meshes_;
-  Mesh mesh_;
   std::unique_ptr<MeshRaycaster> ray_;
-  size_t home_ = 0, entered_ = 0;
+  size_t home_ = 0;
+  std::set<size_t> entered_;
 };
 
 // Every file OUT depends on, on a road: Graph.txt, each fragment's model, mesh and record,
@@ -266,8 +260,10 @@ std::vector<fs::path> RoadDriveInputs(const DriveOptions& o, const Road& road) {
     for (fs::path& p : ws.SparseModelFiles()) inputs.push_back(std::move(p));
     inputs.push_back(ws.MeshPath());
     inputs.push_back(Road::RecordPath(f.dir));
-    if (o.scale == 0 && !o.metric && !ws.MetricRecord("drive").empty())
-      inputs.push_back(ws.MetricRecord("drive"));
+    if (o.scale == 0 && !o.metric) {
+      const fs::path record = ws.MetricRecord("drive");  // (reads every provenance record)
+      if (!record.empty()) inputs.push_back(record);
+    }
   }
   if (!o.controls.empty()) inputs.emplace_back(o.controls);
   return inputs;

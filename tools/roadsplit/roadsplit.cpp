@@ -292,9 +292,19 @@ void SplitMesh(const RoadSplitOptions& o, const Workspace& ws, const fs::path& t
   }
 }
 
+// The workspace's records every fragment keeps: its georeference (georef.json) and how its mesh
+// was made (roadmesh's record), which say whether it is metric (drive, simulate).
+std::vector<fs::path> WorkspaceRecords(const Workspace& ws) {
+  std::vector<fs::path> out;
+  for (const fs::path& p : {ws.root() / "georef.json", ws.root() / "provenance" / "roadmesh.json"})
+    if (fs::is_regular_file(p)) out.push_back(p);
+  return out;
+}
+
 void WriteFragments(const RoadSplitOptions& o, const Workspace& ws, const Reconstruction& rec,
                     const std::vector<const ImageRecord*>& images, const fs::path& tmp, Plan& p,
                     RoadSplitReport& rep) {
+  const std::vector<fs::path> records = WorkspaceRecords(ws);
   std::map<std::string, ExposureRow> exposure;
   if (fs::exists(ws.ExposurePath()))
     for (auto& row : ReadExposureTsv(ws.ExposurePath().string())) exposure[row.image] = row;
@@ -312,9 +322,9 @@ void WriteFragments(const RoadSplitOptions& o, const Workspace& ws, const Recons
       if (p.owner[i] == k) f.owned_images.push_back(images[i]->name);
     }
     if (!rows.empty()) WriteExposureTsv(dst.ExposurePath().string(), rows);
-    // A metric workspace's fragments are metric (drive and simulate read the record).
-    const fs::path metric = ws.MetricRecord("");
-    if (!metric.empty()) LinkFile(metric, dst.root() / metric.lexically_relative(ws.root()), rep);
+    RoadSplitReport records_linked;  // (rep counts per-image files)
+    for (const fs::path& r : records)
+      LinkFile(r, dst.root() / r.lexically_relative(ws.root()), records_linked);
     f.s_begin = p.bounds[k];
     f.s_end = p.bounds[k + 1];
     f.overlap = o.overlap;
@@ -330,7 +340,7 @@ std::vector<fs::path> RoadInputs(const Workspace& ws,
   std::vector<fs::path> in = ws.SparseModelFiles();
   in.push_back(ws.MeshPath());
   in.push_back(ws.ExposurePath());
-  if (!ws.MetricRecord("").empty()) in.push_back(ws.MetricRecord(""));
+  for (fs::path& r : WorkspaceRecords(ws)) in.push_back(std::move(r));
   for (const ImageRecord* im : images) {
     const std::string& n = im->name;
     for (const fs::path& f :
