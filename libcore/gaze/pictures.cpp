@@ -76,27 +76,15 @@ MapFrame MakeFrame(const Eigen::Vector3d& up, const std::vector<Eigen::Vector3d>
   return f;
 }
 
-void Background(Image& img, const MapFrame& f, const Mesh& mesh, const MeshRaycaster& rc) {
-  Eigen::Vector3d lo, hi;
-  mesh.Bounds(lo, hi);
-  const double top = std::max(lo.dot(f.up), hi.dot(f.up)) + (hi - lo).norm() + 1;
-  for (int y = 0; y < f.h; ++y)
-    for (int x = 0; x < f.w; ++x) {
-      const double a = f.x0 + (x + 0.5) * f.px, b = f.y1 - (y + 0.5) * f.px;
-      const Eigen::Vector3d o = a * f.e1 + b * f.e2 + top * f.up;
-      const auto hit = rc.Closest(o, -f.up);
-      Eigen::Vector3d c(30, 30, 30);
-      if (hit && mesh.has_colors()) {
-        const auto& t = mesh.faces[hit->triangle];
-        const double w[3] = {1 - hit->u - hit->v, hit->u, hit->v};
-        c.setZero();
-        for (int k = 0; k < 3; ++k)
-          for (int ch = 0; ch < 3; ++ch) c[ch] += w[k] * mesh.colors[t[k]][ch];
-      } else if (hit) {
-        c.setConstant(150);
-      }
-      for (int ch = 0; ch < 3; ++ch) img.at(x, y, ch) = static_cast<float>(c[ch]);
-    }
+// The colour of the surface under a map pixel: barycentric vertex colours, grey 150 without.
+Eigen::Vector3d SurfaceColour(const Mesh& mesh, const RayHit& hit) {
+  if (!mesh.has_colors()) return Eigen::Vector3d::Constant(150);
+  const auto& t = mesh.faces[hit.triangle];
+  const double w[3] = {1 - hit.u - hit.v, hit.u, hit.v};
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (int k = 0; k < 3; ++k)
+    for (int ch = 0; ch < 3; ++ch) c[ch] += w[k] * mesh.colors[t[k]][ch];
+  return c;
 }
 
 std::vector<double> Heat(const MapFrame& f, const std::vector<HeatPoint>& points, double sigma) {
@@ -118,23 +106,92 @@ std::vector<double> Heat(const MapFrame& f, const std::vector<HeatPoint>& points
 
 }  // namespace
 
-Image RenderHeatmap(const Mesh& mesh, const MeshRaycaster& raycaster, const Eigen::Vector3d& up,
-                    const std::vector<Eigen::Vector3d>& path, const std::vector<HeatPoint>& points,
-                    const HeatmapOptions& o) {
+struct HeatmapPainter::State {
+  MapFrame f;
+  double sigma = 0;
+  std::vector<Eigen::Vector3d> path;
+  std::vector<HeatPoint> points;
+  Image img;
+  std::vector<double> height;  // of the surface shown at each pixel (-inf: none yet)
+};
+
+HeatmapPainter::HeatmapPainter(const Eigen::Vector3d& up, std::vector<Eigen::Vector3d> path,
+                               std::vector<HeatPoint> points, const HeatmapOptions& o)
+    : s_(std::make_unique<State>()) {
   std::vector<Eigen::Vector3d> all = path;
   for (const HeatPoint& p : points) all.push_back(p.point);
   if (all.empty()) throw Error("a heat map needs a path or points");
-  double sigma = o.sigma;
-  const MapFrame f = MakeFrame(up, all, o.size, sigma);
-  Image img(f.w, f.h, 3, 8);
-  Background(img, f, mesh, raycaster);
-  for (const auto& p : path) {
+  s_->sigma = o.sigma;
+  s_->f = MakeFrame(up, all, o.size, s_->sigma);
+  s_->path = std::move(path);
+  s_->points = std::move(points);
+  s_->img = Image(s_->f.w, s_->f.h, 3, 8);
+  for (float& v : s_->img.data) v = 30;
+  s_->height.assign(static_cast<size_t>(s_->f.w) * s_->f.h, -INFINITY);
+}
+
+HeatmapPainter::~HeatmapPainter() = default;
+
+namespace {
+
+// The pixel rectangle [x0, x1) × [y0, y1) under an axis-aligned box, clipped to the map.
+struct PixelRect {
+  int x0 = 0, x1 = 0, y0 = 0, y1 = 0;
+  bool empty() const { return x0 >= x1 || y0 >= y1; }
+};
+
+PixelRect RectUnder(const MapFrame& f, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+  double x_lo = INFINITY, x_hi = -INFINITY, y_lo = INFINITY, y_hi = -INFINITY;
+  for (int corner = 0; corner < 8; ++corner) {
+    const Eigen::Vector3d c(corner & 1 ? hi.x() : lo.x(), corner & 2 ? hi.y() : lo.y(),
+                            corner & 4 ? hi.z() : lo.z());
+    const Eigen::Vector2d p = f.ToPixel(c);
+    x_lo = std::min(x_lo, p.x()), x_hi = std::max(x_hi, p.x());
+    y_lo = std::min(y_lo, p.y()), y_hi = std::max(y_hi, p.y());
+  }
+  auto clamp = [](double v, int n) { return static_cast<int>(std::clamp(v, 0.0, double(n))); };
+  return {clamp(std::floor(x_lo) - 1, f.w), clamp(std::ceil(x_hi) + 1, f.w),
+          clamp(std::floor(y_lo) - 1, f.h), clamp(std::ceil(y_hi) + 1, f.h)};
+}
+
+}  // namespace
+
+bool HeatmapPainter::CoversBox(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) const {
+  return !RectUnder(s_->f, lo, hi).empty();
+}
+
+void HeatmapPainter::AddSurface(const Mesh& mesh, const MeshRaycaster& rc) {
+  if (mesh.faces.empty()) return;
+  const MapFrame& f = s_->f;
+  Eigen::Vector3d lo, hi;
+  mesh.Bounds(lo, hi);
+  // Rays start above every surface of this part; hits of parts compare by their height.
+  const double top = std::max(lo.dot(f.up), hi.dot(f.up)) + (hi - lo).norm() + 1;
+  // Only the pixels under the part's bounding box can hit it.
+  const PixelRect r = RectUnder(f, lo, hi);
+  for (int y = r.y0; y < r.y1; ++y)
+    for (int x = r.x0; x < r.x1; ++x) {
+      const double a = f.x0 + (x + 0.5) * f.px, b = f.y1 - (y + 0.5) * f.px;
+      const auto hit = rc.Closest(a * f.e1 + b * f.e2 + top * f.up, -f.up);
+      if (!hit) continue;
+      double& h = s_->height[static_cast<size_t>(y) * f.w + x];
+      if (!(top - hit->t > h)) continue;
+      h = top - hit->t;
+      const Eigen::Vector3d c = SurfaceColour(mesh, *hit);
+      for (int ch = 0; ch < 3; ++ch) s_->img.at(x, y, ch) = static_cast<float>(c[ch]);
+    }
+}
+
+Image HeatmapPainter::Finish() const {
+  const MapFrame& f = s_->f;
+  Image img = s_->img;
+  for (const auto& p : s_->path) {
     const Eigen::Vector2d c = f.ToPixel(p);
     const int x = static_cast<int>(c.x()), y = static_cast<int>(c.y());
     if (x >= 0 && y >= 0 && x < f.w && y < f.h)
       for (int ch = 0; ch < 3; ++ch) img.at(x, y, ch) = 255;
   }
-  const std::vector<double> heat = Heat(f, points, sigma);
+  const std::vector<double> heat = Heat(f, s_->points, s_->sigma);
   const double peak = *std::max_element(heat.begin(), heat.end());
   if (peak <= 0) return img;
   for (int y = 0; y < f.h; ++y)
@@ -147,6 +204,14 @@ Image RenderHeatmap(const Mesh& mesh, const MeshRaycaster& raycaster, const Eige
         img.at(x, y, ch) = static_cast<float>((1 - alpha) * img.at(x, y, ch) + alpha * col[ch]);
     }
   return img;
+}
+
+Image RenderHeatmap(const Mesh& mesh, const MeshRaycaster& raycaster, const Eigen::Vector3d& up,
+                    const std::vector<Eigen::Vector3d>& path, const std::vector<HeatPoint>& points,
+                    const HeatmapOptions& o) {
+  HeatmapPainter painter(up, path, points, o);
+  painter.AddSurface(mesh, raycaster);
+  return painter.Finish();
 }
 
 }  // namespace mvtm

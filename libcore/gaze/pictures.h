@@ -17,6 +17,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -46,5 +47,24 @@ struct HeatmapOptions {
 Image RenderHeatmap(const Mesh& mesh, const MeshRaycaster& raycaster, const Eigen::Vector3d& up,
                     const std::vector<Eigen::Vector3d>& path, const std::vector<HeatPoint>& points,
                     const HeatmapOptions& options);
+
+// RenderHeatmap with the mesh given part by part (a road's fragments, one resident at a time):
+// each pixel shows the highest surface of any part under it (the same picture as RenderHeatmap on
+// the parts' union, up to hits exactly at the parts' shared edges). Throws Error as RenderHeatmap.
+class HeatmapPainter {
+ public:
+  HeatmapPainter(const Eigen::Vector3d& up, std::vector<Eigen::Vector3d> path,
+                 std::vector<HeatPoint> points, const HeatmapOptions& options);
+  ~HeatmapPainter();
+  // True when an axis-aligned box, seen from above, overlaps the map.
+  bool CoversBox(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) const;
+  void AddSurface(const Mesh& mesh, const MeshRaycaster& raycaster);
+  // The map: the surfaces added (dark grey where none), the path and the heat.
+  Image Finish() const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> s_;
+};
 
 }  // namespace mvtm

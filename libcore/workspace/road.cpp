@@ -53,6 +53,18 @@ void ReadRecord(RoadFragment& f) {
   f.s_end = j["s"][1].get<double>();
   if (j.contains("overlap") && !j["overlap"].is_number()) bad("\"overlap\" must be metres");
   f.overlap = j.value("overlap", 0.0);
+  if (!j.contains("bounds")) return;
+  const nlohmann::json& b = j["bounds"];
+  std::array<Eigen::Vector3d, 2> box;
+  for (int k = 0; k < 2; ++k)
+    for (int a = 0; a < 3; ++a) {
+      if (!b.is_array() || b.size() != 2 || !b[k].is_array() || b[k].size() != 3 ||
+          !b[k][a].is_number())
+        bad("\"bounds\" must be [[XMIN, YMIN, ZMIN], [XMAX, YMAX, ZMAX]]");
+      box[k][a] = b[k][a].get<double>();
+    }
+  if (!(box[0].array() <= box[1].array()).all()) bad("\"bounds\": a minimum above its maximum");
+  f.bounds = box;
 }
 
 }  // namespace
@@ -161,6 +173,10 @@ void WriteFragmentRecord(const RoadFragment& f) {
   j["owned_faces"] = f.owned_faces;
   j["s"] = {f.s_begin, f.s_end};
   j["overlap"] = f.overlap;
+  if (f.bounds) {
+    const auto& [lo, hi] = *f.bounds;
+    j["bounds"] = {{lo.x(), lo.y(), lo.z()}, {hi.x(), hi.y(), hi.z()}};
+  }
   WriteTextAtomic(Road::RecordPath(f.dir), [&](std::ostream& s) { s << j.dump(1) << '\n'; });
 }
 

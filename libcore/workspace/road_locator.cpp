@@ -15,6 +15,9 @@ RoadLocator::RoadLocator(const Road& road) : road_(road) {
   for (size_t k = 0; k < road.fragments().size(); ++k) {
     const RoadFragment& f = road.fragments()[k];
     models_.push_back(ReadColmapModel(Workspace(f.dir).SparseDir().string()));
+    // Poses and cameras are what a route needs: the points would grow with the road.
+    models_.back().points3D.clear();
+    for (auto& [id, im] : models_.back().images) std::vector<Point2D>().swap(im.points2D);
     for (const std::string& name : f.owned_images) {
       const ImageRecord* im = models_.back().FindImage(name);
       if (!im) throw Error(Road::RecordPath(f.dir).string(), 0, name + ": not in the model");

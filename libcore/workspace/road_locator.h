@@ -34,6 +34,8 @@ class RoadLocator {
   const Road& road() const { return road_; }
   // Road::RecordedFrames() order: each fragment's own images, fragments in Graph.txt's order.
   const std::vector<RoadRecordedFrame>& frames() const { return frames_; }
+  // A fragment's model: its cameras and images (poses), without points (no points3D, no
+  // points2D: they would grow with the road).
   const Reconstruction& model(size_t fragment) const { return models_[fragment]; }
 
   // The fragment `centre` is in. `from`: the fragment the route was in (none for its first

@@ -1,11 +1,14 @@
 #include "gazemap.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 
 #include "base/atomic_file.h"
@@ -23,6 +26,9 @@
 #include "io/trajectory.h"
 #include "run/ledger.h"
 #include "workspace/assets.h"
+#include "workspace/road.h"
+#include "workspace/road_locator.h"
+#include "workspace/road_meshes.h"
 #include "workspace/workspace.h"
 
 namespace mvtm {
@@ -109,11 +115,17 @@ std::vector<SourceView> LoadViews(const Reconstruction& rec) {
   return views;
 }
 
+// The workspace holding view i's files (the workspace, or on a road the fragment owning it).
+using WorkspaceOf = std::function<const Workspace&(size_t view)>;
+// Where the photo of an image is on disk.
+using PhotoOf = std::function<fs::path(const std::string& image)>;
+
 // Depth maps and label images read on first use, at their camera's size (workspace/assets.h:
 // depth baked at any --scale reads as ptmrender reads it).
 class MapCache {
  public:
-  MapCache(const Workspace& ws, const std::vector<SourceView>& views) : ws_(ws), views_(views) {}
+  MapCache(const std::vector<SourceView>& views, WorkspaceOf ws_of)
+      : views_(views), ws_of_(std::move(ws_of)) {}
   const Image* Depth(size_t i) { return Get(depth_, i, ReadDepthAtCamera); }
   const Image* Labels(size_t i) { return Get(labels_, i, ReadLabelsAtCamera); }
 
@@ -122,12 +134,12 @@ class MapCache {
   const Image* Get(std::map<size_t, std::unique_ptr<Image>>& m, size_t i, Reader read) {
     auto it = m.find(i);
     if (it != m.end()) return it->second.get();
-    Image img = read(ws_, views_[i].name, views_[i].camera);
+    Image img = read(ws_of_(i), views_[i].name, views_[i].camera);
     std::unique_ptr<Image> p = img.empty() ? nullptr : std::make_unique<Image>(std::move(img));
     return m.emplace(i, std::move(p)).first->second.get();
   }
-  const Workspace& ws_;
   const std::vector<SourceView>& views_;
+  WorkspaceOf ws_of_;
   std::map<size_t, std::unique_ptr<Image>> depth_, labels_;
 };
 
@@ -169,7 +181,7 @@ std::set<std::string> PicturedImages(const fs::path& sources) {
 // Asks about every output known before the fixations are mapped: the tables, the heat map and,
 // when sources.tsv is up to date (so made from these inputs), the pictures of the photos it
 // names. True when any must be made.
-bool PlanOutputs(const GazemapOptions& o, const Workspace& ws, OutputPlan& plan) {
+bool PlanOutputs(const GazemapOptions& o, const PhotoOf& photo, OutputPlan& plan) {
   const fs::path out(o.out);
   bool any = false;
   for (const char* table : {"sources.tsv", "aoi.tsv", "fixations.tsv"})
@@ -179,7 +191,7 @@ bool PlanOutputs(const GazemapOptions& o, const Workspace& ws, OutputPlan& plan)
   plan.pictured = PicturedImages(out / "sources.tsv");
   if (plan.Need(out / "sources.tsv")) return true;
   for (const std::string& image : plan.pictured)
-    any = plan.Need(PicturePath(out, image), {ws.SourceImagePath(image)}) || any;
+    any = plan.Need(PicturePath(out, image), {photo(image)}) || any;
   return any;
 }
 
@@ -216,12 +228,12 @@ void WriteTables(const fs::path& out, const std::vector<MappedFixation>& mapped,
   });
 }
 
-// What the fixations were mapped with, for the pictures.
+// What the fixations were mapped with, for the pictures: the photos, and the surfaces of the
+// heat map (the mesh, or a road's fragments one by one).
 struct MappedScene {
-  const Workspace& ws;
   const std::vector<SourceView>& views;
-  const Mesh& mesh_data;
-  const MeshRaycaster& mesh;
+  PhotoOf photo;
+  std::function<void(HeatmapPainter&)> surfaces;
   const Frames& frames;
 };
 
@@ -237,7 +249,7 @@ size_t WritePictures(const fs::path& out, const std::vector<MappedFixation>& map
   size_t written = 0;
   std::set<std::string> drawn;
   for (const auto& [view, list] : marks) {
-    const fs::path photo = scene.ws.SourceImagePath(scene.views[view].name);
+    const fs::path photo = scene.photo(scene.views[view].name);
     const fs::path picture = PicturePath(out, scene.views[view].name);
     drawn.insert(scene.views[view].name);
     if (!plan.Need(picture, {photo})) continue;
@@ -257,19 +269,19 @@ size_t WritePictures(const fs::path& out, const std::vector<MappedFixation>& map
   std::vector<Rigid3d> w2c;
   for (const Rigid3d& p : scene.frames.w2c) path.push_back(p.Centre());
   for (const SourceView& v : scene.views) w2c.push_back(v.w2c);
-  const Image map = RenderHeatmap(scene.mesh_data, scene.mesh, RecordedUp(w2c), path, heat,
-                                  {o.heatmap_size, o.heatmap_sigma});
-  WriteImage(heatmap.string(), map);
+  HeatmapPainter painter(RecordedUp(w2c), std::move(path), std::move(heat),
+                         {o.heatmap_size, o.heatmap_sigma});
+  scene.surfaces(painter);
+  WriteImage(heatmap.string(), painter.Finish());
   plan.ledger.Done(heatmap);
   return written + 1;
 }
 
-// Where gazemap's record goes: the workspace when OUT is inside it, else OUT.
-fs::path RecordRoot(const GazemapOptions& o, const Workspace& ws) {
-  const fs::path rel =
-      fs::weakly_canonical(o.out).lexically_relative(fs::weakly_canonical(ws.root()));
+// Where gazemap's record goes: the workspace (or road) when OUT is inside it, else OUT.
+fs::path RecordRoot(const GazemapOptions& o, const fs::path& root) {
+  const fs::path rel = fs::weakly_canonical(o.out).lexically_relative(fs::weakly_canonical(root));
   const bool inside = !rel.empty() && rel.begin()->string() != "..";
-  return inside ? ws.root() : fs::path(o.out);
+  return inside ? root : fs::path(o.out);
 }
 
 // Every file all outputs depend on: the sparse model, the mesh, FRAMES, GAZE, the boxes, the
@@ -323,23 +335,8 @@ IvtOptions ToIvt(const GazemapOptions& o) {
   return v;
 }
 
-// The fixations mapped onto the mesh and the photos, with their AOIs; the counts into `rep`.
-std::vector<MappedFixation> MapAndAssign(const IvtResult& ivt, const ShownFrames& shown,
-                                         const MeshRaycaster& mesh,
-                                         const std::vector<SourceView>& views,
-                                         const std::vector<AoiBox>& boxes, const Workspace& ws,
-                                         const GazemapOptions& o, GazemapReport& rep) {
-  MapCache cache(ws, views);
-  const DepthLookup depth = [&](size_t i) {
-    return o.visibility == GazeVisibility::kDepth ? cache.Depth(i) : nullptr;
-  };
-  std::vector<MappedFixation> mapped =
-      MapFixations(ivt.fixations, shown, mesh, views, depth, {o.depth_tolerance, 1e-3});
-  const bool labels = boxes.empty() && fs::is_directory(ws.LabelsDir());
-  LabelLookup label_lookup;
-  if (labels) label_lookup = [&](size_t i) { return cache.Labels(i); };
-  AssignAois(mapped, boxes, label_lookup);
-  rep.aoi_from = !boxes.empty() ? "boxes " + o.aoi_boxes : labels ? "labels" : "none";
+// The fixations' counts and the dwell table into `rep`.
+void Tally(const std::vector<MappedFixation>& mapped, GazemapReport& rep) {
   std::vector<std::string> names;
   std::vector<double> durations;
   for (const MappedFixation& m : mapped) {
@@ -350,7 +347,49 @@ std::vector<MappedFixation> MapAndAssign(const IvtResult& ivt, const ShownFrames
     durations.push_back(m.fixation.duration());
   }
   rep.aoi = DwellTable(names, durations);
+}
+
+// The fixations mapped onto `mesh` and the photos `views` (files in ws_of(view)), with their AOIs.
+std::vector<MappedFixation> MapAndAssign(const std::vector<Fixation>& fixations,
+                                         const ShownFrames& shown, const MeshRaycaster& mesh,
+                                         const std::vector<SourceView>& views,
+                                         const std::vector<AoiBox>& boxes, bool labels,
+                                         const WorkspaceOf& ws_of, const GazemapOptions& o) {
+  MapCache cache(views, ws_of);
+  const DepthLookup depth = [&](size_t i) {
+    return o.visibility == GazeVisibility::kDepth ? cache.Depth(i) : nullptr;
+  };
+  std::vector<MappedFixation> mapped =
+      MapFixations(fixations, shown, mesh, views, depth, {o.depth_tolerance, 1e-3});
+  LabelLookup label_lookup;
+  if (labels) label_lookup = [&](size_t i) { return cache.Labels(i); };
+  AssignAois(mapped, boxes, label_lookup);
   return mapped;
+}
+
+std::string AoiFrom(const std::vector<AoiBox>& boxes, bool labels, const GazemapOptions& o) {
+  return !boxes.empty() ? "boxes " + o.aoi_boxes : labels ? "labels" : "none";
+}
+
+// The I-VT fixations of the gaze on `screen`; the filter's counts into `rep`.
+IvtResult Fixate(const GazeTrace& gaze, const ScreenGeometry& screen, const GazemapOptions& o,
+                 GazemapReport& rep) {
+  IvtResult ivt = RunIvt(gaze.samples, screen, ToIvt(o));
+  rep.gaps_filled = ivt.gaps_filled;
+  rep.samples_filled = ivt.samples_filled;
+  rep.merged = ivt.merged;
+  rep.discarded = ivt.discarded;
+  rep.fixations = ivt.fixations.size();
+  return ivt;
+}
+
+// Writes the pictures and the tables the plan says must be made.
+void WriteOutputs(const std::vector<MappedFixation>& mapped, const MappedScene& scene,
+                  const GazemapOptions& o, OutputPlan& plan, GazemapReport& rep) {
+  const fs::path out(o.out);
+  CreateFolder(out);
+  if (!o.no_pictures) rep.pictures = WritePictures(out, mapped, scene, o, plan);
+  WriteTables(out, mapped, scene.views, rep.aoi, plan);
 }
 
 // Maps the gaze and writes the outputs the plan says must be made.
@@ -362,23 +401,195 @@ void MakeOutputs(const GazeTrace& gaze, const Reconstruction& rec, const std::ve
   if (rec.cameras.empty()) throw Error(ws.SparseDir().string(), 0, "the model has no cameras");
   const Camera render = rec.RenderCamera();
   const ScreenGeometry screen = MakeScreen(o, render);
-  const IvtResult ivt = RunIvt(gaze.samples, screen, ToIvt(o));
-  rep.gaps_filled = ivt.gaps_filled;
-  rep.samples_filled = ivt.samples_filled;
-  rep.merged = ivt.merged;
-  rep.discarded = ivt.discarded;
-  rep.fixations = ivt.fixations.size();
+  const IvtResult ivt = Fixate(gaze, screen, o, rep);
   const Mesh mesh_data = ReadMesh(ws.MeshPath().string());
   const MeshRaycaster mesh(mesh_data);
   const std::vector<SourceView> views = LoadViews(rec);
+  const bool labels = boxes.empty() && fs::is_directory(ws.LabelsDir());
   const std::vector<MappedFixation> mapped = MapAndAssign(
-      ivt, ShownFrames{*frames.clock, frames.w2c, render, screen}, mesh, views, boxes, ws, o, rep);
-  const fs::path out(o.out);
-  CreateFolder(out);
-  if (!o.no_pictures)
-    rep.pictures =
-        WritePictures(out, mapped, MappedScene{ws, views, mesh_data, mesh, frames}, o, plan);
-  WriteTables(out, mapped, views, rep.aoi, plan);
+      ivt.fixations, ShownFrames{*frames.clock, frames.w2c, render, screen}, mesh, views, boxes,
+      labels, [&](size_t) -> const Workspace& { return ws; }, o);
+  rep.aoi_from = AoiFrom(boxes, labels, o);
+  Tally(mapped, rep);
+  const MappedScene scene{
+      views, [&](const std::string& image) { return ws.SourceImagePath(image); },
+      [&](HeatmapPainter& painter) { painter.AddSurface(mesh_data, mesh); }, frames};
+  WriteOutputs(mapped, scene, o, plan, rep);
+}
+
+// ---- a road (ROAD/Graph.txt): fragments streamed by the graph --------------------------------
+
+// The road's photos: every fragment's own images, each once, with the fragment holding its files.
+struct RoadPhotos {
+  std::vector<Workspace> fragments;        // one per fragment of the road
+  std::vector<SourceView> views;           // RoadLocator::frames() order
+  std::vector<size_t> owner;               // the fragment of each view
+  std::vector<std::vector<size_t>> owned;  // each fragment's views
+
+  explicit RoadPhotos(const RoadLocator& where) : owned(where.road().fragments().size()) {
+    for (const RoadFragment& f : where.road().fragments()) fragments.emplace_back(f.dir);
+    for (const RoadRecordedFrame& f : where.frames()) {
+      const ImageRecord& im = *f.image;
+      const Camera& cam = where.model(f.home).cameras.at(im.camera_id);
+      cam.RequireUndistorted();
+      owned[f.home].push_back(views.size());
+      owner.push_back(f.home);
+      views.push_back({im.name, cam,
+                       Rigid3d(NormalizedQuaternion(im.world_to_camera.q), im.world_to_camera.t)});
+    }
+  }
+  bool HasLabels() const {
+    return std::any_of(fragments.begin(), fragments.end(),
+                       [](const Workspace& w) { return fs::is_directory(w.LabelsDir()); });
+  }
+};
+
+// Where each of the road's photos is: in the fragment that owns it (an image the road does not
+// hold: a path that does not exist).
+PhotoOf RoadPhotoOf(const Road& road) {
+  auto where = std::make_shared<std::map<std::string, fs::path>>();
+  for (const RoadFragment& f : road.fragments()) {
+    const Workspace ws(f.dir);
+    for (const std::string& name : f.owned_images) (*where)[name] = ws.SourceImagePath(name);
+  }
+  return [where, root = road.root()](const std::string& image) {
+    const auto it = where->find(image);
+    return it == where->end() ? root / image : it->second;
+  };
+}
+
+// The fragment each frame's camera is in, walking the graph in the frames' order.
+std::vector<size_t> FrameHomes(const Frames& frames, const RoadLocator& where,
+                               const GazemapOptions& o) {
+  std::vector<size_t> homes;
+  std::optional<size_t> home;
+  for (size_t i = 0; i < frames.w2c.size(); ++i) {
+    home = where.Locate(frames.w2c[i].Centre(), home, o.frames + ": pose " + std::to_string(i + 1));
+    homes.push_back(*home);
+  }
+  return homes;
+}
+
+// Runs of consecutive fixations whose frame's camera is in the same fragment.
+struct FixationGroup {
+  size_t home = 0, begin = 0, end = 0;
+};
+
+std::vector<FixationGroup> GroupByHome(const std::vector<Fixation>& fixations,
+                                       const FrameClock& clock, const std::vector<size_t>& homes) {
+  std::vector<FixationGroup> groups;
+  for (size_t i = 0; i < fixations.size(); ++i) {
+    const auto frame = clock.FrameAt((fixations[i].start + fixations[i].end) / 2);
+    // A middle outside the frames stays with its group: MapFixations reports it.
+    const size_t home = frame ? homes[*frame] : groups.empty() ? homes.front() : groups.back().home;
+    if (groups.empty() || groups.back().home != home) groups.push_back({home, i, i});
+    groups.back().end = i + 1;
+  }
+  return groups;
+}
+
+struct RoadRun {
+  const Road& road;
+  const RoadLocator& where;
+  const RoadPhotos& photos;
+  RoadMeshes& meshes;
+};
+
+// Maps each group's fixations on the mesh and photos of its fragment and its neighbours; the
+// mesh of the next group is read on a second thread meanwhile.
+std::vector<MappedFixation> MapOnRoad(const IvtResult& ivt, const Frames& frames,
+                                      const ScreenGeometry& screen,
+                                      const std::vector<size_t>& homes,
+                                      const std::vector<AoiBox>& boxes, bool labels, RoadRun& run,
+                                      const GazemapOptions& o) {
+  const std::vector<FixationGroup> groups = GroupByHome(ivt.fixations, *frames.clock, homes);
+  std::vector<MappedFixation> mapped;
+  for (size_t g = 0; g < groups.size(); ++g) {
+    const std::vector<size_t> resident = run.road.Resident(groups[g].home);
+    const Mesh mesh =
+        run.meshes.Union(resident, g + 1 < groups.size() ? run.road.Resident(groups[g + 1].home)
+                                                         : std::vector<size_t>{});
+    const MeshRaycaster raycaster(mesh);
+    std::vector<SourceView> views;
+    std::vector<size_t> global;
+    for (size_t k : resident)
+      for (size_t v : run.photos.owned[k])
+        views.push_back(run.photos.views[v]), global.push_back(v);
+    const Camera render = run.where.model(groups[g].home).RenderCamera();
+    const std::vector<Fixation> part(ivt.fixations.begin() + groups[g].begin,
+                                     ivt.fixations.begin() + groups[g].end);
+    std::vector<MappedFixation> m = MapAndAssign(
+        part, ShownFrames{*frames.clock, frames.w2c, render, screen}, raycaster, views, boxes,
+        labels,
+        [&](size_t i) -> const Workspace& {
+          return run.photos.fragments[run.photos.owner[global[i]]];
+        },
+        o);
+    for (MappedFixation& f : m) {
+      for (SourceHit& h : f.sources) h.view = global[h.view];
+      mapped.push_back(std::move(f));
+    }
+  }
+  return mapped;
+}
+
+// The heat map's surfaces on a road: every fragment whose own triangles lie under the map (by
+// the bounds in its fragment.json; one without bounds is read to find out), read one at a time,
+// the next on a second thread.
+void PaintRoad(HeatmapPainter& painter, RoadRun& run) {
+  std::vector<size_t> under;
+  for (size_t k = 0; k < run.road.fragments().size(); ++k) {
+    const RoadFragment& f = run.road.fragments()[k];
+    if (f.owned_faces > 0 && (!f.bounds || painter.CoversBox((*f.bounds)[0], (*f.bounds)[1])))
+      under.push_back(k);
+  }
+  for (size_t i = 0; i < under.size(); ++i) {
+    const Mesh mesh =
+        run.meshes.Union({under[i]}, i + 1 < under.size() ? std::vector<size_t>{under[i + 1]}
+                                                          : std::vector<size_t>{});
+    if (!mesh.faces.empty()) painter.AddSurface(mesh, MeshRaycaster(mesh));
+  }
+}
+
+void MakeRoadOutputs(const GazeTrace& gaze, const Road& road, const std::vector<AoiBox>& boxes,
+                     const PhotoOf& photo, const GazemapOptions& o, OutputPlan& plan,
+                     GazemapReport& rep) {
+  const RoadLocator where(road);
+  const RoadPhotos photos(where);
+  const Frames frames = LoadFrames(o);
+  CheckGazeTimes(gaze, *frames.clock, o);
+  const std::vector<size_t> homes = FrameHomes(frames, where, o);
+  const ScreenGeometry screen = MakeScreen(o, where.model(homes.front()).RenderCamera());
+  const IvtResult ivt = Fixate(gaze, screen, o, rep);
+  RoadMeshes meshes(road);
+  RoadRun run{road, where, photos, meshes};
+  const bool labels = boxes.empty() && photos.HasLabels();
+  const std::vector<MappedFixation> mapped =
+      MapOnRoad(ivt, frames, screen, homes, boxes, labels, run, o);
+  rep.aoi_from = AoiFrom(boxes, labels, o);
+  Tally(mapped, rep);
+  const MappedScene scene{photos.views, photo,
+                          [&](HeatmapPainter& painter) { PaintRoad(painter, run); }, frames};
+  WriteOutputs(mapped, scene, o, plan, rep);
+}
+
+// Every file a road's outputs depend on: Graph.txt, FRAMES, GAZE, the boxes, and each fragment's
+// model, mesh, fragment.json, depth maps (--visibility depth) and label images (without boxes).
+std::vector<fs::path> RoadGazeInputs(const GazemapOptions& o, const Road& road) {
+  std::vector<fs::path> inputs{road.GraphPath()};
+  for (const std::string& p : {o.frames, o.gaze, o.aoi_boxes})
+    if (!p.empty()) inputs.emplace_back(p);
+  for (const RoadFragment& f : road.fragments()) {
+    const Workspace ws(f.dir);
+    for (fs::path& p : ws.SparseModelFiles()) inputs.push_back(std::move(p));
+    inputs.push_back(ws.MeshPath());
+    inputs.push_back(Road::RecordPath(f.dir));
+    for (const std::string& name : f.owned_images) {
+      if (o.visibility == GazeVisibility::kDepth) inputs.push_back(ws.DepthPath(name));
+      if (o.aoi_boxes.empty()) inputs.push_back(ws.LabelPath(name));
+    }
+  }
+  return inputs;
 }
 
 }  // namespace
@@ -393,7 +604,9 @@ std::string FormatDwellTable(const std::vector<DwellRow>& rows) {
 
 OptionTable DeclareOptions(GazemapOptions& o) {
   OptionTable t("gazemap");
-  t.Positional("WS", &o.workspace, "Workspace folder (sparse/, mesh.ply; depth/, labels/ used)")
+  t.Positional("WS", &o.workspace,
+               "Workspace folder (sparse/, mesh.ply; depth/, labels/ used), or a road "
+               "(ROAD/Graph.txt): streamed fragment by fragment")
       .Dir();
   t.Positional("FRAMES", &o.frames,
                "The poses the frames were rendered at (ptmrender --poses: TUM, whose timestamps "
@@ -468,14 +681,30 @@ GazemapReport RunGazemap(const GazemapOptions& o) {
   rep.invalid_nonfinite = gaze.invalid_nonfinite;
   const std::vector<AoiBox> boxes =
       o.aoi_boxes.empty() ? std::vector<AoiBox>{} : ReadAoiBoxes(o.aoi_boxes);
+  GazemapOptions resolved = o;
+  const OptionTable table = DeclareOptions(resolved);
+  if (Road::IsRoad(o.workspace)) {
+    const Road road(o.workspace);
+    Ledger ledger(RecordRoot(o, road.root()), "gazemap", table, RoadGazeInputs(o, road),
+                  road.root());
+    OutputPlan plan{ledger, o.force, {}, {}};
+    const PhotoOf photo = RoadPhotoOf(road);
+    if (!PlanOutputs(o, photo, plan)) {
+      rep.up_to_date = true;
+      return rep;
+    }
+    MakeRoadOutputs(gaze, road, boxes, photo, o, plan, rep);
+    ledger.Write();
+    rep.why = ledger.Summary();
+    return rep;
+  }
   const Workspace ws(o.workspace);
   ws.Require("gazemap", {WsItem::kSparse, WsItem::kMesh});
   const Reconstruction rec = ReadColmapModel(ws.SparseDir().string());
-  GazemapOptions resolved = o;
-  const OptionTable table = DeclareOptions(resolved);
-  Ledger ledger(RecordRoot(o, ws), "gazemap", table, GazeInputs(o, ws, rec), ws.root());
+  Ledger ledger(RecordRoot(o, ws.root()), "gazemap", table, GazeInputs(o, ws, rec), ws.root());
   OutputPlan plan{ledger, o.force, {}, {}};
-  if (!PlanOutputs(o, ws, plan)) {
+  if (!PlanOutputs(
+          o, [&](const std::string& image) { return ws.SourceImagePath(image); }, plan)) {
     rep.up_to_date = true;
     return rep;
   }

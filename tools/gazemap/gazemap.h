@@ -17,6 +17,10 @@
 // checked are those of the photos sources.tsv names, and those of them a new mapping draws on no
 // more are removed (with pictures on). The record (run/ledger.h) is OUT/provenance/gazemap.json,
 // or WS/provenance/gazemap.json when OUT is inside the workspace.
+// A road (ROAD/Graph.txt, workspace/road.h) in place of a workspace: FRAMES walks the graph as
+// ptmrender --poses does (workspace/road_locator.h); each fixation is mapped on the own triangles
+// and own photos of the fragment its frame's camera is in and of its neighbours (read ahead on a
+// second thread, the others dropped); the heat map paints every fragment, one at a time.
 // Conventions: poses of record are COLMAP's; double precision throughout; times in seconds in the
 // files, the I-VT options in milliseconds (as Tobii states them).
 #pragma once

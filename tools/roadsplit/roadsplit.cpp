@@ -286,6 +286,13 @@ void SplitMesh(const RoadSplitOptions& o, const Workspace& ws, const fs::path& t
         out.faces.push_back(
             {vertex(mesh.faces[f][0]), vertex(mesh.faces[f][1]), vertex(mesh.faces[f][2])});
     p.fragments[k].owned_faces = own[k].size();
+    if (!own[k].empty()) {
+      std::array<Eigen::Vector3d, 2> box{out.vertices[0], out.vertices[0]};
+      for (size_t f = 0; f < own[k].size(); ++f)
+        for (uint32_t v : out.faces[f])
+          box[0] = box[0].cwiseMin(out.vertices[v]), box[1] = box[1].cwiseMax(out.vertices[v]);
+      p.fragments[k].bounds = box;
+    }
     if (out.faces.empty()) continue;
     const Workspace dst(tmp / "Models" / p.fragments[k].id);
     WriteMesh((dst.root() / "mesh.ply").string(), out);
