@@ -53,6 +53,10 @@ void ReadRecord(RoadFragment& f) {
   f.s_end = j["s"][1].get<double>();
   if (j.contains("overlap") && !j["overlap"].is_number()) bad("\"overlap\" must be metres");
   f.overlap = j.value("overlap", 0.0);
+  if (j.contains("mesh_faces")) {
+    if (!j["mesh_faces"].is_number_unsigned()) bad("\"mesh_faces\" must be a count");
+    f.mesh_faces = j["mesh_faces"].get<size_t>();
+  }
   if (!j.contains("bounds")) return;
   const nlohmann::json& b = j["bounds"];
   std::array<Eigen::Vector3d, 2> box;
@@ -173,6 +177,7 @@ void WriteFragmentRecord(const RoadFragment& f) {
   j["owned_faces"] = f.owned_faces;
   j["s"] = {f.s_begin, f.s_end};
   j["overlap"] = f.overlap;
+  if (f.mesh_faces) j["mesh_faces"] = *f.mesh_faces;
   if (f.bounds) {
     const auto& [lo, hi] = *f.bounds;
     j["bounds"] = {{lo.x(), lo.y(), lo.z()}, {hi.x(), hi.y(), hi.z()}};

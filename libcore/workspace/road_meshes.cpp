@@ -51,6 +51,12 @@ std::shared_ptr<const Mesh> RoadMeshes::Own(size_t k) const {
   if (f.owned_faces == 0) return m;
   const Workspace ws(f.dir);
   *m = ReadMesh(ws.MeshPath().string());
+  if (f.mesh_faces && m->faces.size() != *f.mesh_faces)
+    throw Error(ws.MeshPath().string(), 0,
+                "has " + std::to_string(m->faces.size()) + " triangles, not the " +
+                    std::to_string(*f.mesh_faces) +
+                    " roadsplit wrote: the mesh was replaced after the split (its first " +
+                    "owned_faces are no longer the fragment's own); split the workspace again");
   if (m->faces.size() < f.owned_faces)
     throw Error(Road::RecordPath(f.dir).string(), 0,
                 "owned_faces " + std::to_string(f.owned_faces) + " exceeds the " +

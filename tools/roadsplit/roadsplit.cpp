@@ -1,6 +1,7 @@
 #include "roadsplit.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <set>
@@ -150,22 +151,67 @@ std::string FragmentName(size_t k) {
   return std::string(n.size() < 3 ? 3 - n.size() : 0, '0') + n;
 }
 
-// Neighbours along the path, then junctions: record images within the radius of a record image
-// of a stretch more than a fragment and two overlaps away. Returns the junction count.
+// Links fragments a and b at `image` (both hold it) unless they are linked already.
+bool Link(Plan& p, const std::vector<const ImageRecord*>& images, size_t a, size_t b,
+          size_t image) {
+  for (const RoadLink& l : p.fragments[a].links)
+    if (l.to == b) return false;
+  p.fragments[a].links.push_back({b, images[image]->name});
+  p.fragments[b].links.push_back({a, images[image]->name});
+  p.members[a].insert(image);
+  p.members[b].insert(image);
+  return true;
+}
+
+// Junctions: record images within the radius of a record image of a stretch more than a
+// fragment and two overlaps away. The images are hashed by cells of the radius: each meets only
+// those in the 27 cells around it, in the order of the path (as a scan of every pair would, in
+// linear time). Returns the junction count.
+size_t LinkJunctions(const RoadSplitOptions& o, const std::vector<const ImageRecord*>& images,
+                     Plan& p) {
+  std::map<const ImageRecord*, size_t> index;
+  for (size_t i = 0; i < images.size(); ++i) index[images[i]] = i;
+  const double apart = o.length + 2 * o.overlap;
+  auto cell = [&](size_t r) {
+    const Eigen::Vector3d q =
+        (p.record[r]->world_to_camera.Centre() / o.junction_radius).array().floor();
+    return std::array<int64_t, 3>{int64_t(q.x()), int64_t(q.y()), int64_t(q.z())};
+  };
+  std::map<std::array<int64_t, 3>, std::vector<size_t>> cells;
+  for (size_t r = 0; r < p.record.size(); ++r) cells[cell(r)].push_back(r);
+  size_t junctions = 0;
+  for (size_t a = 0; a < p.record.size(); ++a) {
+    std::vector<size_t> near;
+    const std::array<int64_t, 3> at = cell(a);
+    for (int64_t dx = -1; dx <= 1; ++dx)
+      for (int64_t dy = -1; dy <= 1; ++dy)
+        for (int64_t dz = -1; dz <= 1; ++dz) {
+          const auto it = cells.find({at[0] + dx, at[1] + dy, at[2] + dz});
+          if (it == cells.end()) continue;
+          for (size_t b : it->second)
+            if (b > a) near.push_back(b);
+        }
+    std::sort(near.begin(), near.end());
+    for (size_t b : near) {
+      if (p.path->ArcLength(b) - p.path->ArcLength(a) <= apart) continue;
+      const Eigen::Vector3d ca = p.record[a]->world_to_camera.Centre();
+      const Eigen::Vector3d cb = p.record[b]->world_to_camera.Centre();
+      if ((ca - cb).norm() > o.junction_radius) continue;
+      const size_t ia = index[p.record[a]], ib = index[p.record[b]];
+      const size_t fa = p.owner[ia], fb = p.owner[ib];
+      if (fa == fb) continue;
+      p.members[fa].insert(ib);
+      p.members[fb].insert(ia);
+      if (Link(p, images, fa, fb, ib)) ++junctions;
+    }
+  }
+  return junctions;
+}
+
+// Neighbours along the path, then junctions (LinkJunctions). Returns the junction count.
 size_t LinkFragments(const RoadSplitOptions& o, const std::vector<const ImageRecord*>& images,
                      Plan& p) {
   const size_t n = p.bounds.size() - 1;
-  std::map<const ImageRecord*, size_t> index;
-  for (size_t i = 0; i < images.size(); ++i) index[images[i]] = i;
-  auto link = [&](size_t a, size_t b, size_t image) {
-    for (const RoadLink& l : p.fragments[a].links)
-      if (l.to == b) return false;
-    p.fragments[a].links.push_back({b, images[image]->name});
-    p.fragments[b].links.push_back({a, images[image]->name});
-    p.members[a].insert(image);
-    p.members[b].insert(image);
-    return true;
-  };
   for (size_t k = 0; k + 1 < n; ++k) {
     // The pose where a drive passes on: the first image the next fragment owns.
     size_t first = images.size();
@@ -177,26 +223,9 @@ size_t LinkFragments(const RoadSplitOptions& o, const std::vector<const ImageRec
         if (p.owner[i] == k + 1) first = i;
     if (first == images.size())
       throw Error(o.workspace, 0, "fragment " + FragmentName(k + 1) + " owns no image");
-    link(k, k + 1, first);
+    Link(p, images, k, k + 1, first);
   }
-  size_t junctions = 0;
-  if (o.junction_radius <= 0) return 0;
-  const double apart = o.length + 2 * o.overlap;
-  for (size_t a = 0; a < p.record.size(); ++a)
-    for (size_t b = a + 1; b < p.record.size(); ++b) {
-      const double ds = p.path->ArcLength(b) - p.path->ArcLength(a);
-      if (ds <= apart) continue;
-      const Eigen::Vector3d ca = p.record[a]->world_to_camera.Centre();
-      const Eigen::Vector3d cb = p.record[b]->world_to_camera.Centre();
-      if ((ca - cb).norm() > o.junction_radius) continue;
-      const size_t ia = index[p.record[a]], ib = index[p.record[b]];
-      const size_t fa = p.owner[ia], fb = p.owner[ib];
-      if (fa == fb) continue;
-      p.members[fa].insert(ib);
-      p.members[fb].insert(ia);
-      if (link(fa, fb, ib)) ++junctions;
-    }
-  return junctions;
+  return o.junction_radius > 0 ? LinkJunctions(o, images, p) : 0;
 }
 
 // The fragment's model: its images, the cameras they use, the points seen by two of them.
@@ -286,6 +315,7 @@ void SplitMesh(const RoadSplitOptions& o, const Workspace& ws, const fs::path& t
         out.faces.push_back(
             {vertex(mesh.faces[f][0]), vertex(mesh.faces[f][1]), vertex(mesh.faces[f][2])});
     p.fragments[k].owned_faces = own[k].size();
+    p.fragments[k].mesh_faces = out.faces.size();
     if (!own[k].empty()) {
       std::array<Eigen::Vector3d, 2> box{out.vertices[0], out.vertices[0]};
       for (size_t f = 0; f < own[k].size(); ++f)
