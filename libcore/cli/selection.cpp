@@ -58,4 +58,12 @@ std::vector<size_t> Selection::Apply(size_t n) const {
   return out;
 }
 
+std::vector<size_t> Selection::ApplyBlocks(size_t n) const {
+  if (shard_count == 1) return Apply(n);
+  const size_t count = static_cast<size_t>(shard_count), index = static_cast<size_t>(shard_index);
+  std::vector<size_t> out;
+  for (size_t i = index * n / count; i < (index + 1) * n / count; ++i) out.push_back(i);
+  return out;
+}
+
 }  // namespace mvtm

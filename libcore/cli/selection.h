@@ -3,7 +3,9 @@
 // Items are indexed 0..n-1 in a fixed, documented order (each tool states its order). A range
 // "A:B" is half-open like Python slices (A or B may be empty; negatives count from the end).
 // A shard "I/N" (0 <= I < N) takes items i with i % N == I, so N shards partition the items and
-// the union of their outputs is byte-identical to one run.
+// the union of their outputs is byte-identical to one run. Where items are worth keeping
+// together (a road's frames, fragment by fragment), ApplyBlocks gives shard I the I-th of N
+// contiguous blocks instead: N shards still partition the items.
 #pragma once
 
 #include <cstddef>
@@ -26,6 +28,8 @@ struct Selection {
 
   // The selected indices of n items, ascending.
   std::vector<size_t> Apply(size_t n) const;
+  // As Apply, but a shard I/N takes items [floor(I·n/N), floor((I+1)·n/N)).
+  std::vector<size_t> ApplyBlocks(size_t n) const;
 };
 
 }  // namespace mvtm

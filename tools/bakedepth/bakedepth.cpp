@@ -66,13 +66,14 @@ void BakeImages(const BakeDepthOptions& o, const Workspace& ws, const Reconstruc
 
 // A road: each fragment's images (its own and its copies of the neighbours') baked against the
 // road's mesh around it (its own triangles and its neighbours'), fragment by fragment, the next
-// fragment's meshes read while one bakes. --frames and --shard count the road's recorded frames;
-// a frame chosen is baked in every fragment that holds it.
+// fragment's meshes read while one bakes. --frames and --shard count the road's recorded frames
+// (a shard is a contiguous run of them); a frame chosen is baked in every fragment that holds it.
 BakeDepthReport RunRoadBake(const BakeDepthOptions& o) {
   const Road road(o.workspace);
   const auto frames = road.RecordedFrames();
   std::set<std::string> names;
-  for (size_t i : o.Select().Apply(frames.size())) names.insert(frames[i].second);
+  // Shards are contiguous runs of the road's frames: each reads a few fragments, not all.
+  for (size_t i : o.Select().ApplyBlocks(frames.size())) names.insert(frames[i].second);
   BakeDepthReport rep;
   rep.selected = names.size();
   BakeDepthOptions resolved = o;

@@ -544,7 +544,8 @@ void RenderRoadGroup(RoadRun& run, const RoadGroup& g, const std::vector<size_t>
 PtmRenderReport RunRoadRender(const PtmRenderOptions& o) {
   const Road road(o.workspace);
   const std::vector<RoadFrameJob> frames = RoadFrames(o, road);
-  const std::vector<size_t> chosen = o.Select().Apply(frames.size());
+  // Shards are contiguous runs of the road's frames: each reads a few fragments, not all.
+  const std::vector<size_t> chosen = o.Select().ApplyBlocks(frames.size());
   PtmRenderReport rep;
   rep.frames = chosen.size();
   std::vector<fs::path> inputs{road.GraphPath()};

@@ -24,6 +24,23 @@ TEST(Selection, ShardsPartition) {
   }
 }
 
+TEST(Selection, BlocksPartitionInOrder) {
+  for (size_t n : {0u, 1u, 7u, 100u}) {
+    for (int k : {1, 2, 3, 4, 9}) {
+      size_t expect = 0;
+      for (int i = 0; i < k; ++i) {
+        const std::vector<size_t> block =
+            Selection::Shard(std::to_string(i) + "/" + std::to_string(k)).ApplyBlocks(n);
+        // Shard i of k holds floor(i·n/k) .. floor((i+1)·n/k) - 1, each after the last.
+        EXPECT_EQ(block.size(), (i + 1) * n / k - i * n / k);
+        for (size_t x : block) EXPECT_EQ(x, expect++);
+      }
+      EXPECT_EQ(expect, n);
+    }
+  }
+  EXPECT_EQ(Selection::Frames("2:5").ApplyBlocks(9), Selection::Frames("2:5").Apply(9));
+}
+
 TEST(Selection, RangesLikeSlices) {
   EXPECT_EQ(Selection::Frames("2:5").Apply(10), (std::vector<size_t>{2, 3, 4}));
   EXPECT_EQ(Selection::Frames("8:").Apply(10), (std::vector<size_t>{8, 9}));
