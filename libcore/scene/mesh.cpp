@@ -27,4 +27,24 @@ void Mesh::Bounds(Eigen::Vector3d& lo, Eigen::Vector3d& hi) const {
   }
 }
 
+Mesh SubMesh(const Mesh& m, const std::vector<uint32_t>& faces) {
+  Mesh out;
+  std::vector<int64_t> remap(m.vertices.size(), -1);
+  for (uint32_t f : faces) {
+    std::array<uint32_t, 3> t{};
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = m.faces[f][static_cast<size_t>(k)];
+      if (remap[v] < 0) {
+        remap[v] = static_cast<int64_t>(out.vertices.size());
+        out.vertices.push_back(m.vertices[v]);
+        if (m.has_normals()) out.normals.push_back(m.normals[v]);
+        if (m.has_colors()) out.colors.push_back(m.colors[v]);
+      }
+      t[static_cast<size_t>(k)] = static_cast<uint32_t>(remap[v]);
+    }
+    out.faces.push_back(t);
+  }
+  return out;
+}
+
 }  // namespace mvtm

@@ -31,4 +31,8 @@ struct Mesh {
   void Bounds(Eigen::Vector3d& lo, Eigen::Vector3d& hi) const;
 };
 
+// The faces `faces` of `m` (indices into m.faces, in that order) with the vertices they use, in
+// the order they are first used; normals and colours come along when `m` has them.
+Mesh SubMesh(const Mesh& m, const std::vector<uint32_t>& faces);
+
 }  // namespace mvtm

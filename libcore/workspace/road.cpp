@@ -131,6 +131,12 @@ Road::Road(fs::path root) : root_(std::move(root)) {
                               " back (links are mutual)");
 }
 
+size_t Road::FragmentAt(double s) const {
+  size_t k = 0;
+  while (k + 1 < fragments_.size() && s >= fragments_[k + 1].s_begin) ++k;
+  return k;
+}
+
 bool Road::Adjacent(size_t a, size_t b) const {
   for (const RoadLink& l : fragments_[a].links)
     if (l.to == b) return true;
@@ -138,7 +144,7 @@ bool Road::Adjacent(size_t a, size_t b) const {
 }
 
 std::vector<fs::path> Road::ResidentFiles(size_t home) const {
-  std::vector<fs::path> out;
+  std::vector<fs::path> out{PathFileOf(root_)};  // which triangles of a new mesh are own
   for (size_t k : Resident(home)) {
     out.push_back(Workspace(fragments_[k].dir).MeshPath());
     out.push_back(RecordPath(fragments_[k].dir));
@@ -169,6 +175,39 @@ void WriteRoadGraph(const fs::path& root, const std::vector<RoadFragment>& fragm
       s << '\n';
     }
   });
+}
+
+void WriteRoadPath(const fs::path& root, const RoadPath& path) {
+  WriteTextAtomic(Road::PathFileOf(root), [&](std::ostream& s) {
+    s << "# mvtm road path of record (man 5 mvtm-workspace): step, then NAME X Y Z in order\n";
+    s << "step " << FormatDouble(path.step) << '\n';
+    for (size_t i = 0; i < path.names.size(); ++i)
+      s << path.names[i] << ' ' << FormatDouble(path.centres[i].x()) << ' '
+        << FormatDouble(path.centres[i].y()) << ' ' << FormatDouble(path.centres[i].z()) << '\n';
+  });
+}
+
+RoadPath ReadRoadPath(const fs::path& root) {
+  const fs::path p = Road::PathFileOf(root);
+  if (!fs::is_regular_file(p))
+    throw Error(p.string(), 0, "missing (a road made by an older roadsplit: split it again)");
+  LineReader r(p.string());
+  RoadPath path;
+  for (std::string line; r.Next(line);) {
+    const auto f = SplitBlank(line);
+    if (path.step == 0) {
+      if (f.size() != 2 || f[0] != "step") r.Fail("expected 'step STEP' first");
+      path.step = ParseDouble(f[1], r, "step");
+      if (!(path.step > 0)) r.Fail("step must be > 0");
+      continue;
+    }
+    if (f.size() != 4) r.Fail("expected NAME X Y Z, found " + std::to_string(f.size()) + " fields");
+    path.names.emplace_back(f[0]);
+    path.centres.emplace_back(ParseDouble(f[1], r, "X"), ParseDouble(f[2], r, "Y"),
+                              ParseDouble(f[3], r, "Z"));
+  }
+  if (path.names.size() < 2) throw Error(p.string(), 0, "a path needs two images or more");
+  return path;
 }
 
 void WriteFragmentRecord(const RoadFragment& f) {

@@ -13,6 +13,10 @@
 // Neighbours are symmetric (each link is listed on both nodes' lines); a junction is a node
 // with more than two neighbours.
 //
+// path.txt: the path of record roadsplit measured the arc lengths along ("s" below): '#'
+// comments, then "step STEP" (its PathIndex's sampling step), then "NAME X Y Z" per image in
+// path order (camera centres, %.17g).
+//
 // fragment.json: {"images": [NAME, ...], "owned_faces": N, "s": [BEGIN, END], "overlap": M,
 //                 "mesh_faces": T, "bounds": [[XMIN, YMIN, ZMIN], [XMAX, YMAX, ZMAX]]}
 //   images       the images the fragment owns (each image of the road is owned by exactly one
@@ -22,7 +26,8 @@
 //                the union of every fragment's own triangles is the road's mesh, each once
 //   s, overlap   arc length (metres) of its own stretch of the path of record, and the overlap
 //   mesh_faces   the triangles of the mesh.ply roadsplit wrote, own and copies (optional): a
-//                mesh replaced since (roadmesh run on the fragment) is refused, not misread
+//                mesh made anew since (roadmesh run on the fragment) owns the triangles over
+//                its stretch of path.txt instead (workspace/road_meshes.h)
 //   bounds       the axis-aligned box of its own triangles (optional: absent when it owns none)
 #pragma once
 
@@ -37,6 +42,12 @@
 namespace mvtm {
 
 namespace fs = std::filesystem;
+
+struct RoadPath {
+  double step = 0;  // PathIndex sampling step
+  std::vector<std::string> names;
+  std::vector<Eigen::Vector3d> centres;
+};
 
 struct RoadLink {
   size_t to = 0;     // fragment index
@@ -65,6 +76,7 @@ class Road {
   static fs::path RecordPath(const fs::path& fragment_dir) {
     return fragment_dir / "fragment.json";
   }
+  static fs::path PathFileOf(const fs::path& root) { return root / "path.txt"; }
 
   // Reads and checks ROAD/Graph.txt and every fragment.json. Throws Error("FILE:LINE: what")
   // for a malformed line, a fragment named twice, a neighbour that is not a node of the graph,
@@ -79,7 +91,10 @@ class Road {
   // the order of its links.
   std::vector<size_t> Resident(size_t home) const;
   bool Adjacent(size_t a, size_t b) const;
-  // The files the road around `home` is made of: each resident fragment's mesh and
+  // The fragment whose own stretch [s_begin, s_end) holds arc length s (the first and the last
+  // fragment in Graph.txt's order reach on without end), as roadsplit assigns triangles.
+  size_t FragmentAt(double s) const;
+  // The files the road around `home` is made of: path.txt, each resident fragment's mesh and
   // fragment.json (what a render or a depth map made there depends on).
   std::vector<fs::path> ResidentFiles(size_t home) const;
   // The road's recorded frames in order (what --frames counts on a road): each fragment's own
@@ -93,6 +108,10 @@ class Road {
 
 // Writes ROAD/Graph.txt atomically from the fragments' ids and links.
 void WriteRoadGraph(const fs::path& root, const std::vector<RoadFragment>& fragments);
+// Writes ROAD/path.txt atomically; reads it (Error "FILE:LINE: what"; a road made before
+// path.txt existed: Error naming the missing file).
+void WriteRoadPath(const fs::path& root, const RoadPath& path);
+RoadPath ReadRoadPath(const fs::path& root);
 // Writes FRAGMENT/fragment.json atomically.
 void WriteFragmentRecord(const RoadFragment& fragment);
 

@@ -1,12 +1,47 @@
 #include "workspace/road_meshes.h"
 
 #include <algorithm>
+#include <fstream>
+#include <string>
 
 #include "base/error.h"
+#include "index/path_index.h"
 #include "io/mesh_io.h"
 #include "workspace/workspace.h"
 
 namespace mvtm {
+
+RoadMeshes::RoadMeshes(const Road& road) : road_(road) {}
+
+RoadMeshes::~RoadMeshes() {
+  held_.clear();  // (the reads use path_)
+}
+
+const PathIndex& RoadMeshes::Path() const {
+  std::call_once(path_once_, [this] {
+    const RoadPath p = ReadRoadPath(road_.root());
+    path_ = std::make_unique<PathIndex>(p.centres, p.step);
+  });
+  return *path_;
+}
+
+namespace {
+
+// The triangle count a PLY header declares ("element face N"), or -1 when it declares none.
+long PlyFaceCount(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  for (std::string line; std::getline(in, line) && line.rfind("end_header", 0) != 0;)
+    if (line.rfind("element face ", 0) == 0) return std::stol(line.substr(13));
+  return -1;
+}
+
+}  // namespace
+
+bool RoadMeshes::AsSplit(size_t k) const {
+  const RoadFragment& f = road_.fragments()[k];
+  if (!f.mesh_faces) return true;
+  return PlyFaceCount(Workspace(f.dir).MeshPath()) == static_cast<long>(*f.mesh_faces);
+}
 
 void RoadMeshes::Prefetch(const std::vector<size_t>& ks) {
   for (size_t k : ks)
@@ -48,15 +83,21 @@ Mesh RoadMeshes::Union(const std::vector<size_t>& ks, const std::vector<size_t>&
 std::shared_ptr<const Mesh> RoadMeshes::Own(size_t k) const {
   const RoadFragment& f = road_.fragments()[k];
   auto m = std::make_shared<Mesh>();
-  if (f.owned_faces == 0) return m;
   const Workspace ws(f.dir);
+  if (f.owned_faces == 0 && !fs::exists(ws.MeshPath())) return m;
   *m = ReadMesh(ws.MeshPath().string());
-  if (f.mesh_faces && m->faces.size() != *f.mesh_faces)
-    throw Error(ws.MeshPath().string(), 0,
-                "has " + std::to_string(m->faces.size()) + " triangles, not the " +
-                    std::to_string(*f.mesh_faces) +
-                    " roadsplit wrote: the mesh was replaced after the split (its first " +
-                    "owned_faces are no longer the fragment's own); split the workspace again");
+  if (f.mesh_faces && m->faces.size() != *f.mesh_faces) {
+    // Made anew in the fragment: its own triangles are those over its stretch of the path.
+    const PathIndex& path = Path();
+    std::vector<uint32_t> own;
+    for (uint32_t i = 0; i < m->faces.size(); ++i) {
+      const auto& t = m->faces[i];
+      const Eigen::Vector3d c = (m->vertices[t[0]] + m->vertices[t[1]] + m->vertices[t[2]]) / 3;
+      if (road_.FragmentAt(path.Locate(c).s) == k) own.push_back(i);
+    }
+    *m = SubMesh(*m, own);
+    return m;
+  }
   if (m->faces.size() < f.owned_faces)
     throw Error(Road::RecordPath(f.dir).string(), 0,
                 "owned_faces " + std::to_string(f.owned_faces) + " exceeds the " +

@@ -254,7 +254,7 @@ class RoadGround {
 // Every file OUT depends on, on a road: Graph.txt, each fragment's model, mesh and record,
 // CONTROLS, and the start fragment's metric record when the scale comes from it.
 std::vector<fs::path> RoadDriveInputs(const DriveOptions& o, const Road& road) {
-  std::vector<fs::path> inputs{road.GraphPath()};
+  std::vector<fs::path> inputs{road.GraphPath(), Road::PathFileOf(road.root())};
   for (const RoadFragment& f : road.fragments()) {
     const Workspace ws(f.dir);
     for (fs::path& p : ws.SparseModelFiles()) inputs.push_back(std::move(p));

@@ -534,13 +534,15 @@ std::vector<MappedFixation> MapOnRoad(const IvtResult& ivt, const Frames& frames
 }
 
 // The heat map's surfaces on a road: every fragment whose own triangles lie under the map (by
-// the bounds in its fragment.json; one without bounds is read to find out), read one at a time,
-// the next on a second thread.
+// the bounds in its fragment.json; one without bounds, or whose mesh was made anew since, is read
+// to find out), read one at a time, the next on a second thread.
 void PaintRoad(HeatmapPainter& painter, RoadRun& run) {
   std::vector<size_t> under;
   for (size_t k = 0; k < run.road.fragments().size(); ++k) {
     const RoadFragment& f = run.road.fragments()[k];
-    if (f.owned_faces > 0 && (!f.bounds || painter.CoversBox((*f.bounds)[0], (*f.bounds)[1])))
+    const bool as_split = run.meshes.AsSplit(k);  // (a mesh made anew has other bounds)
+    if (as_split && f.owned_faces == 0) continue;
+    if (!as_split || !f.bounds || painter.CoversBox((*f.bounds)[0], (*f.bounds)[1]))
       under.push_back(k);
   }
   for (size_t i = 0; i < under.size(); ++i) {
@@ -576,7 +578,7 @@ void MakeRoadOutputs(const GazeTrace& gaze, const Road& road, const std::vector<
 // Every file a road's outputs depend on: Graph.txt, FRAMES, GAZE, the boxes, and each fragment's
 // model, mesh, fragment.json, depth maps (--visibility depth) and label images (without boxes).
 std::vector<fs::path> RoadGazeInputs(const GazemapOptions& o, const Road& road) {
-  std::vector<fs::path> inputs{road.GraphPath()};
+  std::vector<fs::path> inputs{road.GraphPath(), Road::PathFileOf(road.root())};
   for (const std::string& p : {o.frames, o.gaze, o.aoi_boxes})
     if (!p.empty()) inputs.emplace_back(p);
   for (const RoadFragment& f : road.fragments()) {

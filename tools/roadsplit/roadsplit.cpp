@@ -53,6 +53,9 @@ void RoadSplitOptions::Check() const {
 
 namespace {
 
+// The sampling step of the path of record's PathIndex.
+double PathStep(const RoadSplitOptions& o) { return std::max(o.length / 200, 1e-9); }
+
 // The sequence an image belongs to: its folder and its name's stem up to the last '_'
 // ("A_0007.png" → "A", "cam1/000001.png" → "cam1/"), "" for a bare name without one.
 std::string SequenceOf(const std::string& name) {
@@ -116,7 +119,7 @@ void PlanPath(const RoadSplitOptions& o, const std::vector<const ImageRecord*>& 
                     FormatDouble(length / o.length) +
                     " fragments of --length: is a camera far from the others?");
   // Samples every 1/200 of a fragment: exact answers come from the segments around them.
-  p.path = std::make_unique<PathIndex>(centres, std::max(o.length / 200, 1e-9));
+  p.path = std::make_unique<PathIndex>(centres, PathStep(o));
   const double total = p.path->Length();
   if (!(total > 0)) throw Error(o.workspace, 0, "the path of record does not move");
   // At most one fragment per step of the path, so each owns an image of it.
@@ -299,21 +302,9 @@ void SplitMesh(const RoadSplitOptions& o, const Workspace& ws, const fs::path& t
       if (j != k) near[j].push_back(f);
   }
   for (size_t k = 0; k < n; ++k) {
-    Mesh out;
-    std::map<uint32_t, uint32_t> remap;
-    auto vertex = [&](uint32_t v) {
-      auto [it, added] = remap.emplace(v, uint32_t(out.vertices.size()));
-      if (added) {
-        out.vertices.push_back(mesh.vertices[v]);
-        if (mesh.has_normals()) out.normals.push_back(mesh.normals[v]);
-        if (mesh.has_colors()) out.colors.push_back(mesh.colors[v]);
-      }
-      return it->second;
-    };
-    for (const auto* list : {&own[k], &near[k]})
-      for (uint32_t f : *list)
-        out.faces.push_back(
-            {vertex(mesh.faces[f][0]), vertex(mesh.faces[f][1]), vertex(mesh.faces[f][2])});
+    std::vector<uint32_t> faces = own[k];
+    faces.insert(faces.end(), near[k].begin(), near[k].end());
+    const Mesh out = SubMesh(mesh, faces);
     p.fragments[k].owned_faces = own[k].size();
     p.fragments[k].mesh_faces = out.faces.size();
     if (!own[k].empty()) {
@@ -368,6 +359,12 @@ void WriteFragments(const RoadSplitOptions& o, const Workspace& ws, const Recons
   }
   SplitMesh(o, ws, tmp, p, rep);
   WriteRoadGraph(tmp, p.fragments);
+  RoadPath path{PathStep(o), {}, {}};  // what RoadMeshes re-owns a fragment's new mesh by
+  for (const ImageRecord* im : p.record) {
+    path.names.push_back(im->name);
+    path.centres.push_back(im->world_to_camera.Centre());
+  }
+  WriteRoadPath(tmp, path);
   for (RoadFragment& f : p.fragments) WriteFragmentRecord(f);
 }
 
