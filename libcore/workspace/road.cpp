@@ -53,9 +53,10 @@ void ReadRecord(RoadFragment& f) {
   f.s_end = j["s"][1].get<double>();
   if (j.contains("overlap") && !j["overlap"].is_number()) bad("\"overlap\" must be metres");
   f.overlap = j.value("overlap", 0.0);
-  if (j.contains("mesh_faces")) {
-    if (!j["mesh_faces"].is_number_unsigned()) bad("\"mesh_faces\" must be a count");
-    f.mesh_faces = j["mesh_faces"].get<size_t>();
+  for (const char* key : {"mesh_faces", "mesh_vertices"}) {
+    if (!j.contains(key)) continue;
+    if (!j[key].is_number_unsigned()) bad(std::string("\"") + key + "\" must be a count");
+    (std::string(key) == "mesh_faces" ? f.mesh_faces : f.mesh_vertices) = j[key].get<size_t>();
   }
   if (!j.contains("bounds")) return;
   const nlohmann::json& b = j["bounds"];
@@ -217,6 +218,7 @@ void WriteFragmentRecord(const RoadFragment& f) {
   j["s"] = {f.s_begin, f.s_end};
   j["overlap"] = f.overlap;
   if (f.mesh_faces) j["mesh_faces"] = *f.mesh_faces;
+  if (f.mesh_vertices) j["mesh_vertices"] = *f.mesh_vertices;
   if (f.bounds) {
     const auto& [lo, hi] = *f.bounds;
     j["bounds"] = {{lo.x(), lo.y(), lo.z()}, {hi.x(), hi.y(), hi.z()}};

@@ -18,16 +18,19 @@
 // path order (camera centres, %.17g).
 //
 // fragment.json: {"images": [NAME, ...], "owned_faces": N, "s": [BEGIN, END], "overlap": M,
-//                 "mesh_faces": T, "bounds": [[XMIN, YMIN, ZMIN], [XMAX, YMAX, ZMAX]]}
+//                 "mesh_faces": T, "mesh_vertices": V,
+//                 "bounds": [[XMIN, YMIN, ZMIN], [XMAX, YMAX, ZMAX]]}
 //   images       the images the fragment owns (each image of the road is owned by exactly one
 //                fragment; the fragment also holds its neighbours' images within the overlap)
 //   owned_faces  its mesh's first N triangles are its own; the others are copies of its
 //                neighbours' triangles within the overlap (so the fragment renders alone), and
 //                the union of every fragment's own triangles is the road's mesh, each once
 //   s, overlap   arc length (metres) of its own stretch of the path of record, and the overlap
-//   mesh_faces   the triangles of the mesh.ply roadsplit wrote, own and copies (optional): a
-//                mesh made anew since (roadmesh run on the fragment) owns the triangles over
-//                its stretch of path.txt instead (workspace/road_meshes.h)
+//   mesh_faces, mesh_vertices
+//                the triangles and vertices of the mesh.ply roadsplit wrote, own and copies
+//                (optional): a mesh whose PLY header says other counts was made anew since
+//                (roadmesh run on the fragment) owns the triangles over its stretch of path.txt
+//                instead (workspace/road_meshes.h)
 //   bounds       the axis-aligned box of its own triangles (optional: absent when it owns none)
 #pragma once
 
@@ -61,7 +64,7 @@ struct RoadFragment {
   std::vector<std::string> owned_images;
   size_t owned_faces = 0;
   double s_begin = 0, s_end = 0, overlap = 0;
-  std::optional<size_t> mesh_faces;                      // of its mesh.ply as roadsplit wrote it
+  std::optional<size_t> mesh_faces, mesh_vertices;       // of its mesh.ply as roadsplit wrote it
   std::optional<std::array<Eigen::Vector3d, 2>> bounds;  // of the own triangles: lo, hi
 };
 

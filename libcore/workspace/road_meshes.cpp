@@ -27,12 +27,16 @@ const PathIndex& RoadMeshes::Path() const {
 
 namespace {
 
-// The triangle count a PLY header declares ("element face N"), or -1 when it declares none.
-long PlyFaceCount(const fs::path& path) {
+// The vertex and face counts a PLY header declares ("element vertex N", "element face N"; -1
+// for one it does not declare).
+std::pair<long, long> PlyCounts(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
-  for (std::string line; std::getline(in, line) && line.rfind("end_header", 0) != 0;)
-    if (line.rfind("element face ", 0) == 0) return std::stol(line.substr(13));
-  return -1;
+  std::pair<long, long> n{-1, -1};
+  for (std::string line; std::getline(in, line) && line.rfind("end_header", 0) != 0;) {
+    if (line.rfind("element vertex ", 0) == 0) n.first = std::atol(line.c_str() + 15);
+    if (line.rfind("element face ", 0) == 0) n.second = std::atol(line.c_str() + 13);
+  }
+  return n;
 }
 
 }  // namespace
@@ -40,7 +44,9 @@ long PlyFaceCount(const fs::path& path) {
 bool RoadMeshes::AsSplit(size_t k) const {
   const RoadFragment& f = road_.fragments()[k];
   if (!f.mesh_faces) return true;
-  return PlyFaceCount(Workspace(f.dir).MeshPath()) == static_cast<long>(*f.mesh_faces);
+  const auto [vertices, faces] = PlyCounts(Workspace(f.dir).MeshPath());
+  return faces == static_cast<long>(*f.mesh_faces) &&
+         (!f.mesh_vertices || vertices == static_cast<long>(*f.mesh_vertices));
 }
 
 void RoadMeshes::Prefetch(const std::vector<size_t>& ks) {
@@ -86,7 +92,7 @@ std::shared_ptr<const Mesh> RoadMeshes::Own(size_t k) const {
   const Workspace ws(f.dir);
   if (f.owned_faces == 0 && !fs::exists(ws.MeshPath())) return m;
   *m = ReadMesh(ws.MeshPath().string());
-  if (f.mesh_faces && m->faces.size() != *f.mesh_faces) {
+  if (!AsSplit(k)) {
     // Made anew in the fragment: its own triangles are those over its stretch of the path.
     const PathIndex& path = Path();
     std::vector<uint32_t> own;

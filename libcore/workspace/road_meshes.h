@@ -1,10 +1,10 @@
 // mvtm — the meshes of a road's fragments, streamed (thesis Appendix D.3): each fragment's own
 // triangles (the first owned_faces of its mesh.ply, workspace/road.h), read on demand or ahead
 // on a second thread, kept while resident and dropped after. A fragment whose mesh.ply was made
-// anew after the split (its triangle count is not fragment.json's mesh_faces: say roadmesh
-// --dense run on the fragment) owns the triangles of its mesh whose centroid lies over its own
-// stretch of the path of record (ROAD/path.txt), as roadsplit assigns them: the fragments' new
-// meshes meet at the stretch boundaries.
+// anew after the split (its PLY header's counts are not fragment.json's mesh_faces and
+// mesh_vertices: say roadmesh --dense run on the fragment) owns the triangles of its mesh whose
+// centroid lies over its own stretch of the path of record (ROAD/path.txt), as roadsplit
+// assigns them: the fragments' new meshes meet at the stretch boundaries.
 //
 // Thread safety: one thread calls the methods; the reads run on std::async threads.
 #pragma once
@@ -35,8 +35,9 @@ class RoadMeshes {
   // triangles has them. Throws Error for an unreadable mesh or an owned_faces beyond its
   // triangles.
   Mesh Union(const std::vector<size_t>& ks, const std::vector<size_t>& next);
-  // True when fragment k's mesh.ply is the one roadsplit wrote (its PLY header's triangle count
-  // is fragment.json's mesh_faces, or the record has none): its bounds hold.
+  // True when fragment k's mesh.ply is the one roadsplit wrote (its PLY header's triangle and
+  // vertex counts are fragment.json's, or the record has none): its first owned_faces are its
+  // own and its bounds hold. (A copy that is not is re-owned by the same rule: no harm.)
   bool AsSplit(size_t k) const;
   // Fragments held now (read or being read).
   size_t held() const { return held_.size(); }

@@ -422,13 +422,18 @@ void MakeOutputs(const GazeTrace& gaze, const Reconstruction& rec, const std::ve
 // The road's photos: every fragment's own images, each once, with the fragment holding its files.
 struct RoadPhotos {
   std::vector<Workspace> fragments;        // one per fragment of the road
-  std::vector<SourceView> views;           // RoadLocator::frames() order
+  std::vector<SourceView> views;           // name order, as a workspace's (LoadViews)
   std::vector<size_t> owner;               // the fragment of each view
   std::vector<std::vector<size_t>> owned;  // each fragment's views
 
   explicit RoadPhotos(const RoadLocator& where) : owned(where.road().fragments().size()) {
     for (const RoadFragment& f : where.road().fragments()) fragments.emplace_back(f.dir);
-    for (const RoadRecordedFrame& f : where.frames()) {
+    std::vector<const RoadRecordedFrame*> frames;
+    for (const RoadRecordedFrame& f : where.frames()) frames.push_back(&f);
+    std::sort(frames.begin(), frames.end(),
+              [](auto* a, auto* b) { return a->image->name < b->image->name; });
+    for (const RoadRecordedFrame* fp : frames) {
+      const RoadRecordedFrame& f = *fp;
       const ImageRecord& im = *f.image;
       const Camera& cam = where.model(f.home).cameras.at(im.camera_id);
       cam.RequireUndistorted();
@@ -513,8 +518,9 @@ std::vector<MappedFixation> MapOnRoad(const IvtResult& ivt, const Frames& frames
     std::vector<SourceView> views;
     std::vector<size_t> global;
     for (size_t k : resident)
-      for (size_t v : run.photos.owned[k])
-        views.push_back(run.photos.views[v]), global.push_back(v);
+      global.insert(global.end(), run.photos.owned[k].begin(), run.photos.owned[k].end());
+    std::sort(global.begin(), global.end());  // name order, as on a workspace
+    for (size_t v : global) views.push_back(run.photos.views[v]);
     const Camera render = run.where.model(groups[g].home).RenderCamera();
     const std::vector<Fixation> part(ivt.fixations.begin() + groups[g].begin,
                                      ivt.fixations.begin() + groups[g].end);
@@ -526,7 +532,7 @@ std::vector<MappedFixation> MapOnRoad(const IvtResult& ivt, const Frames& frames
         },
         o);
     for (MappedFixation& f : m) {
-      for (SourceHit& h : f.sources) h.view = global[h.view];
+      for (SourceHit& h : f.sources) h.view = global[h.view];  // (order kept: global ascends)
       mapped.push_back(std::move(f));
     }
   }

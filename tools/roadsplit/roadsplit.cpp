@@ -175,9 +175,11 @@ size_t LinkJunctions(const RoadSplitOptions& o, const std::vector<const ImageRec
   std::map<const ImageRecord*, size_t> index;
   for (size_t i = 0; i < images.size(); ++i) index[images[i]] = i;
   const double apart = o.length + 2 * o.overlap;
+  // Cells a little larger than the radius (a pair exactly at it stays in adjacent cells), and
+  // not tiny (cell indices of UTM coordinates stay far inside int64).
+  const double size = std::max(o.junction_radius, 1e-3) * (1 + 1e-9);
   auto cell = [&](size_t r) {
-    const Eigen::Vector3d q =
-        (p.record[r]->world_to_camera.Centre() / o.junction_radius).array().floor();
+    const Eigen::Vector3d q = (p.record[r]->world_to_camera.Centre() / size).array().floor();
     return std::array<int64_t, 3>{int64_t(q.x()), int64_t(q.y()), int64_t(q.z())};
   };
   std::map<std::array<int64_t, 3>, std::vector<size_t>> cells;
@@ -307,6 +309,7 @@ void SplitMesh(const RoadSplitOptions& o, const Workspace& ws, const fs::path& t
     const Mesh out = SubMesh(mesh, faces);
     p.fragments[k].owned_faces = own[k].size();
     p.fragments[k].mesh_faces = out.faces.size();
+    p.fragments[k].mesh_vertices = out.vertices.size();
     if (!own[k].empty()) {
       std::array<Eigen::Vector3d, 2> box{out.vertices[0], out.vertices[0]};
       for (size_t f = 0; f < own[k].size(); ++f)
