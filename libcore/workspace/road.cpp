@@ -53,11 +53,13 @@ void ReadRecord(RoadFragment& f) {
   f.s_end = j["s"][1].get<double>();
   if (j.contains("overlap") && !j["overlap"].is_number()) bad("\"overlap\" must be metres");
   f.overlap = j.value("overlap", 0.0);
-  for (const char* key : {"mesh_faces", "mesh_vertices"}) {
-    if (!j.contains(key)) continue;
+  auto count = [&](const char* key, std::optional<size_t>& field) {
+    if (!j.contains(key)) return;
     if (!j[key].is_number_unsigned()) bad(std::string("\"") + key + "\" must be a count");
-    (std::string(key) == "mesh_faces" ? f.mesh_faces : f.mesh_vertices) = j[key].get<size_t>();
-  }
+    field = j[key].get<size_t>();
+  };
+  count("mesh_faces", f.mesh_faces);
+  count("mesh_vertices", f.mesh_vertices);
   if (!j.contains("bounds")) return;
   const nlohmann::json& b = j["bounds"];
   std::array<Eigen::Vector3d, 2> box;

@@ -600,6 +600,22 @@ std::vector<fs::path> RoadGazeInputs(const GazemapOptions& o, const Road& road) 
   return inputs;
 }
 
+// Asks the record which outputs of a workspace or road at `root` must be made (up to date when
+// none), makes them, and writes the record with why they were remade.
+void PlanAndMake(const GazemapOptions& o, const OptionTable& table, const fs::path& root,
+                 std::vector<fs::path> inputs, const PhotoOf& photo, GazemapReport& rep,
+                 const std::function<void(OutputPlan&)>& make) {
+  Ledger ledger(RecordRoot(o, root), "gazemap", table, std::move(inputs), root);
+  OutputPlan plan{ledger, o.force, {}, {}};
+  if (!PlanOutputs(o, photo, plan)) {
+    rep.up_to_date = true;
+    return;
+  }
+  make(plan);
+  ledger.Write();
+  rep.why = ledger.Summary();
+}
+
 }  // namespace
 
 std::string FormatDwellTable(const std::vector<DwellRow>& rows) {
@@ -693,32 +709,18 @@ GazemapReport RunGazemap(const GazemapOptions& o) {
   const OptionTable table = DeclareOptions(resolved);
   if (Road::IsRoad(o.workspace)) {
     const Road road(o.workspace);
-    Ledger ledger(RecordRoot(o, road.root()), "gazemap", table, RoadGazeInputs(o, road),
-                  road.root());
-    OutputPlan plan{ledger, o.force, {}, {}};
     const PhotoOf photo = RoadPhotoOf(road);
-    if (!PlanOutputs(o, photo, plan)) {
-      rep.up_to_date = true;
-      return rep;
-    }
-    MakeRoadOutputs(gaze, road, boxes, photo, o, plan, rep);
-    ledger.Write();
-    rep.why = ledger.Summary();
+    PlanAndMake(o, table, road.root(), RoadGazeInputs(o, road), photo, rep,
+                [&](OutputPlan& plan) { MakeRoadOutputs(gaze, road, boxes, photo, o, plan, rep); });
     return rep;
   }
   const Workspace ws(o.workspace);
   ws.Require("gazemap", {WsItem::kSparse, WsItem::kMesh});
   const Reconstruction rec = ReadColmapModel(ws.SparseDir().string());
-  Ledger ledger(RecordRoot(o, ws.root()), "gazemap", table, GazeInputs(o, ws, rec), ws.root());
-  OutputPlan plan{ledger, o.force, {}, {}};
-  if (!PlanOutputs(
-          o, [&](const std::string& image) { return ws.SourceImagePath(image); }, plan)) {
-    rep.up_to_date = true;
-    return rep;
-  }
-  MakeOutputs(gaze, rec, boxes, ws, o, plan, rep);
-  ledger.Write();
-  rep.why = ledger.Summary();
+  PlanAndMake(
+      o, table, ws.root(), GazeInputs(o, ws, rec),
+      [&](const std::string& image) { return ws.SourceImagePath(image); }, rep,
+      [&](OutputPlan& plan) { MakeOutputs(gaze, rec, boxes, ws, o, plan, rep); });
   return rep;
 }
 
