@@ -23,6 +23,10 @@
 #              for a metric model; a non-metric one needs 1.5 x its units per metre),
 #              MATCH_OVERLAP (COLMAP sequential matching overlap, default 5; 10 with POSES -),
 #              SFM_MAX_REPROJ (POSES -: the mapper's outlier threshold in pixels, default 2),
+#              SFM_CHUNK (POSES -: map stretches of this many images each, SFM_CHUNK_OVERLAP
+#              shared between neighbours, default 8, and join them with sfmjoin: a long drive's
+#              mapping then costs the same per image whatever its length; 0, the default: all
+#              images at once),
 #              SFM_THREADS (POSES -: threads of COLMAP's extraction, matching and mapping; 1 makes
 #              a run repeatable, as COLMAP's RANSAC draws from per-thread generators),
 #              LOOP_DETECTION (1: with POSES -, also match each frame against the frames most
@@ -135,25 +139,57 @@ if [ "$poses" = - ]; then
       done
       echo "$n $b"
     }
+    # The mapper on one set of images (all, or one stretch's list): COLMAP's defaults, and when
+    # they register under half the images, again as forward motion; the largest model is kept.
+    # Sets best_n and best (count, path); several models when the chain of matches breaks: each
+    # is reported.
+    map_best() {  # OUTDIR COUNT [mapper options...]
+      local d=$1 want=$2; shift 2
+      map_run "$d" "$@"
+      read -r best_n best <<< "$(largest "$d")"
+      if [ "$best_n" -lt $(( (want + 1) / 2 )) ]; then
+        echo "SfM with COLMAP's defaults registered $best_n of $want images: again as forward motion" >&2
+        map_run "${d}_forward" "$@" --Mapper.init_min_tri_angle 1 --Mapper.init_min_num_inliers 50 \
+          --Mapper.init_max_forward_motion 1.0
+        read -r fwd_n fwd <<< "$(largest "${d}_forward")"
+        if [ "$fwd_n" -gt "$best_n" ]; then rm -rf "$d"; mv "${d}_forward" "$d"; fi
+        rm -rf "${d}_forward"
+        read -r best_n best <<< "$(largest "$d")"
+      fi
+      for m in "$d"/*/; do
+        [ -d "$m" ] || continue
+        k=$(colmap model_analyzer --path "$m" 2>&1 | sed -n 's/.*Registered images: *\([0-9]*\).*/\1/p')
+        echo "SfM model $m: ${k:-0} of $want images registered" >&2
+      done
+      [ -n "$best" ] || { echo "$0: error: COLMAP registered no image of $want (see $out/colmap.log)" >&2; exit 1; }
+    }
     total=$(ls "$images" | wc -l)
     : > "$out/colmap.log"
-    map_run "$out/sfm"
-    read -r best_n best <<< "$(largest "$out/sfm")"
-    if [ "$best_n" -lt $(( (total + 1) / 2 )) ]; then
-      echo "SfM with COLMAP's defaults registered $best_n of $total images: again as forward motion" >&2
-      map_run "$out/sfm_forward" --Mapper.init_min_tri_angle 1 --Mapper.init_min_num_inliers 50 \
-        --Mapper.init_max_forward_motion 1.0
-      read -r fwd_n fwd <<< "$(largest "$out/sfm_forward")"
-      if [ "$fwd_n" -gt "$best_n" ]; then rm -rf "$out/sfm"; mv "$out/sfm_forward" "$out/sfm"; fi
-      read -r best_n best <<< "$(largest "$out/sfm")"
+    chunk=${SFM_CHUNK:-0}; chunk_overlap=${SFM_CHUNK_OVERLAP:-8}
+    if [ "$chunk" -gt 0 ] && [ "$total" -gt "$chunk" ]; then
+      # Long drives: the mapper per stretch of SFM_CHUNK images (name order), neighbours sharing
+      # SFM_CHUNK_OVERLAP, so each costs the same whatever the road's length; sfmjoin places the
+      # stretches in one frame by the images they share; georef below aligns the road once.
+      [ "$chunk_overlap" -ge 3 ] && [ "$chunk_overlap" -lt "$chunk" ] ||
+        { echo "$0: error: SFM_CHUNK_OVERLAP must be at least 3 and under SFM_CHUNK" >&2; exit 2; }
+      rm -rf "$out/sfm_chunks"; mkdir -p "$out/sfm_chunks"
+      ls "$images" > "$out/sfm_chunks/all.txt"
+      parts=$(( (total - chunk_overlap + (chunk - chunk_overlap) / 2) / (chunk - chunk_overlap) ))
+      [ "$parts" -ge 1 ] || parts=1
+      models=()
+      for ((k = 0; k < parts; k++)); do
+        s=$(( k * (total - chunk_overlap) / parts )); e=$(( (k + 1) * (total - chunk_overlap) / parts + chunk_overlap ))
+        list=$out/sfm_chunks/$k.txt
+        sed -n "$((s + 1)),${e}p" "$out/sfm_chunks/all.txt" > "$list"
+        map_best "$out/sfm_chunks/$k" $((e - s)) --image_list_path "$list"
+        models+=("$best")
+      done
+      "$bin/sfmjoin" -q --binary "${models[@]}" "$out/sfm_chunks/joined"
+      best=$out/sfm_chunks/joined
+      best_n=$(colmap model_analyzer --path "$best" 2>&1 | sed -n 's/.*Registered images: *\([0-9]*\).*/\1/p')
+    else
+      map_best "$out/sfm" "$total"
     fi
-    # Several models when the chain of matches breaks: the largest is built, the rest reported.
-    for m in "$out"/sfm/*/; do
-      [ -d "$m" ] || continue
-      k=$(colmap model_analyzer --path "$m" 2>&1 | sed -n 's/.*Registered images: *\([0-9]*\).*/\1/p')
-      echo "SfM model $(basename "$m"): ${k:-0} of $total images registered" >&2
-    done
-    [ -n "$best" ] || { echo "$0: error: COLMAP registered no image (see $out/colmap.log)" >&2; exit 1; }
     [ "$best_n" -lt "$total" ] && echo "warning: $((total - best_n)) of $total images not in the model built (the others above, or unregistered)" >&2
     gps_opt=()
     if [ -n "${GPS:-}" ]; then
