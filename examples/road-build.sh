@@ -27,6 +27,8 @@
 #              shared between neighbours, default 8, and join them with sfmjoin: a long drive's
 #              mapping then costs the same per image whatever its length; 0, the default: all
 #              images at once),
+#              SFM_ONLY (1: stop once the model of record, OUT/ba, is made: to check the poses
+#              before the dense steps),
 #              SFM_THREADS (POSES -: threads of COLMAP's extraction, matching and mapping; 1 makes
 #              a run repeatable, as COLMAP's RANSAC draws from per-thread generators),
 #              LOOP_DETECTION (1: with POSES -, also match each frame against the frames most
@@ -144,7 +146,7 @@ if [ "$poses" = - ]; then
     # Sets best_n and best (count, path); several models when the chain of matches breaks: each
     # is reported.
     map_best() {  # OUTDIR COUNT [mapper options...]
-      local d=$1 want=$2; shift 2
+      local d=$1 want=$2 m k fwd_n fwd; shift 2
       map_run "$d" "$@"
       read -r best_n best <<< "$(largest "$d")"
       if [ "$best_n" -lt $(( (want + 1) / 2 )) ]; then
@@ -222,6 +224,10 @@ else
       --BundleAdjustment.refine_extrinsics 0 --BundleAdjustment.refine_focal_length 0 \
       --BundleAdjustment.refine_principal_point 0 --BundleAdjustment.refine_extra_params 0
   fi
+fi
+if [ "${SFM_ONLY:-0}" = 1 ]; then
+  log "SFM_ONLY=1: the model of record is $out/ba; stopping before the workspace and the mesh"
+  exit 0
 fi
 if [ ! -d "$ws/sparse" ]; then
   colmap_log colmap image_undistorter --image_path "$images" --input_path "$out/ba" \

@@ -14,8 +14,9 @@ similarity fit as a share of the path length, and the scale error of the camera-
 against the whole SfM's wall-clock seconds per frame (2 cores; run it on an idle machine).
 
 Knobs: matching overlap (5, 10, 20), SIFT image size (--SiftExtraction.max_image_size 1241 = full,
-800, 500), and frame spacing (every 1st, 2nd, 3rd photo: what frames --spacing chooses on a
-faster drive). Writes OUT/sfm.csv, OUT/sfm.png and OUT/index.html.
+800, 500), frame spacing (every 1st, 2nd, 3rd photo: what frames --spacing chooses on a
+faster drive), and mapping in stretches joined by sfmjoin (road-build.sh's SFM_CHUNK: 21 images
+sharing 6, 30 sharing 8). Writes OUT/sfm.csv, OUT/sfm.png and OUT/index.html.
 """
 import argparse
 import os
@@ -56,7 +57,27 @@ def registered(model):
     return int(m.group(1)) if m else 0
 
 
-def sfm(name, every=1, overlap=10, max_size=1241):
+def map_best(d, name, db, imgs, log, want, opts):
+    """COLMAP's mapper with its defaults, again as forward motion when they register under half
+    of `want` images: (the largest model, its registered images)."""
+    best, best_n = None, 0
+    for extra in ([], ["--Mapper.init_min_tri_angle", "1", "--Mapper.init_min_num_inliers", "50",
+                      "--Mapper.init_max_forward_motion", "1.0"]):
+        sdir = os.path.join(d, name if not extra else name + "_forward")
+        os.makedirs(sdir)
+        run(["colmap", "mapper", "--database_path", db, "--image_path", imgs, "--output_path", sdir,
+             "--Mapper.ba_refine_focal_length", "0", "--Mapper.ba_refine_extra_params", "0",
+             "--Mapper.ba_refine_principal_point", "0"] + opts + extra, log)
+        for m in sorted(os.listdir(sdir)):
+            k = registered(os.path.join(sdir, m))
+            if k > best_n:
+                best, best_n = os.path.join(sdir, m), k
+        if best_n >= (want + 1) // 2:
+            break
+    return best, best_n
+
+
+def sfm(name, every=1, overlap=10, max_size=1241, chunk=0, chunk_overlap=8):
     d = os.path.join(work, name)
     shutil.rmtree(d, ignore_errors=True)
     imgs = os.path.join(d, "images")
@@ -73,20 +94,25 @@ def sfm(name, every=1, overlap=10, max_size=1241):
          "--ImageReader.camera_params", f"{fx},{fy},{cx},{cy}"], log)
     run(["colmap", "sequential_matcher", "--database_path", db, "--SiftMatching.use_gpu", "0",
          "--SequentialMatching.overlap", str(overlap)], log)
-    best, best_n = None, 0
-    for extra in ([], ["--Mapper.init_min_tri_angle", "1", "--Mapper.init_min_num_inliers", "50",
-                      "--Mapper.init_max_forward_motion", "1.0"]):
-        sdir = os.path.join(d, "sfm" if not extra else "sfm_forward")
-        os.makedirs(sdir)
-        run(["colmap", "mapper", "--database_path", db, "--image_path", imgs, "--output_path", sdir,
-             "--Mapper.ba_refine_focal_length", "0", "--Mapper.ba_refine_extra_params", "0",
-             "--Mapper.ba_refine_principal_point", "0"] + extra, log)
-        for m in sorted(os.listdir(sdir)):
-            k = registered(os.path.join(sdir, m))
-            if k > best_n:
-                best, best_n = os.path.join(sdir, m), k
-        if best_n >= (len(names) + 1) // 2:
-            break
+    if chunk and chunk < len(names):
+        # As road-build.sh's SFM_CHUNK: stretches of `chunk` images sharing `chunk_overlap`, each
+        # mapped alone, joined by sfmjoin.
+        parts = max(1, (len(names) - chunk_overlap + (chunk - chunk_overlap) // 2) // (chunk - chunk_overlap))
+        models = []
+        for k in range(parts):
+            s0 = k * (len(names) - chunk_overlap) // parts
+            e0 = (k + 1) * (len(names) - chunk_overlap) // parts + chunk_overlap
+            lst = os.path.join(d, f"list{k}.txt")
+            open(lst, "w").write("\n".join(names[s0:e0]) + "\n")
+            m, _ = map_best(d, f"part{k}", db, imgs, log, e0 - s0, ["--image_list_path", lst])
+            if m:
+                models.append(m)
+        best = os.path.join(d, "joined")
+        if len(models) < parts or run([os.path.join(a.bin, "sfmjoin"), "-q"] + models + [best], log):
+            best = None
+        best_n = registered(best) if best else 0
+    else:
+        best, best_n = map_best(d, "sfm", db, imgs, log, len(names), [])
     secs = time.time() - t0
     row = {"group": "", "setting": name, "registered": best_n, "frames": len(names),
            "s_per_frame": round(secs / len(names), 2)}
@@ -114,6 +140,10 @@ for size in (800, 500):
 for every in (2, 3):
     r = sfm(f"every {every} frames", every=every)
     r["group"] = "frame spacing"
+    rows.append(r)
+for chunk, chunk_overlap in ((21, 6), (30, 8)):
+    r = sfm(f"stretches of {chunk}, {chunk_overlap} shared", chunk=chunk, chunk_overlap=chunk_overlap)
+    r["group"] = "mapped in stretches (SFM_CHUNK)"
     rows.append(r)
 fields = ["group", "setting", "registered", "frames", "ate_percent", "scale_error_percent",
           "s_per_frame"]
