@@ -168,6 +168,8 @@ if [ "$poses" = - ]; then
     total=$(ls "$images" | wc -l)
     : > "$out/colmap.log"
     chunk=${SFM_CHUNK:-0}; chunk_overlap=${SFM_CHUNK_OVERLAP:-8}
+    [[ "$chunk" =~ ^[0-9]+$ && "$chunk_overlap" =~ ^[0-9]+$ ]] ||
+      { echo "$0: error: SFM_CHUNK and SFM_CHUNK_OVERLAP must be whole numbers" >&2; exit 2; }
     if [ "$chunk" -gt 0 ] && [ "$total" -gt "$chunk" ]; then
       # Long drives: the mapper per stretch of SFM_CHUNK images (name order), neighbours sharing
       # SFM_CHUNK_OVERLAP, so each costs the same whatever the road's length; sfmjoin places the
@@ -175,8 +177,10 @@ if [ "$poses" = - ]; then
       [ "$chunk_overlap" -ge 3 ] && [ "$chunk_overlap" -lt "$chunk" ] ||
         { echo "$0: error: SFM_CHUNK_OVERLAP must be at least 3 and under SFM_CHUNK" >&2; exit 2; }
       rm -rf "$out/sfm_chunks"; mkdir -p "$out/sfm_chunks"
-      ls "$images" > "$out/sfm_chunks/all.txt"
-      parts=$(( (total - chunk_overlap + (chunk - chunk_overlap) / 2) / (chunk - chunk_overlap) ))
+      [ $# -ge 1 ] || echo "warning: SFM_CHUNK without INTRINSICS: each stretch calibrates its own camera (renders use the first)" >&2
+      LC_ALL=C ls "$images" > "$out/sfm_chunks/all.txt"  # byte order, as sfmjoin and COLMAP sort
+      # The fewest stretches of at most SFM_CHUNK images, all of one length (to an image).
+      parts=$(( (total - chunk_overlap + chunk - chunk_overlap - 1) / (chunk - chunk_overlap) ))
       [ "$parts" -ge 1 ] || parts=1
       models=()
       for ((k = 0; k < parts; k++)); do
@@ -189,6 +193,7 @@ if [ "$poses" = - ]; then
       "$bin/sfmjoin" -q --binary "${models[@]}" "$out/sfm_chunks/joined"
       best=$out/sfm_chunks/joined
       best_n=$(colmap model_analyzer --path "$best" 2>&1 | sed -n 's/.*Registered images: *\([0-9]*\).*/\1/p')
+      best_n=${best_n:-0}
     else
       map_best "$out/sfm" "$total"
     fi

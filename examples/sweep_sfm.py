@@ -97,7 +97,7 @@ def sfm(name, every=1, overlap=10, max_size=1241, chunk=0, chunk_overlap=8):
     if chunk and chunk < len(names):
         # As road-build.sh's SFM_CHUNK: stretches of `chunk` images sharing `chunk_overlap`, each
         # mapped alone, joined by sfmjoin.
-        parts = max(1, (len(names) - chunk_overlap + (chunk - chunk_overlap) // 2) // (chunk - chunk_overlap))
+        parts = max(1, (len(names) - chunk_overlap + chunk - chunk_overlap - 1) // (chunk - chunk_overlap))
         models = []
         for k in range(parts):
             s0 = k * (len(names) - chunk_overlap) // parts

@@ -52,7 +52,8 @@ std::vector<size_t> Spread(size_t n, size_t most) {
 }
 
 // Median of |C_dst,i - C_dst,j| / |C_src,i - C_src,j| over used pairs (at most 200 images, evenly
-// drawn); 0 when no pair has distinct source centres.
+// drawn) whose source centres lie over 5 % of the images' extent apart (so frames of a stop, whose
+// distances are noise, do not vote); 0 when no pair does.
 double MedianScale(const std::vector<Eigen::Vector3d>& cs, const std::vector<Eigen::Vector3d>& cd,
                    const std::vector<bool>& use) {
   std::vector<size_t> idx;
@@ -69,7 +70,7 @@ double MedianScale(const std::vector<Eigen::Vector3d>& cs, const std::vector<Eig
   for (size_t a = 0; a < idx.size(); ++a)
     for (size_t b = a + 1; b < idx.size(); ++b) {
       const double ds = (cs[idx[a]] - cs[idx[b]]).norm();
-      if (ds > 1e-9 * extent && ds > 0) ratios.push_back((cd[idx[a]] - cd[idx[b]]).norm() / ds);
+      if (ds > 0.05 * extent && ds > 0) ratios.push_back((cd[idx[a]] - cd[idx[b]]).norm() / ds);
     }
   return Median(ratios);
 }
@@ -120,6 +121,8 @@ PoseAlignment AlignPoses(const std::vector<Rigid3d>& src, const std::vector<Rigi
   for (size_t i = 0; i < n; ++i) {
     cs[i] = src[i].Centre();
     cd[i] = dst[i].Centre();
+    if (!cs[i].allFinite() || !cd[i].allFinite())
+      throw Error("pose alignment: a camera centre is not finite");
     q[i] = ImageRotation(src[i], dst[i]);
   }
   PoseAlignment a;
@@ -164,11 +167,13 @@ PoseAlignment AlignPoses(const std::vector<Rigid3d>& src, const std::vector<Rigi
   const double lim_c = 5 * Median(ec) + 1e-9 * extent, lim_r = 5 * Median(er) + 0.01 * kDegree;
   for (size_t i = 0; i < n; ++i) a.inlier[i] = ec[i] <= lim_c && er[i] <= lim_r;
   a.inliers = static_cast<size_t>(std::count(a.inlier.begin(), a.inlier.end(), true));
-  if (a.inliers < 2 || 2 * a.inliers < n)
+  if (a.inliers < 2 || 2 * a.inliers <= n)
     throw Error("pose alignment: only " + std::to_string(a.inliers) + " of " + std::to_string(n) +
                 " shared images agree on one similarity");
   // Refit on the inliers.
   if (with_scale) T.scale = MedianScale(cs, cd, a.inlier);
+  if (!(T.scale > 0 && std::isfinite(T.scale)))
+    throw Error("pose alignment: the agreeing cameras' centres coincide: no scale");
   T.R = FitRotation(src, dst, cs, cd, a.inlier, T.scale);
   T.t = Mean(cd, a.inlier) - T.scale * (T.R * Mean(cs, a.inlier));
   a.T = T;

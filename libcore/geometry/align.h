@@ -26,7 +26,7 @@ Sim3 AlignUmeyama(const std::vector<Eigen::Vector3d>& src, const std::vector<Eig
 // `src`'s world into `dst`'s (dst_i ≈ src_i ∘ T⁻¹ up to the scale of the camera frame). Used to
 // join structure-from-motion models of overlapping stretches of a drive, whose shared cameras lie
 // nearly on a line: Umeyama on centres alone leaves the roll about that line free, so the
-// rotation also fits the cameras' axes. Robust (least median, up to half the images wrong): a
+// rotation also fits the cameras' axes. Robust (least median, fewer than half the images wrong): a
 // first estimate takes the per-image rotation nearest the others' (medoid) and the scale and
 // translation of the pair of images whose fit leaves the smallest median centre misfit (at most
 // 60 images, evenly drawn, make the hypotheses); images whose centre or rotation misfits more
@@ -34,8 +34,8 @@ Sim3 AlignUmeyama(const std::vector<Eigen::Vector3d>& src, const std::vector<Eig
 // noise-free inputs keep every image) are outliers; the inliers then give the rotation by Kabsch
 // over their centred centres and their axes (weighted by the centres' RMS spread), the scale as
 // the median distance ratio and the translation as the mean. with_scale false: scale 1. Throws
-// Error under 2 images, when the centres coincide and a scale is asked for, or when under half
-// the images agree.
+// Error under 2 images, for a centre not finite, when the centres coincide and a scale is asked
+// for, or unless over half the images agree.
 struct PoseAlignment {
   Sim3 T;
   std::vector<bool> inlier;  // per input pair

@@ -60,6 +60,7 @@ struct Part {
   std::vector<std::string> names;          // name order
   std::map<std::string, size_t> position;  // name → index in names
   std::map<uint32_t, std::string> name_of;
+  std::set<std::string> outliers;  // shared images whose pose here disagreed with the join
 };
 
 Part ReadPart(const std::string& dir) {
@@ -103,6 +104,8 @@ SfmjoinModelReport Place(Part& part, const std::map<std::string, Rigid3d>& place
     throw Error(part.dir + ": " + e.what());
   }
   r.inliers = a.inliers;
+  for (size_t i = 0, j = 0; i < part.names.size(); ++i)
+    if (placed.count(part.names[i]) && !a.inlier[j++]) part.outliers.insert(part.names[i]);
   r.scale = a.T.scale;
   r.rotation_rms_deg = a.rotation_rms_deg;
   r.centre_rms = a.centre_rms;
@@ -116,11 +119,13 @@ SfmjoinModelReport Place(Part& part, const std::map<std::string, Rigid3d>& place
 }
 
 // The part each image is kept from: the one in which it lies farthest from the ends of the
-// stretch (name order), the earlier on a tie.
+// stretch (name order), the earlier on a tie; never one whose pose of it was an outlier of its
+// placement.
 std::map<std::string, size_t> Owners(const std::vector<Part>& parts) {
   std::map<std::string, std::pair<size_t, size_t>> best;  // name → (depth, part)
   for (size_t k = 0; k < parts.size(); ++k)
     for (const auto& [name, pos] : parts[k].position) {
+      if (parts[k].outliers.count(name)) continue;
       const size_t depth = std::min(pos, parts[k].names.size() - 1 - pos);
       auto it = best.find(name);
       if (it == best.end() || depth > it->second.first) best[name] = {depth, k};
@@ -147,13 +152,18 @@ std::map<std::string, uint32_t> ImageIds(const std::vector<Part>& parts,
   return out;
 }
 
-// Camera ids: a part's camera equal (model, size, parameters) to one already joined is that one;
-// else it keeps its id when free, or takes the next.
-std::map<std::pair<size_t, uint32_t>, uint32_t> JoinCameras(const std::vector<Part>& parts,
-                                                            Reconstruction& out) {
+// Camera ids of the cameras the kept images use: a part's camera equal (model, size, parameters)
+// to one already joined is that one; else it keeps its id when free, or takes the next.
+std::map<std::pair<size_t, uint32_t>, uint32_t> JoinCameras(
+    const std::vector<Part>& parts, const std::map<std::string, size_t>& owner,
+    Reconstruction& out) {
   std::map<std::pair<size_t, uint32_t>, uint32_t> map;
-  for (size_t k = 0; k < parts.size(); ++k)
-    for (const auto& [id, cam] : parts[k].rec.cameras) {
+  for (size_t k = 0; k < parts.size(); ++k) {
+    std::set<uint32_t> used;
+    for (const auto& [id, im] : parts[k].rec.images)
+      if (owner.at(im.name) == k) used.insert(im.camera_id);
+    for (uint32_t id : used) {
+      const Camera& cam = parts[k].rec.cameras.at(id);
       uint32_t found = 0;
       for (const auto& [oid, oc] : out.cameras)
         if (oc.model == cam.model && oc.width == cam.width && oc.height == cam.height &&
@@ -166,6 +176,7 @@ std::map<std::pair<size_t, uint32_t>, uint32_t> JoinCameras(const std::vector<Pa
       }
       map[{k, id}] = found;
     }
+  }
   return map;
 }
 
@@ -173,7 +184,7 @@ Reconstruction Join(const std::vector<Part>& parts, std::vector<SfmjoinModelRepo
   Reconstruction out;
   const auto owner = Owners(parts);
   const auto image_id = ImageIds(parts, owner);
-  const auto camera_id = JoinCameras(parts, out);
+  const auto camera_id = JoinCameras(parts, owner, out);
   uint64_t next_point = 1;
   for (size_t k = 0; k < parts.size(); ++k) {
     const Part& p = parts[k];
@@ -229,8 +240,7 @@ SfmjoinReport RunSfmjoin(const SfmjoinOptions& o) {
   const fs::path outdir = o.paths.back();
   std::vector<fs::path> inputs;
   for (size_t i = 0; i + 1 < o.paths.size(); ++i)
-    for (const std::string& f : ColmapModelFiles(o.paths[i]))
-      inputs.push_back(fs::path(o.paths[i]) / f);
+    for (const std::string& f : ColmapModelFiles(o.paths[i])) inputs.emplace_back(f);
   SfmjoinOptions resolved = o;
   const OptionTable table = DeclareOptions(resolved);
   Ledger ledger(outdir, "sfmjoin", table, inputs, fs::path());
@@ -260,6 +270,8 @@ SfmjoinReport RunSfmjoin(const SfmjoinOptions& o) {
   }
   const Reconstruction joined = Join(parts, rep.models);
   CreateFolder(outdir);
+  // The other format's files would be read first (binary) or left stale beside the new ones.
+  for (const std::string& f : ColmapModelFileNames(!o.binary)) fs::remove(outdir / f);
   if (o.binary)
     WriteColmapBinary(joined, outdir.string());
   else
