@@ -495,6 +495,7 @@ struct RoadRun {
   std::unique_ptr<GlContext>& ctx;
   RoadMeshes& meshes;
   nlohmann::json plans = nlohmann::json::object();
+  nlohmann::json explained = nlohmann::json::array();  // --explain: one plan per group
 };
 
 // Renders one group: the home fragment's scene, projectors and plan, the resident mesh.
@@ -518,7 +519,7 @@ void RenderRoadGroup(RoadRun& run, const RoadGroup& g, const std::vector<size_t>
   const std::vector<fs::path> extra = ResidentInputs(o, run.road, g.home);
   PtmRenderReport part;
   const std::vector<size_t> todo =
-      FramesToRender(o, ws, scene, poses, picks, all, extra, run.ledger, part);
+      o.explain ? all : FramesToRender(o, ws, scene, poses, picks, all, extra, run.ledger, part);
   rep.skipped += part.skipped;
   const std::vector<size_t> resident = run.road.Resident(g.home);
   if (todo.empty()) return;
@@ -534,14 +535,22 @@ void RenderRoadGroup(RoadRun& run, const RoadGroup& g, const std::vector<size_t>
     rep.gl = run.ctx->Describe();
   }
   Renderer renderer(mesh);
+  const std::string& id = run.road.fragments()[g.home].id;
+  if (o.explain) {  // the group's plan, as --explain prints it for a workspace
+    SurveyFrames(survey, renderer, cam, scene, poses, picks, all);
+    nlohmann::json j = PlanJson(cam, poses.size(), rep.gl, survey, PlanEffects(survey));
+    j["fragment"] = id;
+    j["first_frame"] = poses.front().name;
+    run.explained.push_back(std::move(j));
+    return;
+  }
   EffectsPlan plan = PlanEffects(survey);
   RenderFrames(FrameJob{o, ws, scene, cam, poses, picks, run.ledger, extra}, renderer, todo, survey,
                plan, rep);
-  run.plans[run.road.fragments()[g.home].id] =
-      PlanJson(cam, poses.size(), rep.gl, survey, plan)["effects"];
+  run.plans[id] = PlanJson(cam, poses.size(), rep.gl, survey, plan)["effects"];
 }
 
-PtmRenderReport RunRoadRender(const PtmRenderOptions& o) {
+PtmRenderReport RunRoadRender(const PtmRenderOptions& o, std::ostream& out) {
   const Road road(o.workspace);
   const std::vector<RoadFrameJob> frames = RoadFrames(o, road);
   // Shards are contiguous runs of the road's frames: each reads a few fragments, not all.
@@ -553,8 +562,10 @@ PtmRenderReport RunRoadRender(const PtmRenderOptions& o) {
   PtmRenderOptions resolved = o;
   const OptionTable table = DeclareOptions(resolved);
   Ledger ledger(o.outdir, o.ProvenanceName("ptmrender"), table, inputs, road.root());
-  RemoveStaleTemporaries(o.outdir);
-  if (o.provenance) RemoveStaleTemporaries(fs::path(o.outdir) / "provenance");
+  if (!o.explain) {
+    RemoveStaleTemporaries(o.outdir);
+    if (o.provenance) RemoveStaleTemporaries(fs::path(o.outdir) / "provenance");
+  }
   std::unique_ptr<GlContext> ctx;
   RoadMeshes meshes(road);
   RoadRun run{o, road, frames, ledger, ctx, meshes};
@@ -571,6 +582,11 @@ PtmRenderReport RunRoadRender(const PtmRenderOptions& o) {
   rep.depth_ms += rep.survey_ms;
   rep.frames_ms = Ms(t0, Clock::now());
   rep.why = ledger.Summary();
+  if (o.explain) {
+    out << nlohmann::json{{"road", road.root().string()}, {"groups", run.explained}}.dump(2)
+        << "\n";
+    return rep;
+  }
   if (rep.rendered > 0) ledger.Write({{"plans", run.plans}, {"gl_used", rep.gl}});
   return rep;
 }
@@ -578,12 +594,7 @@ PtmRenderReport RunRoadRender(const PtmRenderOptions& o) {
 
 PtmRenderReport RunPtmRender(const PtmRenderOptions& o, std::ostream& out) {
   o.Check();
-  if (Road::IsRoad(o.workspace)) {
-    if (o.explain) throw UsageError("--explain: give one fragment's workspace, not a road");
-    if (o.exclude_self)
-      throw UsageError("--exclude-self: give one fragment's workspace, not a road");
-    return RunRoadRender(o);
-  }
+  if (Road::IsRoad(o.workspace)) return RunRoadRender(o, out);
   Workspace ws(o.workspace);
   ws.Require("ptmrender", {WsItem::kSparse, WsItem::kMesh});
   const Scene scene = LoadScene(ws);
