@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -192,6 +193,13 @@ Trajectory ReadTrajectory(std::istream& in, const std::string& name, TrajectoryF
   PrefixedBuf buf(std::move(seen), in.rdbuf());
   std::istream joined(&buf);
   return ReadTrajectoryAs(joined, name, format);
+}
+
+std::string PoseName(const Trajectory& trajectory, size_t i) {
+  if (i < trajectory.names.size()) return trajectory.names[i];
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%06zu", i);
+  return buf;
 }
 
 Trajectory ReadTrajectory(const std::string& path, TrajectoryFormat format) {

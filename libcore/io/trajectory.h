@@ -48,6 +48,10 @@ Trajectory ReadTrajectory(const std::string& path,
                           TrajectoryFormat format = TrajectoryFormat::kAuto);
 Trajectory ReadTrajectory(std::istream& in, const std::string& name,
                           TrajectoryFormat format = TrajectoryFormat::kAuto);
+// Pose i's name: its name in the file (COLMAP images, NeRF frames), else its index as six digits
+// ("000012"): the name every tool gives a row of a trajectory (ptmrender's frames, pickview's
+// queries, mkroad's truth at the poses).
+std::string PoseName(const Trajectory& trajectory, size_t i);
 void WriteTum(const std::string& path, const std::vector<StampedPose>& c2w);
 // One TUM line without its newline: "timestamp tx ty tz qx qy qz qw" of a camera-to-world pose,
 // numbers that read back exactly (WriteTum's rows; simulate streams them).

@@ -87,13 +87,11 @@ std::vector<PickViewQuery> ReadPickViewQueries(const std::string& path, std::ist
   // the lines it has buffered.
   const Trajectory tr = path == "-" ? ReadTrajectory(in, "-") : ReadTrajectory(path);
   std::vector<PickViewQuery> q;
-  char buf[32];
   for (size_t i = 0; i < tr.poses.size(); ++i) {
-    std::snprintf(buf, sizeof buf, "%06zu", i);
     Rigid3d w2c = tr.poses[i].pose.Inverse();
     if (!w2c.t.allFinite() || !w2c.q.coeffs().allFinite())
       throw Error(path, tr.poses[i].line, "pose is not finite");
-    q.push_back({i < tr.names.size() ? tr.names[i] : buf, w2c});
+    q.push_back({PoseName(tr, i), w2c});
   }
   return q;
 }

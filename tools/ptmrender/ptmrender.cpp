@@ -150,9 +150,7 @@ std::string FrameName(const std::string& name, bool exr) {
 
 // The frame of --poses row i: named as in the file (images.txt), else 000000, 000001, ...
 std::string PoseFrameName(const Trajectory& tr, size_t i, bool exr) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%06zu", i);
-  return FrameName(i < tr.names.size() ? tr.names[i] : buf, exr);
+  return FrameName(PoseName(tr, i), exr);
 }
 
 // OUTDIR/provenance/NAME.png: which projector coloured each pixel (--provenance).
