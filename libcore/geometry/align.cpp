@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "base/error.h"
+#include "base/stats.h"
 
 namespace mvtm {
 
@@ -32,13 +33,6 @@ namespace {
 
 constexpr double kDegree = 3.14159265358979323846 / 180;
 
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  const size_t m = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + static_cast<long>(m), v.end());
-  return v[m];
-}
-
 // The rotation R of dst_world = s·R·src_world + t seen by one image: R = R_dstᵀ·R_src.
 Eigen::Quaterniond ImageRotation(const Rigid3d& src, const Rigid3d& dst) {
   return NormalizedQuaternion(dst.q.conjugate() * src.q);
@@ -53,17 +47,13 @@ std::vector<size_t> Spread(size_t n, size_t most) {
 
 // Median of |C_dst,i - C_dst,j| / |C_src,i - C_src,j| over used pairs (at most 200 images, evenly
 // drawn) whose source centres lie over 5 % of the images' extent apart (so frames of a stop, whose
-// distances are noise, do not vote); 0 when no pair does.
+// distances are noise, do not vote); NaN when no pair does.
 double MedianScale(const std::vector<Eigen::Vector3d>& cs, const std::vector<Eigen::Vector3d>& cd,
                    const std::vector<bool>& use) {
-  std::vector<size_t> idx;
+  std::vector<size_t> used, idx;
   for (size_t i = 0; i < cs.size(); ++i)
-    if (use[i]) idx.push_back(i);
-  if (idx.size() > 200) {
-    std::vector<size_t> few;
-    for (size_t k = 0; k < 200; ++k) few.push_back(idx[k * idx.size() / 200]);
-    idx.swap(few);
-  }
+    if (use[i]) used.push_back(i);
+  for (size_t k : Spread(used.size(), 200)) idx.push_back(used[k]);
   double extent = 0;
   for (size_t i : idx) extent = std::max(extent, (cs[i] - cs[idx[0]]).norm());
   std::vector<double> ratios;
@@ -175,10 +165,10 @@ PoseAlignment AlignPoses(const std::vector<Rigid3d>& src, const std::vector<Rigi
   if (!(T.scale > 0 && std::isfinite(T.scale)))
     throw Error("pose alignment: the agreeing cameras' centres coincide: no scale");
   T.R = FitRotation(src, dst, cs, cd, a.inlier, T.scale);
-  T.t = Mean(cd, a.inlier) - T.scale * (T.R * Mean(cs, a.inlier));
+  const Eigen::Vector3d mi = Mean(cd, a.inlier);
+  T.t = mi - T.scale * (T.R * Mean(cs, a.inlier));
   a.T = T;
   const Eigen::Quaterniond qr(T.R);
-  const Eigen::Vector3d mi = Mean(cd, a.inlier);
   double sc = 0, sr = 0;
   for (size_t i = 0; i < n; ++i) {
     if (!a.inlier[i]) continue;
