@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 #include <opencv2/ximgproc/segmentation.hpp>
 #include <string>
+#include <utility>
 
 #include "base/error.h"
 
@@ -30,6 +32,8 @@ void CheckView(const DynamicView& v, const char* what) {
   if (!v.dynamic.empty() && !ok(v.dynamic))
     throw Error(std::string(what) +
                 ": the first-pass probability must be float of the luma's size");
+  if (!v.seen.empty() && !ok(v.seen))
+    throw Error(std::string(what) + ": the seen depth must be float of the luma's size");
 }
 
 // Where each target pixel lands in `nb` (map_x, map_y; NaN when not valid there).
@@ -59,9 +63,14 @@ void WarpMaps(const DynamicView& t, const DynamicView& nb, double tol, cv::Mat& 
         if (!(q.z() > 0)) continue;
         const double u = gx * q.x() / q.z() + hx, v = gy * q.y() / q.z() + hy;
         if (!(u >= 0.5 && v >= 0.5 && u <= nw - 0.5 && v <= nh - 0.5)) continue;
-        const float dn = nb.depth.at<float>(std::min(nh - 1, static_cast<int>(v)),
-                                            std::min(nw - 1, static_cast<int>(u)));
+        const int iu = std::min(nw - 1, static_cast<int>(u)),
+                  iv = std::min(nh - 1, static_cast<int>(v));
+        const float dn = nb.depth.at<float>(iv, iu);
         if (dn > 0 && std::isfinite(dn) && dn < q.z() * (1 - tol)) continue;  // hidden in nb
+        if (!nb.seen.empty()) {  // hidden in nb by what it saw there (a parked vehicle)
+          const float ds = nb.seen.at<float>(iv, iu);
+          if (ds > 0 && std::isfinite(ds) && ds < q.z() * (1 - tol)) continue;
+        }
         if (!nb.dynamic.empty() &&
             nb.dynamic.at<float>(std::min(nh - 1, static_cast<int>(v)),
                                  std::min(nw - 1, static_cast<int>(u))) >= 0.5f)
@@ -269,36 +278,62 @@ void MaskOptions::Check() const {
     throw UsageError("--min-area must be in [0, 1), got " + std::to_string(min_area));
 }
 
-DynamicEvidence EstimateDynamic(const DynamicView& t,
-                                const std::vector<const DynamicView*>& neighbours,
-                                const DynamicOptions& o) {
-  o.Check();
-  CheckView(t, "target view");
-  std::vector<cv::Mat> photo, flow;
-  DynamicEvidence ev;
-  for (const DynamicView* nb : neighbours) {
-    CheckView(*nb, "neighbour view");
+namespace {
+
+// The target's residuals against `views`, reduced over them (photometric, and flow when on);
+// returns how many views saw any of the target's pixels.
+int ReducedResiduals(const DynamicView& t, const std::vector<const DynamicView*>& views,
+                     const DynamicOptions& o, const char* what, cv::Mat& photometric,
+                     cv::Mat& flow) {
+  std::vector<cv::Mat> photo, flows;
+  int seen_by = 0;
+  for (const DynamicView* nb : views) {
+    CheckView(*nb, what);
     cv::Mat mx, my, warp, coarser, motion;
     WarpMaps(t, *nb, o.depth_tolerance, mx, my, coarser, motion);
     const cv::Mat valid = mx == mx;  // not NaN
     if (cv::countNonZero(valid) == 0) continue;
-    ++ev.neighbours;
+    ++seen_by;
     cv::remap(nb->grey, warp, mx, my, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
     warp.setTo(0, ~valid);
     warp *= ExposureGain(t.grey, warp);
     photo.push_back(Photometric(t.grey, warp, valid, coarser, o));
-    if (o.flow) flow.push_back(FlowResidual(t.grey, warp, valid, motion, o));
+    if (o.flow) flows.push_back(FlowResidual(t.grey, warp, valid, motion, o));
   }
-  ev.photometric = Reduce(photo, o.quantile, t.grey.size());
-  if (o.flow) ev.flow = Reduce(flow, o.quantile, t.grey.size());
+  photometric = Reduce(photo, o.quantile, t.grey.size());
+  if (o.flow) flow = Reduce(flows, o.quantile, t.grey.size());
+  return seen_by;
+}
+
+// max over the cues of their logistic (a cue's map may be empty: no such cue).
+float CueProbability(int y, int x, std::initializer_list<std::pair<const cv::Mat*, double>> cues) {
+  float p = 0;
+  for (const auto& [m, threshold] : cues)
+    if (!m->empty()) p = std::max(p, Logistic(m->at<float>(y, x), threshold));
+  return p;
+}
+
+}  // namespace
+
+DynamicEvidence EstimateDynamic(const DynamicView& t,
+                                const std::vector<const DynamicView*>& neighbours,
+                                const DynamicOptions& o,
+                                const std::vector<const DynamicView*>& partners) {
+  o.Check();
+  CheckView(t, "target view");
+  DynamicEvidence ev;
+  ev.neighbours = ReducedResiduals(t, neighbours, o, "neighbour view", ev.photometric, ev.flow);
+  if (!partners.empty())
+    ev.partners = ReducedResiduals(t, partners, o, "partner view", ev.across, ev.across_flow);
   ev.probability.create(t.grey.size(), CV_32F);
   for (int y = 0; y < t.grey.rows; ++y)
-    for (int x = 0; x < t.grey.cols; ++x) {
-      float p = Logistic(ev.photometric.at<float>(y, x), o.threshold);
-      if (o.flow) p = std::max(p, Logistic(ev.flow.at<float>(y, x), o.flow_threshold));
-      ev.probability.at<float>(y, x) = p;
-    }
-  if (o.segments > 0 && ev.neighbours > 0) {
+    for (int x = 0; x < t.grey.cols; ++x)
+      ev.probability.at<float>(y, x) = CueProbability(y, x,
+                                                      {{&ev.photometric, o.threshold},
+                                                       {&ev.flow, o.flow_threshold},
+                                                       {&ev.across, o.threshold},
+                                                       {&ev.across_flow, o.flow_threshold}});
+  if (o.segments > 0 && ev.neighbours + ev.partners > 0) {
     const cv::Mat has_depth = (t.depth > 0) & (t.depth < std::numeric_limits<float>::infinity());
     SpreadOverRegions(t, has_depth, o, ev.probability);
   }

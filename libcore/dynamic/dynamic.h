@@ -63,6 +63,9 @@ struct DynamicView {
   cv::Mat depth;            // CV_32F linear z of the static reconstruction; inf/NaN/<=0: none
   cv::Mat colour;           // CV_8UC3 of the same size for the segmentation, or empty (luma)
   cv::Mat dynamic;          // CV_32F: this view's own probability from a first pass, or empty
+  cv::Mat seen;  // CV_32F linear z of what this photo saw (densify's map: a parked vehicle
+                 // included), or empty; as a neighbour or partner, a point farther than it is
+                 // hidden in this view like one behind its static depth
 };
 
 struct DynamicOptions {
@@ -84,14 +87,28 @@ struct DynamicEvidence {
   cv::Mat probability;  // CV_32F 0..1: "not static"
   cv::Mat photometric;  // CV_32F: the reduced photometric residual, NaN where no evidence
   cv::Mat flow;         // CV_32F: the reduced flow residual in pixels (empty when flow is off)
+  cv::Mat across;       // CV_32F: the photometric residual reduced over the partners (NaN where
+                        // none saw the pixel; empty without partners)
+  cv::Mat across_flow;  // CV_32F: the flow residual reduced over the partners, or empty
   int neighbours = 0;   // neighbours that saw any of the target's pixels
+  int partners = 0;     // partners that saw any of the target's pixels
 };
 
 // The target's evidence against `neighbours` (any number, even none: then all zero). Throws
 // Error when a view's images are not of its camera's size or type, or a camera is distorted.
+//
+// Partners (optional) are photos of another drive of the same road, taken minutes or days
+// apart: a vehicle parked in the target's drive is consistent across its own neighbours but not
+// there in another drive. Their residuals are computed as the neighbours' and reduced apart (the
+// same quantile: a pixel must disagree with every partner); each cue's probability counts as
+// another cue. The reverse case (a vehicle parked in the partner's drive, on the road the target
+// sees) must not mask the target's road: the partner's `seen` depth (what it photographed,
+// the parked vehicle included) hides the road point behind it, so give partners their own depth
+// maps where they exist. A pixel seen by no partner has no evidence from them.
 DynamicEvidence EstimateDynamic(const DynamicView& target,
                                 const std::vector<const DynamicView*>& neighbours,
-                                const DynamicOptions& options);
+                                const DynamicOptions& options,
+                                const std::vector<const DynamicView*>& partners = {});
 
 // Vehicles, cyclists and pedestrians stand on the road; mistakes of a photo-built mesh (tree
 // canopies, facade edges, poles) float above it. Sets to 0 the probability of every blob (8-

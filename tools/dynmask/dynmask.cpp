@@ -11,6 +11,7 @@
 #include "base/error.h"
 #include "cli/progress.h"
 #include "image/image.h"
+#include "index/view_selection.h"
 #include "io/colmap_model.h"
 #include "io/mesh_io.h"
 #include "io/tracks.h"
@@ -68,6 +69,11 @@ OptionTable DeclareOptions(DynmaskOptions& o) {
   t.Integer("--neighbours", &o.neighbours, "Photos of the same drive each photo is checked against")
       .Range(1, 16)
       .Alternative("2");
+  t.Integer("--partners", &o.partners,
+            "Photos of the other drives of the road each photo is also checked against: a "
+            "vehicle parked in one drive only (0: its own drive only)")
+      .Range(0, 16)
+      .Alternative("0");
   t.Real("--min-baseline", &o.min_baseline,
          "Nearest neighbour allowed, in median camera spacings (larger: more parallax)")
       .Range(0, 10)
@@ -188,6 +194,29 @@ std::vector<std::vector<size_t>> ChooseNeighbours(const Scene& s, int count, dou
   return out;
 }
 
+// Partners of every image among the images of the other drives: the nearest centres looking the
+// same way (index/view_selection.h, the projector rule: within 45°, one just behind preferred),
+// no farther than 3 median camera spacings of its own drive (beyond, a photo of another place).
+std::vector<std::vector<size_t>> ChoosePartners(const Scene& s, int count) {
+  std::vector<std::vector<size_t>> out(s.images.size());
+  if (count <= 0 || s.drives.size() < 2) return out;
+  ViewSelectionOptions vo;
+  vo.k = size_t(count);
+  for (const auto& [name, idx] : s.drives) {
+    std::vector<Rigid3d> own, others;
+    std::vector<size_t> other_idx;
+    for (size_t i : idx) own.push_back(s.images[i]->world_to_camera);
+    for (const auto& [other, jdx] : s.drives)
+      if (other != name)
+        for (size_t j : jdx) others.push_back(s.images[j]->world_to_camera), other_idx.push_back(j);
+    const double reach = 3 * MedianSpacing(own);
+    for (size_t i : idx)
+      for (const Candidate& c : SelectViews(s.images[i]->world_to_camera, others, vo))
+        if (c.distance <= reach) out[i].push_back(other_idx[c.index]);
+  }
+  return out;
+}
+
 // Static depth of one image at its working size.
 class DepthProvider {
  public:
@@ -216,17 +245,24 @@ class DepthProvider {
   std::unique_ptr<MeshRaycaster> caster_;
 };
 
+// densify's depth map of an image (what its photo saw) at the working size; empty when densify
+// made none.
+cv::Mat StereoDepth(const Workspace& ws, const Camera& cam, const std::string& name) {
+  const fs::path p = ws.StereoDepthPath(name);
+  if (!fs::exists(p)) return {};
+  const Image d = ReadImage(p.string());
+  if (d.channels != 1) throw Error(p.string() + ": depth must have one channel");
+  cv::Mat m(d.height, d.width, CV_32F, const_cast<float*>(d.data.data())), z;
+  cv::resize(m, z, {int(cam.width), int(cam.height)}, 0, 0, cv::INTER_NEAREST);
+  return z;
+}
+
 cv::Mat DepthProvider::Depth(const Camera& cam, const Rigid3d& w2c, const std::string& name) const {
   const int w = int(cam.width), h = int(cam.height);
   cv::Mat z(h, w, CV_32F, std::numeric_limits<float>::infinity());
   if (!use_mesh_) {
-    const fs::path p = ws_.StereoDepthPath(name);
-    if (!fs::exists(p)) return z;  // densify made no map for it: no evidence
-    const Image d = ReadImage(p.string());
-    if (d.channels != 1) throw Error(p.string() + ": depth must have one channel");
-    cv::Mat m(d.height, d.width, CV_32F, const_cast<float*>(d.data.data()));
-    cv::resize(m, z, {w, h}, 0, 0, cv::INTER_NEAREST);
-    return z;
+    cv::Mat m = StereoDepth(ws_, cam, name);
+    return m.empty() ? z : m;  // densify made no map for it: no evidence
   }
   const Eigen::Matrix3d Rt = w2c.R().transpose();
   const Eigen::Vector3d c = w2c.Centre();
@@ -260,52 +296,87 @@ void LoadPhoto(const fs::path& path, const Camera& full, const Camera& work, cv:
   if (rgb.size() != size) cv::resize(rgb, rgb, size, 0, 0, cv::INTER_AREA);
 }
 
-// The views one run needs, loaded once each (an image is the neighbour of several), and their
-// first-pass probabilities, computed once each.
+// The views one run needs, loaded once each (an image is the neighbour or partner of several),
+// their first-pass probabilities, computed once each, and their densify depth maps.
 class ViewCache {
  public:
   ViewCache(const Workspace& ws, const Scene& s, const DepthProvider& d,
-            const std::vector<std::vector<size_t>>& nbs, const DynamicOptions& ev)
-      : ws_(ws), s_(s), d_(d), nbs_(nbs), ev_(ev) {}
+            const std::vector<std::vector<size_t>>& nbs, const DynamicOptions& ev,
+            const MaskOptions& mask)
+      : ws_(ws), s_(s), d_(d), nbs_(nbs), ev_(ev), mask_options_(mask) {}
   const DynamicView& Get(size_t i) {
     auto it = views_.find(i);
-    if (it != views_.end()) return it->second;
+    if (it != views_.end()) return Used(it->second);
     const std::string& name = s_.images[i]->name;
     DynamicView v;
     v.camera = s_.work[i];
     v.world_to_camera = s_.images[i]->world_to_camera;
     v.depth = d_.Depth(s_.work[i], s_.images[i]->world_to_camera, name);
     LoadPhoto(ws_.ImagePath(name), s_.full[i], s_.work[i], v.grey, v.colour);
-    return views_.emplace(i, std::move(v)).first->second;
+    return Used(views_.emplace(i, Entry<DynamicView>{std::move(v), 0}).first->second);
   }
   // Image j's probability against its own neighbours (the first pass).
   const cv::Mat& FirstPass(size_t j) {
     auto it = first_.find(j);
-    if (it != first_.end()) return it->second;
+    if (it != first_.end()) return Used(it->second);
     std::vector<const DynamicView*> views;
     for (size_t k : nbs_[j]) views.push_back(&Get(k));
-    return first_.emplace(j, EstimateDynamic(Get(j), views, ev_).probability).first->second;
+    cv::Mat p = EstimateDynamic(Get(j), views, ev_).probability;
+    return Used(first_.emplace(j, Entry<cv::Mat>{p, 0}).first->second);
   }
-  // Forgets what belongs to images more than 32 before `below` (images go in name order, and
-  // neighbours are near in a drive; one needed again is simply made again).
-  void Drop(size_t below) {
-    DropBefore(views_, below);
-    DropBefore(first_, below);
+  // Where image j's first pass finds something moving, as a whole blob: its first-pass mask
+  // (MaskFromProbability: the opening, closing and filled holes of the masks) dilated by the
+  // reach of a residual (window / 2 + slack pixels), 1 inside, 0 outside. A vehicle's body,
+  // which its outline's evidence does not cover, is left out of the evidence against other
+  // photos too.
+  const cv::Mat& FirstMask(size_t j) {
+    auto it = mask_.find(j);
+    if (it != mask_.end()) return Used(it->second);
+    cv::Mat m = MaskFromProbability(FirstPass(j), mask_options_), f;
+    const int r = ev_.window / 2 + ev_.slack;
+    cv::dilate(m, m, cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * r + 1, 2 * r + 1}));
+    m.convertTo(f, CV_32F, 1.0 / 255);
+    return Used(mask_.emplace(j, Entry<cv::Mat>{f, 0}).first->second);
+  }
+  // Image j's densify depth map at the working size (empty without one).
+  const cv::Mat& Seen(size_t j) {
+    auto it = seen_.find(j);
+    if (it != seen_.end()) return Used(it->second);
+    cv::Mat z = StereoDepth(ws_, s_.work[j], s_.images[j]->name);
+    return Used(seen_.emplace(j, Entry<cv::Mat>{z, 0}).first->second);
+  }
+  // The next image: forgets what the last 8 images did not use (neighbours and partners of
+  // images near in name order are near; one needed again is simply made again).
+  void Next() {
+    ++tick_;
+    Forget(views_), Forget(first_), Forget(mask_), Forget(seen_);
   }
 
  private:
+  template <class T>
+  struct Entry {
+    T value;
+    size_t used;
+  };
+  template <class T>
+  const T& Used(Entry<T>& e) {
+    e.used = tick_;
+    return e.value;
+  }
   template <class Map>
-  static void DropBefore(Map& m, size_t below) {
+  void Forget(Map& m) {
     for (auto it = m.begin(); it != m.end();)
-      it = it->first + 32 < below ? m.erase(it) : std::next(it);
+      it = it->second.used + 8 < tick_ ? m.erase(it) : std::next(it);
   }
   const Workspace& ws_;
   const Scene& s_;
   const DepthProvider& d_;
   const std::vector<std::vector<size_t>>& nbs_;
   const DynamicOptions& ev_;
-  std::map<size_t, DynamicView> views_;
-  std::map<size_t, cv::Mat> first_;
+  const MaskOptions& mask_options_;
+  size_t tick_ = 0;
+  std::map<size_t, Entry<DynamicView>> views_;
+  std::map<size_t, Entry<cv::Mat>> first_, mask_, seen_;
 };
 
 // Writes one probability map (8-bit, 255 = surely not static) atomically.
@@ -331,21 +402,35 @@ struct Job {
   std::vector<fs::path> in;  // the files its map is made from beyond the model
 };
 
+// Each image's neighbours of its own drive and partners of the other drives.
+struct Pairing {
+  std::vector<std::vector<size_t>> neighbours, partners;
+};
+
 // The selected images whose probability map is stale.
 std::vector<Job> StaleMaps(const DynmaskOptions& o, const Workspace& ws, const Scene& s,
-                           const std::vector<std::vector<size_t>>& nbs, const DepthProvider& d,
-                           Ledger& ledger, DynmaskReport& rep) {
+                           const Pairing& pair, const DepthProvider& d, Ledger& ledger,
+                           DynmaskReport& rep) {
   std::vector<Job> todo;
+  const auto& nbs = pair.neighbours;
   for (size_t i : o.Select().Apply(s.images.size())) {
-    Job job{i, {ws.ImagePath(s.images[i]->name), d.Input(s.images[i]->name)}};
-    for (size_t j : nbs[i]) {
+    Job job{i, {}};
+    const auto view = [&](size_t j) {
       job.in.push_back(ws.ImagePath(s.images[j]->name));
       job.in.push_back(d.Input(s.images[j]->name));
-      if (o.passes == 2)  // the neighbour's first pass reads its own neighbours
+      if (o.passes == 2)  // the first pass of a neighbour or partner reads its own neighbours
         for (size_t k : nbs[j]) {
           job.in.push_back(ws.ImagePath(s.images[k]->name));
           job.in.push_back(d.Input(s.images[k]->name));
         }
+    };
+    job.in.push_back(ws.ImagePath(s.images[i]->name));
+    job.in.push_back(d.Input(s.images[i]->name));
+    for (size_t j : nbs[i]) view(j);
+    for (size_t j : pair.partners[i]) {
+      view(j);
+      const fs::path seen = ws.StereoDepthPath(s.images[j]->name);
+      if (fs::exists(seen)) job.in.push_back(seen);
     }
     std::sort(job.in.begin(), job.in.end());
     job.in.erase(std::unique(job.in.begin(), job.in.end()), job.in.end());
@@ -357,26 +442,40 @@ std::vector<Job> StaleMaps(const DynmaskOptions& o, const Workspace& ws, const S
   return todo;
 }
 
-void ComputeMaps(const DynmaskOptions& o, const Workspace& ws, const Scene& s,
-                 const std::vector<std::vector<size_t>>& nbs, const DepthProvider& d,
-                 const std::vector<Job>& todo, Ledger& ledger, DynmaskReport& rep) {
+void ComputeMaps(const DynmaskOptions& o, const Workspace& ws, const Scene& s, const Pairing& pair,
+                 const DepthProvider& d, const std::vector<Job>& todo, Ledger& ledger,
+                 DynmaskReport& rep) {
   CreateFolder(ws.DynamicDir());
   DynamicOptions ev = o.evidence;
   ev.flow = !o.no_flow;
-  ViewCache cache(ws, s, d, nbs, ev);
+  ViewCache cache(ws, s, d, pair.neighbours, ev, o.mask);
   Progress bar("dynmask", todo.size(), o.quiet);
   const auto t0 = Clock::now();
-  for (const Job& job : todo) {
-    cache.Drop(job.i);
-    std::vector<DynamicView> nv;
-    for (size_t j : nbs[job.i]) {
-      nv.push_back(cache.Get(j));  // Mat headers: no pixel copies
-      if (o.passes == 2) nv.back().dynamic = cache.FirstPass(j);
+  // The views of `images` (Mat headers: no pixel copies), with their first-pass probability on
+  // two passes, and with what they saw (densify's maps) as partners.
+  // The views of `images` (Mat headers: no pixel copies), with their first-pass mask on two
+  // passes, and with what they saw (densify's maps) as partners.
+  const auto views_of = [&](const std::vector<size_t>& images, bool partners) {
+    std::vector<DynamicView> v;
+    for (size_t j : images) {
+      v.push_back(cache.Get(j));
+      if (o.passes == 2) v.back().dynamic = cache.FirstMask(j);
+      if (partners) v.back().seen = cache.Seen(j);
     }
-    std::vector<const DynamicView*> views;
-    for (const DynamicView& v : nv) views.push_back(&v);
-    DynamicEvidence e = EstimateDynamic(cache.Get(job.i), views, ev);
+    return v;
+  };
+  const auto pointers = [](const std::vector<DynamicView>& v) {
+    std::vector<const DynamicView*> p;
+    for (const DynamicView& x : v) p.push_back(&x);
+    return p;
+  };
+  for (const Job& job : todo) {
+    cache.Next();
+    const std::vector<DynamicView> nv = views_of(pair.neighbours[job.i], false),
+                                   pv = views_of(pair.partners[job.i], true);
+    DynamicEvidence e = EstimateDynamic(cache.Get(job.i), pointers(nv), ev, pointers(pv));
     if (e.neighbours == 0) ++rep.no_neighbours;
+    if (e.partners > 0) ++rep.with_partners;
     if (o.grounded > 0)
       rep.floating += size_t(
           KeepGrounded(cache.Get(job.i), s.up, o.mask.probability, o.grounded, e.probability));
@@ -542,17 +641,18 @@ DynmaskReport RunDynmask(const DynmaskOptions& o) {
   ws.Require("dynmask", {WsItem::kSparse, WsItem::kImages});
   const DepthProvider depth(ws, o.depth);
   const Scene s = LoadScene(ws, o.max_width);
-  const auto nbs = ChooseNeighbours(s, o.neighbours, o.min_baseline);
+  const Pairing pair{ChooseNeighbours(s, o.neighbours, o.min_baseline),
+                     ChoosePartners(s, o.partners)};
   DynmaskReport rep;
   rep.images = s.images.size();
   rep.depth_source = depth.Name();
   DynmaskOptions resolved = o;
   const OptionTable table = DeclareOptions(resolved);
   Ledger ledger(ws.root(), o.ProvenanceName("dynmask"), table, ws.SparseModelFiles(), ws.root());
-  const std::vector<Job> todo = StaleMaps(o, ws, s, nbs, depth, ledger, rep);
+  const std::vector<Job> todo = StaleMaps(o, ws, s, pair, depth, ledger, rep);
   RemoveStaleTemporaries(ws.DynamicDir());
   RemoveStaleTemporaries(ws.MasksDir());
-  if (!todo.empty()) ComputeMaps(o, ws, s, nbs, depth, todo, ledger, rep);
+  if (!todo.empty()) ComputeMaps(o, ws, s, pair, depth, todo, ledger, rep);
   const bool whole = o.frames.empty() && o.shard.empty();
   if (whole && MasksStale(o, ws, s, ledger)) WriteMasks(o, ws, s, ledger, rep);
   rep.why = ledger.Summary();

@@ -1,6 +1,7 @@
 // dynmask — vehicles, cyclists and pedestrians masked without labels: each photo checked against
-// its neighbours of the same drive warped through the static reconstruction (libcore/dynamic),
-// the evidence turned into blobs and tracked as segtrack tracks labels (libcore/track).
+// its neighbours of the same drive and its partners of the other drives of the road (a vehicle
+// parked in one drive only), warped through the static reconstruction (libcore/dynamic), the
+// evidence turned into blobs and tracked as segtrack tracks labels (libcore/track).
 #pragma once
 
 #include <cstddef>
@@ -21,6 +22,7 @@ struct DynmaskOptions : WorkOptions {
   std::string workspace;
   int max_width = 640;         // working resolution: images wider are scaled down to this
   int neighbours = 4;          // photos of the same drive each photo is checked against
+  int partners = 2;            // photos of other drives each photo is also checked against
   double min_baseline = 0.25;  // nearest neighbour allowed, in median camera spacings
   DepthSource depth = DepthSource::kAuto;  // auto: the mesh, else densify's maps
   bool no_flow = false;                    // --no-flow: photometric evidence only
@@ -43,6 +45,7 @@ OptionTable DeclareOptions(DynmaskOptions& o);
 struct DynmaskReport {
   size_t images = 0, written = 0, skipped = 0;  // probability maps
   size_t no_neighbours = 0;                     // images checked against no photo
+  size_t with_partners = 0;                     // images checked against another drive's photos too
   size_t floating = 0;                          // blobs removed: not standing on the ground
   bool masked = false;                          // masks and tracks.tsv were (re)made
   size_t masks_written = 0;

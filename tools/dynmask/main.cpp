@@ -9,8 +9,9 @@ namespace {
 
 constexpr const char* kAbout =
     "Mask what is not the static road (vehicles, cyclists, pedestrians) without labels: each "
-    "photo against its neighbours of the same drive warped through the static depth (photometric "
-    "and optical-flow residuals), as a probability map (dynamic/NAME.png), then blobs tracked as "
+    "photo against its neighbours of the same drive and its partners of the other drives, warped "
+    "through the static depth (photometric and optical-flow residuals), as a probability map "
+    "(dynamic/NAME.png), then blobs tracked as "
     "segtrack tracks labels (masks/NAME.png, tracks.tsv).";
 
 // Runs the tool and prints its summary; the exit status.
@@ -20,6 +21,8 @@ int RunAndReport(mvtm::DynmaskOptions& o) {
   std::fprintf(stderr, "dynmask: %zu probability maps written, %zu up to date (depth: %s)",
                r.written, r.skipped, r.depth_source.c_str());
   if (r.written) std::fprintf(stderr, " (%.0f ms per image)", r.ms_per_image);
+  if (r.with_partners)
+    std::fprintf(stderr, "; %zu checked against other drives too", r.with_partners);
   if (r.floating) std::fprintf(stderr, "; %zu blobs off the ground left out", r.floating);
   if (r.no_neighbours)
     std::fprintf(stderr, "; %zu images had no neighbour (nothing masked)", r.no_neighbours);

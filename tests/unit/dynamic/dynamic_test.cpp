@@ -136,6 +136,50 @@ TEST(Dynamic, VehicleAtTheCamerasSpeedIsFound) {
   EXPECT_LE(fp, 0.01);
 }
 
+TEST(Dynamic, PartnerOfAnotherDriveFindsAVehicleParkedInThisDriveOnly) {
+  // A second drive of the road, 1.5 m to the left and 0.5 m on: the vehicle the target's drive
+  // photographed (at the target's speed, so its own neighbours could not see it move) is not
+  // there. No same-drive neighbour at all: the partner alone is the evidence.
+  const Box box{100, 65, 40, 25};
+  const DynamicView t = MakeView(10, &box);
+  const DynamicView other = MakeView(10.5, nullptr, 1.1, -1.5);
+  for (bool flow : {false, true}) {
+    DynamicOptions o;
+    o.flow = flow;
+    const DynamicEvidence e = EstimateDynamic(t, {}, o, {&other});
+    EXPECT_EQ(e.neighbours, 0);
+    EXPECT_EQ(e.partners, 1);
+    double recall, fp;
+    Score(MaskFromProbability(e.probability, MaskOptions()), box, recall, fp);
+    EXPECT_GE(recall, 0.85) << "flow " << flow;
+    EXPECT_LE(fp, 0.01) << "flow " << flow;
+  }
+}
+
+TEST(Dynamic, AVehicleParkedInThePartnersDriveDoesNotMaskTheRoad) {
+  // The reverse case: the partner's drive had a vehicle on the road the target sees bare. Warped
+  // through the static depth (the road), the partner shows the vehicle where the target shows
+  // road; what the partner saw (its own depth map: the vehicle standing at its foot's depth)
+  // hides those road points from it, so they are not evidence.
+  const Box box{100, 65, 40, 25};
+  const DynamicView t = MakeView(10, nullptr);
+  DynamicView other = MakeView(10.5, &box, 1.0, -1.5);
+  DynamicOptions o;
+  o.flow = false;
+  const auto masked = [&] {
+    const cv::Mat m =
+        MaskFromProbability(EstimateDynamic(t, {}, o, {&other}).probability, MaskOptions());
+    return double(cv::countNonZero(m)) / double(m.total());
+  };
+  const double without = masked();
+  other.seen = other.depth.clone();
+  const float foot = other.depth.at<float>(box.y0 + box.h - 1, box.x0);
+  other.seen(cv::Rect(box.x0, box.y0, box.w, box.h)).setTo(foot);
+  const double with = masked();
+  EXPECT_GE(without, 0.008);  // the ghost: the partner's vehicle painted on the target's road
+  EXPECT_LE(with, 0.001) << "without the partner's depth " << without;
+}
+
 TEST(Dynamic, ExposureChangeIsNotMotion) {
   const DynamicView t = MakeView(10, nullptr);
   const DynamicView n1 = MakeView(9, nullptr, 1.25), n2 = MakeView(11, nullptr, 0.75);
