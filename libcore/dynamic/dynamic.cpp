@@ -323,16 +323,22 @@ DynamicEvidence EstimateDynamic(const DynamicView& t,
   CheckView(t, "target view");
   DynamicEvidence ev;
   ev.neighbours = ReducedResiduals(t, neighbours, o, "neighbour view", ev.photometric, ev.flow);
-  if (!partners.empty())
-    ev.partners = ReducedResiduals(t, partners, o, "partner view", ev.across, ev.across_flow);
+  if (!partners.empty()) {
+    DynamicOptions photometric_only = o;  // another drive: other light, another lane
+    photometric_only.flow = false;
+    cv::Mat no_flow;
+    ev.partners =
+        ReducedResiduals(t, partners, photometric_only, "partner view", ev.across, no_flow);
+  }
   ev.probability.create(t.grey.size(), CV_32F);
   for (int y = 0; y < t.grey.rows; ++y)
     for (int x = 0; x < t.grey.cols; ++x)
       ev.probability.at<float>(y, x) = CueProbability(y, x,
-                                                      {{&ev.photometric, o.threshold},
-                                                       {&ev.flow, o.flow_threshold},
-                                                       {&ev.across, o.threshold},
-                                                       {&ev.across_flow, o.flow_threshold}});
+                                                      {
+                                                          {&ev.photometric, o.threshold},
+                                                          {&ev.flow, o.flow_threshold},
+                                                          {&ev.across, o.threshold},
+                                                      });
   if (o.segments > 0 && ev.neighbours + ev.partners > 0) {
     const cv::Mat has_depth = (t.depth > 0) & (t.depth < std::numeric_limits<float>::infinity());
     SpreadOverRegions(t, has_depth, o, ev.probability);

@@ -89,7 +89,6 @@ struct DynamicEvidence {
   cv::Mat flow;         // CV_32F: the reduced flow residual in pixels (empty when flow is off)
   cv::Mat across;       // CV_32F: the photometric residual reduced over the partners (NaN where
                         // none saw the pixel; empty without partners)
-  cv::Mat across_flow;  // CV_32F: the flow residual reduced over the partners, or empty
   int neighbours = 0;   // neighbours that saw any of the target's pixels
   int partners = 0;     // partners that saw any of the target's pixels
 };
@@ -99,12 +98,15 @@ struct DynamicEvidence {
 //
 // Partners (optional) are photos of another drive of the same road, taken minutes or days
 // apart: a vehicle parked in the target's drive is consistent across its own neighbours but not
-// there in another drive. Their residuals are computed as the neighbours' and reduced apart (the
-// same quantile: a pixel must disagree with every partner); each cue's probability counts as
-// another cue. The reverse case (a vehicle parked in the partner's drive, on the road the target
-// sees) must not mask the target's road: the partner's `seen` depth (what it photographed,
-// the parked vehicle included) hides the road point behind it, so give partners their own depth
-// maps where they exist. A pixel seen by no partner has no evidence from them.
+// there in another drive. Their photometric residuals are computed as the neighbours' and
+// reduced apart (the same quantile: a pixel must disagree with every partner), another cue of
+// the probability. No flow against partners: another drive's light and lane (wet patches,
+// shadows, a lateral baseline) make flow residuals there mostly false evidence (measured on
+// mkroad: mean IoU 0.72 with it, 0.74 without). The reverse case (a vehicle parked in the partner's
+// drive, on the road the target sees) must not mask the target's road: the partner's `seen` depth
+// (what it photographed, the parked vehicle included) hides the road point behind it, so give
+// partners their own depth maps where they exist. A pixel seen by no partner has no evidence from
+// them.
 DynamicEvidence EstimateDynamic(const DynamicView& target,
                                 const std::vector<const DynamicView*>& neighbours,
                                 const DynamicOptions& options,
