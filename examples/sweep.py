@@ -12,8 +12,8 @@ tool and OUT/index.html, the page to read before choosing settings. Work folders
              kdtree's picks, against pickview's own microseconds per query (index + search)
   segtrack   --smooth, --max-gap, --min-life on damaged labels: mask IoU against truth/masks,
              against whole-process milliseconds per frame
-  dynmask    --threshold, --flow-threshold, --no-flow, --neighbours, --min-baseline, --passes,
-             --segments, --probability, --grounded (no labels): mask IoU against truth/masks and
+  dynmask    --threshold, --flow-threshold, --no-flow, --neighbours, --partners, --min-baseline,
+             --passes, --segments, --probability, --grounded (no labels): mask IoU against truth/masks and
              the share of drive B masked, against whole-process milliseconds per image
   inpaint3d  --method 3d|telea|ns|patch2d, --partners, --dilate: SSIM inside the vehicle masks
              against truth/background, against whole-process milliseconds per inpainted image
@@ -462,6 +462,7 @@ def sweep_dynmask(c):
                  ("flow", "--no-flow", (False, True)),
                  ("flow-relative", "--flow-relative", (0, 0.05, 0.1, 0.2)),
                  ("neighbours", "--neighbours", (2, 4, 6, 8)),
+                 ("partners", "--partners", (0, 1, 2, 4)),
                  ("min-baseline", "--min-baseline", (0.25, 1.5, 2.5)),
                  ("passes", "--passes", (1, 2)),
                  ("segments", "--segments", (0, 100, 300, 1000)),
@@ -469,7 +470,8 @@ def sweep_dynmask(c):
                  ("grounded", "--grounded", (0, 0.25, 0.5))]
     defaults = {"--threshold": 0.05, "--flow-threshold": 2.5, "--no-flow": False,
                 "--flow-relative": 0,
-                "--neighbours": 4, "--min-baseline": 0.25, "--passes": 2, "--segments": 300,
+                "--neighbours": 4, "--partners": 2, "--min-baseline": 0.25, "--passes": 2,
+                "--segments": 300,
                 "--probability": 0.4, "--grounded": 0.25}
     rows = []
     for group, opt, values in knobs:
@@ -493,7 +495,8 @@ def sweep_dynmask(c):
          "slowest_ms_per_image"],
         f"<b>Knobs:</b> <code>--threshold</code> (photometric residual at p = 0.5), "
         f"<code>--flow-threshold</code> (flow residual in pixels), <code>--no-flow</code>, "
-        f"<code>--neighbours</code>, <code>--min-baseline</code>, <code>--passes</code>, "
+        f"<code>--neighbours</code>, <code>--partners</code> (photos of the other drive), "
+        f"<code>--min-baseline</code>, <code>--passes</code>, "
         f"<code>--segments</code> (Felzenszwalb's k; 0 = no regions), "
         f"<code>--probability</code>, <code>--grounded</code>. Each varied alone on the "
         f"fixture's photos and true mesh ({len(a_names)} frames per drive, 640x192). "
