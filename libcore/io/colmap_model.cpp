@@ -309,8 +309,25 @@ void Join(std::ostream& os, const T& x, bool& first) {
 }
 }  // namespace
 
+namespace {
+
+// Removes DIR's model files of the format not being written (see the header).
+void RemoveOtherFormat(const fs::path& dir, bool writing_binary) {
+  for (const std::string& f : ColmapModelFileNames(!writing_binary)) {
+    std::error_code ec;
+    // None there, or DIR is not a folder (the write below says so).
+    if (!fs::exists(fs::symlink_status(dir / f, ec))) continue;
+    fs::remove(dir / f, ec);
+    if (ec)
+      throw Error((dir / f).string() + ": cannot remove the other format's file: " + ec.message());
+  }
+}
+
+}  // namespace
+
 void WriteColmapText(const Reconstruction& r, const std::string& dir) {
   fs::path d(dir);
+  RemoveOtherFormat(d, false);
   WriteTextAtomic(d / "cameras.txt", [&](std::ostream& f) {
     f << "# Camera list with one line of data per camera:\n"
       << "#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n"
@@ -525,6 +542,7 @@ Reconstruction ReadColmapBinary(const std::string& dir) {
 
 void WriteColmapBinary(const Reconstruction& r, const std::string& dir) {
   fs::path d(dir);
+  RemoveOtherFormat(d, true);
   WriteBinaryAtomic(d / "cameras.bin", [&](std::ostream& o) {
     Put<uint64_t>(o, r.cameras.size());
     for (const auto& [id, c] : r.cameras) {

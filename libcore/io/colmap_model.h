@@ -42,7 +42,10 @@ std::map<uint64_t, Point3D> ReadColmapPoints3DText(std::istream& in, const std::
 // line number of the image's pose line (a trajectory reader keeps the file's order and lines).
 void ForEachColmapImageText(std::istream& in, const std::string& name,
                             const std::function<void(ImageRecord&&, long line)>& each);
-// Writes the three files atomically (each to a temporary name, then renamed).
+// Writes the three files atomically (each to a temporary name, then renamed). The other format's
+// files in DIR are removed first: a stale binary model beside a new text one would be the one
+// read (ReadColmapModel prefers binary), and a kill between the two leaves an incomplete model,
+// which readers refuse, never an old one.
 void WriteColmapText(const Reconstruction& r, const std::string& dir);
 void WriteColmapBinary(const Reconstruction& r, const std::string& dir);
 // True when DIR's model is read as binary: all three .bin files exist (ReadColmapModel's rule).

@@ -270,8 +270,6 @@ SfmjoinReport RunSfmjoin(const SfmjoinOptions& o) {
   }
   const Reconstruction joined = Join(parts, rep.models);
   CreateFolder(outdir);
-  // The other format's files would be read first (binary) or left stale beside the new ones.
-  for (const std::string& f : ColmapModelFileNames(!o.binary)) fs::remove(outdir / f);
   if (o.binary)
     WriteColmapBinary(joined, outdir.string());
   else

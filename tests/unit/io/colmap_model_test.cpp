@@ -115,6 +115,22 @@ TEST(ColmapModel, BinaryRoundTripIsExact) {
   ExpectSame(back, ReadColmapText((d / "t").string()));
 }
 
+TEST(ColmapModel, WritingOneFormatRemovesTheOther) {
+  // A model rewritten as text where a binary one was must be what is read back (binary is read
+  // first), and the other way round.
+  auto d = test::FreshDir("colmap-formats");
+  const Reconstruction old_model = RandomModel(4, 6, 5), new_model = RandomModel(3, 5, 6);
+  WriteColmapBinary(old_model, d.string());
+  WriteColmapText(new_model, d.string());
+  EXPECT_FALSE(std::filesystem::exists(d / "images.bin"));
+  EXPECT_FALSE(IsColmapBinaryModel(d.string()));
+  ExpectSame(new_model, ReadColmapModel(d.string()));
+  WriteColmapBinary(old_model, d.string());
+  EXPECT_FALSE(std::filesystem::exists(d / "cameras.txt"));
+  EXPECT_EQ(ColmapModelFiles(d.string()).size(), 3u);
+  ExpectSame(old_model, ReadColmapModel(d.string()));
+}
+
 TEST(ColmapModel, EmptyPointsLineAndEmptyModel) {
   auto d = test::FreshDir("colmap-empty");
   Reconstruction r = RandomModel(3, 0, 3);
