@@ -214,19 +214,29 @@ TEST(Dynamic, NeighbourThatSeesNothingIsNotCounted) {
 
 TEST(Dynamic, SimilarWorldsGiveTheSameEvidence) {
   // Scale 0.2 and a UTM-sized offset: the same probabilities.
-  const Box box{100, 70, 40, 25}, a{60, 72, 40, 25}, b{150, 68, 40, 25};
+  // A partner of another drive (with its own depth map) counts too.
+  const Box box{100, 70, 40, 25}, a{60, 72, 40, 25}, b{150, 68, 40, 25}, c{30, 66, 40, 25};
   const DynamicView t = MakeView(10, &box), n1 = MakeView(9, &a), n2 = MakeView(11, &b);
-  const DynamicEvidence e = EstimateDynamic(t, {&n1, &n2}, DynamicOptions());
+  DynamicView p = MakeView(10.5, &c, 1.0, -1.5);
+  p.seen = p.depth.clone();
+  p.seen(cv::Rect(c.x0, c.y0, c.w, c.h)).setTo(p.depth.at<float>(c.y0 + c.h - 1, c.x0));
+  const DynamicEvidence e = EstimateDynamic(t, {&n1, &n2}, DynamicOptions(), {&p});
+  EXPECT_EQ(e.partners, 1);
   const Eigen::Vector3d off(451000, 120, 5410000);
   auto moved = [&](DynamicView v) {
     // x_world' = 0.2 x_world + off: t' = 0.2 t - R off, depth 0.2 z.
     v.world_to_camera.t = 0.2 * v.world_to_camera.t - (v.world_to_camera.q * off);
     v.depth *= 0.2;
+    if (!v.seen.empty()) v.seen *= 0.2;
     return v;
   };
-  const DynamicView t2 = moved(t), m1 = moved(n1), m2 = moved(n2);
-  const DynamicEvidence f = EstimateDynamic(t2, {&m1, &m2}, DynamicOptions());
+  const DynamicView t2 = moved(t), m1 = moved(n1), m2 = moved(n2), p2 = moved(p);
+  const DynamicEvidence f = EstimateDynamic(t2, {&m1, &m2}, DynamicOptions(), {&p2});
   EXPECT_LE(cv::norm(e.probability, f.probability, cv::NORM_INF), 1e-3);
+  cv::Mat ea = e.across.clone(), fa = f.across.clone();  // NaN where no partner saw: -1 in both
+  cv::patchNaNs(ea, -1), cv::patchNaNs(fa, -1);
+  EXPECT_LE(cv::norm(ea, fa, cv::NORM_INF), 1e-4);
+  EXPECT_GT(cv::countNonZero(ea >= 0), 1000);
 }
 
 TEST(Dynamic, MaskFromProbabilityFillsAndDropsSpecks) {
