@@ -44,8 +44,9 @@ void ForEachColmapImageText(std::istream& in, const std::string& name,
                             const std::function<void(ImageRecord&&, long line)>& each);
 // Writes the three files atomically (each to a temporary name, then renamed). The other format's
 // files in DIR are removed first: a stale binary model beside a new text one would be the one
-// read (ReadColmapModel prefers binary), and a kill between the two leaves an incomplete model,
-// which readers refuse, never an old one.
+// read (ReadColmapModel prefers binary). A kill before the three files are written leaves an
+// incomplete model (readers refuse it) or, over a model of the same format, a mix of old and
+// new files.
 void WriteColmapText(const Reconstruction& r, const std::string& dir);
 void WriteColmapBinary(const Reconstruction& r, const std::string& dir);
 // True when DIR's model is read as binary: all three .bin files exist (ReadColmapModel's rule).

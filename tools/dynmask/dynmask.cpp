@@ -9,6 +9,7 @@
 
 #include "base/atomic_file.h"
 #include "base/error.h"
+#include "base/stats.h"
 #include "cli/progress.h"
 #include "image/image.h"
 #include "index/view_selection.h"
@@ -84,8 +85,8 @@ OptionTable DeclareOptions(DynmaskOptions& o) {
       .Range(0, 10)
       .Alternative("0");
   t.Integer("--passes", &o.passes,
-            "2: a second pass leaves out the neighbours' pixels their own first pass finds "
-            "moving (the road a vehicle covers there); 1: one pass")
+            "2: a second pass leaves out the neighbours' and partners' pixels inside their own "
+            "first pass's blobs (the road a vehicle covers there); 1: one pass")
       .Range(1, 2);
   t.Choice("--depth", &o.depth,
            {{DepthSource::kAuto, "auto"},
@@ -194,22 +195,39 @@ std::vector<std::vector<size_t>> ChooseNeighbours(const Scene& s, int count, dou
   return out;
 }
 
+// Median distance between consecutive camera centres of each drive.
+std::map<std::string, double> DriveSpacings(const Scene& s) {
+  std::map<std::string, double> out;
+  for (const auto& [name, idx] : s.drives) {
+    std::vector<Rigid3d> w2c;
+    for (size_t i : idx) w2c.push_back(s.images[i]->world_to_camera);
+    out[name] = MedianSpacing(w2c);
+  }
+  return out;
+}
+
 // Partners of every image among the images of the other drives: the nearest centres looking the
 // same way (index/view_selection.h, the projector rule: within 45°, one just behind preferred),
-// no farther than 3 median camera spacings of its own drive (beyond, a photo of another place).
+// no farther than 3 camera spacings (beyond, a photo of another place). The spacing is the
+// larger of the image's own drive's median and the median over the road's drives, so a drive
+// of one photo, or one that mostly stood still, still has partners.
 std::vector<std::vector<size_t>> ChoosePartners(const Scene& s, int count) {
   std::vector<std::vector<size_t>> out(s.images.size());
   if (count <= 0 || s.drives.size() < 2) return out;
   ViewSelectionOptions vo;
   vo.k = size_t(count);
+  const std::map<std::string, double> spacing = DriveSpacings(s);
+  std::vector<double> moving;
+  for (const auto& [name, d] : spacing)
+    if (d > 0) moving.push_back(d);
+  const double road = moving.empty() ? 0 : Median(moving);
   for (const auto& [name, idx] : s.drives) {
-    std::vector<Rigid3d> own, others;
+    std::vector<Rigid3d> others;
     std::vector<size_t> other_idx;
-    for (size_t i : idx) own.push_back(s.images[i]->world_to_camera);
     for (const auto& [other, jdx] : s.drives)
       if (other != name)
         for (size_t j : jdx) others.push_back(s.images[j]->world_to_camera), other_idx.push_back(j);
-    const double reach = 3 * MedianSpacing(own);
+    const double reach = 3 * std::max(spacing.at(name), road);
     for (size_t i : idx)
       for (const Candidate& c : SelectViews(s.images[i]->world_to_camera, others, vo))
         if (c.distance <= reach) out[i].push_back(other_idx[c.index]);
@@ -451,8 +469,6 @@ void ComputeMaps(const DynmaskOptions& o, const Workspace& ws, const Scene& s, c
   ViewCache cache(ws, s, d, pair.neighbours, ev, o.mask);
   Progress bar("dynmask", todo.size(), o.quiet);
   const auto t0 = Clock::now();
-  // The views of `images` (Mat headers: no pixel copies), with their first-pass probability on
-  // two passes, and with what they saw (densify's maps) as partners.
   // The views of `images` (Mat headers: no pixel copies), with their first-pass mask on two
   // passes, and with what they saw (densify's maps) as partners.
   const auto views_of = [&](const std::vector<size_t>& images, bool partners) {
@@ -474,7 +490,7 @@ void ComputeMaps(const DynmaskOptions& o, const Workspace& ws, const Scene& s, c
     const std::vector<DynamicView> nv = views_of(pair.neighbours[job.i], false),
                                    pv = views_of(pair.partners[job.i], true);
     DynamicEvidence e = EstimateDynamic(cache.Get(job.i), pointers(nv), ev, pointers(pv));
-    if (e.neighbours == 0) ++rep.no_neighbours;
+    if (e.neighbours + e.partners == 0) ++rep.no_neighbours;
     if (e.partners > 0) ++rep.with_partners;
     if (o.grounded > 0)
       rep.floating += size_t(

@@ -44,10 +44,10 @@ OptionTable DeclareOptions(DynmaskOptions& o);
 
 struct DynmaskReport {
   size_t images = 0, written = 0, skipped = 0;  // probability maps
-  size_t no_neighbours = 0;                     // images checked against no photo
-  size_t with_partners = 0;                     // images checked against another drive's photos too
-  size_t floating = 0;                          // blobs removed: not standing on the ground
-  bool masked = false;                          // masks and tracks.tsv were (re)made
+  size_t no_neighbours = 0;  // images that no neighbour and no partner saw any pixel of
+  size_t with_partners = 0;  // images checked against another drive's photos too
+  size_t floating = 0;       // blobs removed: not standing on the ground
+  bool masked = false;       // masks and tracks.tsv were (re)made
   size_t masks_written = 0;
   TrackSummary summary;
   double masked_share = 0;  // mean share of the image masked

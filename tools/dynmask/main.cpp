@@ -25,7 +25,7 @@ int RunAndReport(mvtm::DynmaskOptions& o) {
     std::fprintf(stderr, "; %zu checked against other drives too", r.with_partners);
   if (r.floating) std::fprintf(stderr, "; %zu blobs off the ground left out", r.floating);
   if (r.no_neighbours)
-    std::fprintf(stderr, "; %zu images had no neighbour (nothing masked)", r.no_neighbours);
+    std::fprintf(stderr, "; %zu images seen by no other photo (nothing masked)", r.no_neighbours);
   if (r.masked) {
     const auto& t = r.summary;
     std::fprintf(stderr,

@@ -143,17 +143,12 @@ TEST(Dynamic, PartnerOfAnotherDriveFindsAVehicleParkedInThisDriveOnly) {
   const Box box{100, 65, 40, 25};
   const DynamicView t = MakeView(10, &box);
   const DynamicView other = MakeView(10.5, nullptr, 1.1, -1.5);
-  for (bool flow : {false, true}) {
-    DynamicOptions o;
-    o.flow = flow;
-    const DynamicEvidence e = EstimateDynamic(t, {}, o, {&other});
-    EXPECT_EQ(e.neighbours, 0);
-    EXPECT_EQ(e.partners, 1);
-    double recall, fp;
-    Score(MaskFromProbability(e.probability, MaskOptions()), box, recall, fp);
-    EXPECT_GE(recall, 0.85) << "flow " << flow;
-    EXPECT_LE(fp, 0.01) << "flow " << flow;
-  }
+  const DynamicEvidence e = EstimateDynamic(t, {}, DynamicOptions(), {&other});
+  EXPECT_EQ(e.partners, 1);
+  double recall, fp;
+  Score(MaskFromProbability(e.probability, MaskOptions()), box, recall, fp);
+  EXPECT_GE(recall, 0.85);
+  EXPECT_LE(fp, 0.01);
 }
 
 TEST(Dynamic, AVehicleParkedInThePartnersDriveDoesNotMaskTheRoad) {
