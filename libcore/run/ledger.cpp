@@ -178,6 +178,13 @@ std::string Ledger::Stale(const fs::path& output, const std::vector<fs::path>& i
   return why;
 }
 
+bool Ledger::AnyStale(const std::vector<fs::path>& outputs,
+                      const std::vector<fs::path>& item_inputs, bool force) {
+  bool stale = false;
+  for (const fs::path& p : outputs) stale = !Stale(p, item_inputs, force).empty() || stale;
+  return stale;
+}
+
 std::string Ledger::StaleExisting(const std::string& rel, const fs::path& output,
                                   const FileStamp& now, const std::vector<fs::path>& item_inputs) {
   // The record whose entry matches the file as it is made it.

@@ -69,6 +69,11 @@ class Ledger {
   // "--lateral changed", "input changed: mesh.ply", "no record" (made by another run, or edited).
   std::string Stale(const fs::path& output, const std::vector<fs::path>& item_inputs = {},
                     bool force = false);
+  // True when any of `outputs` must be (re)made, all from the same `item_inputs`: a tool whose
+  // outputs are made together (a model's three files, masks coupled by tracking). Asks about
+  // every output, so each one's reason counts in Summary().
+  bool AnyStale(const std::vector<fs::path>& outputs, const std::vector<fs::path>& item_inputs = {},
+                bool force = false);
   // Records that `output` (now complete on disk) was made by this run from `item_inputs`.
   void Done(const fs::path& output, const std::vector<fs::path>& item_inputs = {});
   // Writes the record now (atomically). `extra` is merged into the top level (e.g. a plan).

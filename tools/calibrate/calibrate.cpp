@@ -250,8 +250,7 @@ CalibrateReport RunCalibrate(const CalibrateOptions& o) {
   const fs::path json = fs::path(o.outdir) / "calibration.json";
   std::vector<fs::path> outputs{json};
   for (const auto& f : ColmapModelFileNames(false)) outputs.push_back(fs::path(o.outdir) / f);
-  bool stale = false;
-  for (const fs::path& p : outputs) stale = !ledger.Stale(p, {}, o.force).empty() || stale;
+  const bool stale = ledger.AnyStale(outputs, {}, o.force);
   rep.why = ledger.Summary();
   RemoveStaleTemporaries(o.outdir);
   if (!stale) {

@@ -390,8 +390,7 @@ DriveReport RunDrive(const DriveOptions& o) {
   const OptionTable table = DeclareOptions(resolved);
   Ledger ledger(RecordRoot(o, root), "drive", table,
                 road ? RoadDriveInputs(o, *road) : DriveInputs(o, *ws), root);
-  bool stale = false;
-  for (const fs::path& p : outputs) stale = !ledger.Stale(p, {}, o.force).empty() || stale;
+  const bool stale = ledger.AnyStale(outputs, {}, o.force);
   rep.why = ledger.Summary();
   if (!stale) {
     rep.up_to_date = true;

@@ -28,6 +28,12 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// A folder option that is given must name a folder (a misspelt one would silently add nothing).
+void RequireFolder(const char* flag, const std::string& dir) {
+  if (!dir.empty() && !fs::is_directory(dir))
+    throw UsageError(std::string(flag) + ": no such folder: " + dir);
+}
+
 // The options that turn probability maps into tracked masks.
 void DeclareMaskOptions(OptionTable& t, DynmaskOptions& o) {
   t.Real("--probability", &o.mask.probability, "Probability at or above which a pixel is masked")
@@ -43,11 +49,14 @@ void DeclareMaskOptions(OptionTable& t, DynmaskOptions& o) {
          "0: a quarter of the image width)")
       .AtLeast(0);
   DeclareTrackOptions(t, o.track);
-  t.Text("--also", &o.also, "Folder of masks (NAME.png) OR-ed into every output mask").Dir();
+  t.Text("--also", &o.also, "Folder of masks (NAME.png) OR-ed into every output mask")
+      .Dir()
+      .Check([&o] { RequireFolder("--also", o.also); });
   t.Text("--labels", &o.labels,
          "Folder of label images (NAME.png, class ids): the masks are the blobs of --classes "
          "that the geometry confirms move, whole")
-      .Dir();
+      .Dir()
+      .Check([&o] { RequireFolder("--labels", o.labels); });
   t.Text("--classes", &o.classes, "With --labels: the class ids to confirm, comma-separated")
       .Alternative("8")
       .Check([&o] { LabelDecoder::ParseClasses(o.classes); });
@@ -642,11 +651,9 @@ void WriteMasks(const DynmaskOptions& o, const Workspace& ws, const Scene& s, Le
 
 // The masks (and tracks.tsv) are stale when any is.
 bool MasksStale(const DynmaskOptions& o, const Workspace& ws, const Scene& s, Ledger& ledger) {
-  const std::vector<fs::path> maps = MaskInputs(o, ws, s);
-  bool stale = !ledger.Stale(ws.TracksPath(), maps, o.force).empty();
-  for (const ImageRecord* im : s.images)
-    stale = !ledger.Stale(ws.MaskPath(im->name), maps, o.force).empty() || stale;
-  return stale;
+  std::vector<fs::path> outputs{ws.TracksPath()};
+  for (const ImageRecord* im : s.images) outputs.push_back(ws.MaskPath(im->name));
+  return ledger.AnyStale(outputs, MaskInputs(o, ws, s), o.force);
 }
 
 }  // namespace

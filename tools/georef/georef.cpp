@@ -296,8 +296,7 @@ GeorefReport RunGeoref(const GeorefOptions& o) {
   std::vector<fs::path> outputs;
   for (const auto& f : ColmapModelFileNames(o.binary)) outputs.push_back(fs::path(o.outdir) / f);
   outputs.push_back(GeorefJson(o));
-  bool stale = false;
-  for (const fs::path& p : outputs) stale = !ledger.Stale(p, {}, o.force).empty() || stale;
+  const bool stale = ledger.AnyStale(outputs, {}, o.force);
   rep.why = ledger.Summary();
   RemoveStaleTemporaries(o.outdir);
   if (!stale) {

@@ -340,8 +340,7 @@ Orb2ColmapReport RunOrb2Colmap(const Orb2ColmapOptions& o) {
   // ids): one stale output remakes them all. A database another program changed since (COLMAP's
   // feature extraction) is stale too ("no record"), as it always was rewritten before.
   const std::vector<fs::path> outputs = Outputs(o);
-  bool stale = false;
-  for (const fs::path& p : outputs) stale = !ledger.Stale(p, {}, o.force).empty() || stale;
+  const bool stale = ledger.AnyStale(outputs, {}, o.force);
   rep.why = ledger.Summary();
   RemoveStaleTemporaries(o.outdir);  // a killed run's leftovers, even when all is up to date
   if (!stale) {

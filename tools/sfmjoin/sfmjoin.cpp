@@ -247,8 +247,7 @@ SfmjoinReport RunSfmjoin(const SfmjoinOptions& o) {
   std::vector<fs::path> outputs;
   for (const auto& f : ColmapModelFileNames(o.binary)) outputs.push_back(outdir / f);
   outputs.push_back(outdir / "join.tsv");
-  bool stale = false;
-  for (const fs::path& p : outputs) stale = !ledger.Stale(p, {}, o.force).empty() || stale;
+  const bool stale = ledger.AnyStale(outputs, {}, o.force);
   rep.why = ledger.Summary();
   RemoveStaleTemporaries(outdir);
   if (!stale) {

@@ -113,6 +113,20 @@ TEST_F(LedgerTest, AnOutputEditedOrMadeElsewhereHasNoRecord) {
   EXPECT_EQ(Run({}, {"f0.png"}), (V{"no record"}));
 }
 
+TEST_F(LedgerTest, AnyStaleAsksAboutEveryOutput) {
+  Run({}, {"f0.png", "f1.png", "f2.png"});
+  Put(dir_ / "out/f0.png", "edited by hand");
+  Put(dir_ / "out/f2.png", "edited too");
+  Opts o;
+  const OptionTable t = Declare(o);
+  Ledger ledger(dir_ / "out", "demo", t, {dir_ / "ws/mesh.ply"}, dir_ / "ws");
+  const fs::path a = dir_ / "ws/images/a.png";
+  EXPECT_FALSE(ledger.AnyStale({dir_ / "out/f1.png"}, {a}));
+  EXPECT_TRUE(
+      ledger.AnyStale({dir_ / "out/f0.png", dir_ / "out/f1.png", dir_ / "out/f2.png"}, {a}));
+  EXPECT_EQ(ledger.Summary(), "2 redone: no record");  // the third was asked about too
+}
+
 TEST_F(LedgerTest, APartialRunKeepsTheOtherOutputsHistory) {
   Run({}, {"f0.png", "f1.png", "f2.png"});
   EXPECT_EQ(Run({0.5, 1}, {"f0.png"}), (V{"--lateral changed"}));  // like --frames 0:1
