@@ -65,15 +65,15 @@ void WarpMaps(const DynamicView& t, const DynamicView& nb, double tol, cv::Mat& 
         if (!(u >= 0.5 && v >= 0.5 && u <= nw - 0.5 && v <= nh - 0.5)) continue;
         const int iu = std::min(nw - 1, static_cast<int>(u)),
                   iv = std::min(nh - 1, static_cast<int>(v));
-        const float dn = nb.depth.at<float>(iv, iu);
-        if (dn > 0 && std::isfinite(dn) && dn < q.z() * (1 - tol)) continue;  // hidden in nb
-        if (!nb.seen.empty()) {  // hidden in nb by what it saw there (a parked vehicle)
-          const float ds = nb.seen.at<float>(iv, iu);
-          if (ds > 0 && std::isfinite(ds) && ds < q.z() * (1 - tol)) continue;
-        }
-        if (!nb.dynamic.empty() &&
-            nb.dynamic.at<float>(std::min(nh - 1, static_cast<int>(v)),
-                                 std::min(nw - 1, static_cast<int>(u))) >= 0.5f)
+        // Hidden in nb behind a surface of this depth map (empty: none).
+        const auto nearer = [&](const cv::Mat& map) {
+          if (map.empty()) return false;
+          const float dn = map.at<float>(iv, iu);
+          return dn > 0 && std::isfinite(dn) && dn < q.z() * (1 - tol);
+        };
+        // Behind the static surface, or behind what nb saw there (a parked vehicle).
+        if (nearer(nb.depth) || nearer(nb.seen)) continue;
+        if (!nb.dynamic.empty() && nb.dynamic.at<float>(iv, iu) >= 0.5f)
           continue;  // hidden in nb by something that moves
         // How much coarser the neighbour sees the point (its pixel footprint over the target's).
         coarser.at<float>(y, x) = static_cast<float>((q.z() / gx) / (d / fx));

@@ -307,9 +307,6 @@ void Join(std::ostream& os, const T& x, bool& first) {
   first = false;
   os << x;
 }
-}  // namespace
-
-namespace {
 
 // Removes DIR's model files of the format not being written (see the header).
 void RemoveOtherFormat(const fs::path& dir, bool writing_binary) {
