@@ -322,59 +322,74 @@ void RemoveOtherFormat(const fs::path& dir, bool writing_binary) {
 
 }  // namespace
 
-void WriteColmapText(const Reconstruction& r, const std::string& dir) {
-  fs::path d(dir);
-  RemoveOtherFormat(d, false);
-  WriteTextAtomic(d / "cameras.txt", [&](std::ostream& f) {
+void WriteColmapCamerasText(const std::map<uint32_t, Camera>& cameras, const std::string& file) {
+  WriteTextAtomic(file, [&](std::ostream& f) {
     f << "# Camera list with one line of data per camera:\n"
       << "#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n"
-      << "# Number of cameras: " << r.cameras.size() << "\n";
-    for (const auto& [id, c] : r.cameras) {
+      << "# Number of cameras: " << cameras.size() << "\n";
+    for (const auto& [id, c] : cameras) {
       f << id << ' ' << CameraModelName(c.model) << ' ' << c.width << ' ' << c.height;
       for (double p : c.params) f << ' ' << p;
       f << '\n';
     }
   });
+}
+
+void WriteColmapImagesHeader(std::ostream& f, size_t images, size_t observations) {
+  const double mean = images == 0 ? 0.0 : double(observations) / double(images);
+  f << "# Image list with two lines of data per image:\n"
+    << "#   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME\n"
+    << "#   POINTS2D[] as (X, Y, POINT3D_ID)\n"
+    << "# Number of images: " << images << ", mean observations per image: " << mean << "\n";
+}
+
+void WriteColmapImageText(std::ostream& f, uint32_t id, const ImageRecord& im) {
+  Eigen::Vector4d q = NormalizedWxyz(im.world_to_camera.q);
+  const Eigen::Vector3d t = im.world_to_camera.t.array() + 0.0;  // no "-0"
+  f << id << ' ' << q[0] << ' ' << q[1] << ' ' << q[2] << ' ' << q[3] << ' ' << t.x() << ' '
+    << t.y() << ' ' << t.z() << ' ' << im.camera_id << ' ' << im.name << '\n';
+  bool first = true;
+  for (const auto& p : im.points2D) {
+    Join(f, p.xy.x(), first);
+    Join(f, p.xy.y(), first);
+    if (p.point3D_id == kInvalidPoint3DId)
+      Join(f, -1, first);
+    else
+      Join(f, p.point3D_id, first);
+  }
+  f << '\n';
+}
+
+void WriteColmapPointsHeader(std::ostream& f, size_t points, size_t track_sum) {
+  const double mean = points == 0 ? 0.0 : double(track_sum) / double(points);
+  f << "# 3D point list with one line of data per point:\n"
+    << "#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n"
+    << "# Number of points: " << points << ", mean track length: " << mean << "\n";
+}
+
+void WriteColmapPointText(std::ostream& f, uint64_t id, const Point3D& p) {
+  f << id << ' ' << p.xyz.x() << ' ' << p.xyz.y() << ' ' << p.xyz.z() << ' ' << int(p.rgb[0]) << ' '
+    << int(p.rgb[1]) << ' ' << int(p.rgb[2]) << ' ' << p.error;
+  for (const auto& el : p.track) f << ' ' << el.image_id << ' ' << el.point2D_idx;
+  f << '\n';
+}
+
+void WriteColmapText(const Reconstruction& r, const std::string& dir) {
+  fs::path d(dir);
+  RemoveOtherFormat(d, false);
+  WriteColmapCamerasText(r.cameras, (d / "cameras.txt").string());
   size_t observations = 0;
   for (const auto& [id, im] : r.images)
     for (const auto& p : im.points2D) observations += p.point3D_id != kInvalidPoint3DId;
   WriteTextAtomic(d / "images.txt", [&](std::ostream& f) {
-    double mean = r.images.empty() ? 0.0 : double(observations) / double(r.images.size());
-    f << "# Image list with two lines of data per image:\n"
-      << "#   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME\n"
-      << "#   POINTS2D[] as (X, Y, POINT3D_ID)\n"
-      << "# Number of images: " << r.images.size() << ", mean observations per image: " << mean
-      << "\n";
-    for (const auto& [id, im] : r.images) {
-      Eigen::Vector4d q = NormalizedWxyz(im.world_to_camera.q);
-      const Eigen::Vector3d t = im.world_to_camera.t.array() + 0.0;  // no "-0"
-      f << id << ' ' << q[0] << ' ' << q[1] << ' ' << q[2] << ' ' << q[3] << ' ' << t.x() << ' '
-        << t.y() << ' ' << t.z() << ' ' << im.camera_id << ' ' << im.name << '\n';
-      bool first = true;
-      for (const auto& p : im.points2D) {
-        Join(f, p.xy.x(), first);
-        Join(f, p.xy.y(), first);
-        if (p.point3D_id == kInvalidPoint3DId)
-          Join(f, -1, first);
-        else
-          Join(f, p.point3D_id, first);
-      }
-      f << '\n';
-    }
+    WriteColmapImagesHeader(f, r.images.size(), observations);
+    for (const auto& [id, im] : r.images) WriteColmapImageText(f, id, im);
   });
   WriteTextAtomic(d / "points3D.txt", [&](std::ostream& f) {
     size_t track_sum = 0;
     for (const auto& [id, p] : r.points3D) track_sum += p.track.size();
-    double mean = r.points3D.empty() ? 0.0 : double(track_sum) / double(r.points3D.size());
-    f << "# 3D point list with one line of data per point:\n"
-      << "#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n"
-      << "# Number of points: " << r.points3D.size() << ", mean track length: " << mean << "\n";
-    for (const auto& [id, p] : r.points3D) {
-      f << id << ' ' << p.xyz.x() << ' ' << p.xyz.y() << ' ' << p.xyz.z() << ' ' << int(p.rgb[0])
-        << ' ' << int(p.rgb[1]) << ' ' << int(p.rgb[2]) << ' ' << p.error;
-      for (const auto& el : p.track) f << ' ' << el.image_id << ' ' << el.point2D_idx;
-      f << '\n';
-    }
+    WriteColmapPointsHeader(f, r.points3D.size(), track_sum);
+    for (const auto& [id, p] : r.points3D) WriteColmapPointText(f, id, p);
   });
 }
 

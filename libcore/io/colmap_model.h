@@ -49,6 +49,16 @@ void ForEachColmapImageText(std::istream& in, const std::string& name,
 // new files.
 void WriteColmapText(const Reconstruction& r, const std::string& dir);
 void WriteColmapBinary(const Reconstruction& r, const std::string& dir);
+// The text files' parts, for a writer that makes a model too large to hold piece by piece: the
+// same bytes WriteColmapText writes (streams imbued with the "C" locale, precision 17).
+// cameras.txt whole; the images.txt header and one image's two lines; the points3D.txt header
+// and one point's line. `observations` counts 2-D points with a 3-D point, `track_sum` the
+// points' track elements.
+void WriteColmapCamerasText(const std::map<uint32_t, Camera>& cameras, const std::string& file);
+void WriteColmapImagesHeader(std::ostream& f, size_t images, size_t observations);
+void WriteColmapImageText(std::ostream& f, uint32_t id, const ImageRecord& im);
+void WriteColmapPointsHeader(std::ostream& f, size_t points, size_t track_sum);
+void WriteColmapPointText(std::ostream& f, uint64_t id, const Point3D& p);
 // True when DIR's model is read as binary: all three .bin files exist (ReadColmapModel's rule).
 bool IsColmapBinaryModel(const std::string& dir);
 // True when DIR holds a model (text or binary).

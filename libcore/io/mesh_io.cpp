@@ -408,57 +408,82 @@ Mesh ReadMesh(const std::string& path) {
 // positions, which rounds UTM-sized coordinates to 0.5 m. Layout follows COLMAP's meshes:
 // x y z [nx ny nz] [red green blue], faces as "list uchar int vertex_indices".
 void WriteMesh(const std::string& path, const Mesh& mesh, bool ascii) {
-  for (const auto& f : mesh.faces)
-    for (uint32_t i : f)
-      if (i >= mesh.vertices.size())
-        throw Error(path, 0, "face index " + std::to_string(i) + " out of range");
-  Eigen::Vector3d lo, hi;
-  mesh.Bounds(lo, hi);
+  MeshTotals t;
+  t.vertices = mesh.vertices.size();
+  t.faces = mesh.faces.size();
+  mesh.Bounds(t.lo, t.hi);
+  t.normals = mesh.has_normals();
+  t.colours = mesh.has_colors();
+  WriteMeshParts(
+      path, t, [&](bool, const MeshPartEmitter& emit) { emit(mesh); }, ascii);
+}
+
+void WriteMeshParts(const std::string& path, const MeshTotals& t,
+                    const std::function<void(bool faces, const MeshPartEmitter& emit)>& parts,
+                    bool ascii) {
   const bool dbl =
-      !mesh.vertices.empty() && std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff()) > 1e5;
-  const bool normals = mesh.has_normals(), colours = mesh.has_colors();
+      t.vertices > 0 && std::max(t.lo.cwiseAbs().maxCoeff(), t.hi.cwiseAbs().maxCoeff()) > 1e5;
   WriteBinaryAtomic(path, [&](std::ostream& o) {
     o << "ply\nformat " << (ascii ? "ascii" : "binary_little_endian") << " 1.0\n"
-      << "comment mvtm\nelement vertex " << mesh.vertices.size() << "\n";
+      << "comment mvtm\nelement vertex " << t.vertices << "\n";
     const char* pt = dbl ? "double" : "float";
     o << "property " << pt << " x\nproperty " << pt << " y\nproperty " << pt << " z\n";
-    if (normals) o << "property float nx\nproperty float ny\nproperty float nz\n";
-    if (colours) o << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
-    o << "element face " << mesh.faces.size()
-      << "\nproperty list uchar int vertex_indices\nend_header\n";
+    if (t.normals) o << "property float nx\nproperty float ny\nproperty float nz\n";
+    if (t.colours) o << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+    o << "element face " << t.faces << "\nproperty list uchar int vertex_indices\nend_header\n";
     auto put = [&](auto v) { o.write(reinterpret_cast<const char*>(&v), sizeof v); };
-    for (size_t i = 0; i < mesh.vertices.size(); ++i) {
-      const auto& v = mesh.vertices[i];
-      if (ascii) {
-        o << v.x() << ' ' << v.y() << ' ' << v.z();
-        if (normals)
-          o << ' ' << mesh.normals[i].x() << ' ' << mesh.normals[i].y() << ' '
-            << mesh.normals[i].z();
-        if (colours)
-          o << ' ' << int(mesh.colors[i][0]) << ' ' << int(mesh.colors[i][1]) << ' '
-            << int(mesh.colors[i][2]);
-        o << '\n';
-        continue;
+    size_t vertices = 0;
+    parts(false, [&](const Mesh& mesh) {
+      if (!mesh.vertices.empty() &&
+          ((t.normals && !mesh.has_normals()) || (t.colours && !mesh.has_colors())))
+        throw Error(path, 0, "a part lacks the normals or colours the totals announce");
+      for (size_t i = 0; i < mesh.vertices.size(); ++i) {
+        const auto& v = mesh.vertices[i];
+        if (ascii) {
+          o << v.x() << ' ' << v.y() << ' ' << v.z();
+          if (t.normals)
+            o << ' ' << mesh.normals[i].x() << ' ' << mesh.normals[i].y() << ' '
+              << mesh.normals[i].z();
+          if (t.colours)
+            o << ' ' << int(mesh.colors[i][0]) << ' ' << int(mesh.colors[i][1]) << ' '
+              << int(mesh.colors[i][2]);
+          o << '\n';
+          continue;
+        }
+        for (int k = 0; k < 3; ++k) {
+          if (dbl)
+            put(v[k]);
+          else
+            put(static_cast<float>(v[k]));
+        }
+        if (t.normals)
+          for (int k = 0; k < 3; ++k) put(mesh.normals[i][k]);
+        if (t.colours)
+          for (int k = 0; k < 3; ++k) put(mesh.colors[i][k]);
       }
-      for (int k = 0; k < 3; ++k) {
-        if (dbl)
-          put(v[k]);
-        else
-          put(static_cast<float>(v[k]));
+      vertices += mesh.vertices.size();
+    });
+    size_t faces = 0, base = 0;
+    parts(true, [&](const Mesh& mesh) {
+      for (const auto& f : mesh.faces) {
+        for (uint32_t i : f)
+          if (i >= mesh.vertices.size())
+            throw Error(path, 0, "face index " + std::to_string(base + i) + " out of range");
+        if (ascii) {
+          o << "3 " << base + f[0] << ' ' << base + f[1] << ' ' << base + f[2] << '\n';
+          continue;
+        }
+        put(uint8_t{3});
+        for (uint32_t i : f) put(static_cast<int32_t>(base + i));
       }
-      if (normals)
-        for (int k = 0; k < 3; ++k) put(mesh.normals[i][k]);
-      if (colours)
-        for (int k = 0; k < 3; ++k) put(mesh.colors[i][k]);
-    }
-    for (const auto& f : mesh.faces) {
-      if (ascii) {
-        o << "3 " << f[0] << ' ' << f[1] << ' ' << f[2] << '\n';
-        continue;
-      }
-      put(uint8_t{3});
-      for (uint32_t i : f) put(static_cast<int32_t>(i));
-    }
+      base += mesh.vertices.size();
+      faces += mesh.faces.size();
+    });
+    if (vertices != t.vertices || base != t.vertices || faces != t.faces)
+      throw Error(path, 0,
+                  "the parts hold " + std::to_string(vertices) + " vertices and " +
+                      std::to_string(faces) + " faces, the header " + std::to_string(t.vertices) +
+                      " and " + std::to_string(t.faces));
   });
 }
 

@@ -14,6 +14,9 @@
 //    than failing; a tool that needs an attribute throws with that list.
 #pragma once
 
+#include <Eigen/Core>
+#include <cstddef>
+#include <functional>
 #include <string>
 
 #include "scene/mesh.h"
@@ -24,5 +27,21 @@ namespace mvtm {
 Mesh ReadMesh(const std::string& path);
 // Writes PLY (binary unless ascii) atomically, with normals and colours when present.
 void WriteMesh(const std::string& path, const Mesh& mesh, bool ascii = false);
+
+// A PLY written in parts, for a mesh too large to hold: the totals first (the header needs them),
+// then the parts in order, each with its own vertex indices (offset by the vertices of the parts
+// before it). `parts(faces, emit)` is called twice, with faces false and then true (PLY holds
+// every vertex before any face), and must emit the same parts both times; the faces pass may
+// leave colours out. The file equals WriteMesh's of the joined mesh byte for byte. Throws Error
+// when the parts do not add up to the totals or a face names a vertex outside its part.
+struct MeshTotals {
+  size_t vertices = 0, faces = 0;
+  Eigen::Vector3d lo = Eigen::Vector3d::Zero(), hi = Eigen::Vector3d::Zero();  // vertex bounds
+  bool normals = false, colours = false;
+};
+using MeshPartEmitter = std::function<void(const Mesh&)>;
+void WriteMeshParts(const std::string& path, const MeshTotals& totals,
+                    const std::function<void(bool faces, const MeshPartEmitter& emit)>& parts,
+                    bool ascii = false);
 
 }  // namespace mvtm

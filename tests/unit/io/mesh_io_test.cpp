@@ -45,6 +45,46 @@ TEST(MeshIo, UtmCoordinatesKeepMillimetres) {
   for (size_t i = 0; i < 4; ++i) EXPECT_LT((r.vertices[i] - m.vertices[i]).norm(), 1e-6);
 }
 
+// A mesh written in parts (mkroad's long roads) reads back as the joined mesh: each part's face
+// indices shifted by the vertices before it, at UTM coordinates and in ascii; parts that do not
+// add up to the totals are an error and leave no file.
+TEST(MeshIo, PartsReadBackAsTheJoinedMesh) {
+  auto d = test::FreshDir("mesh-parts");
+  const std::vector<Mesh> parts = {Quad({451000, 5410000, 120}), Quad({451002, 5410000, 120}),
+                                   Quad({451004, 5410001, 121})};
+  MeshTotals t;
+  t.lo = Eigen::Vector3d::Constant(1e300);
+  t.hi = -t.lo;
+  for (const Mesh& p : parts) {
+    t.vertices += p.vertices.size();
+    t.faces += p.faces.size();
+    for (const auto& v : p.vertices) t.lo = t.lo.cwiseMin(v), t.hi = t.hi.cwiseMax(v);
+  }
+  t.normals = t.colours = true;
+  auto each = [&](bool, const MeshPartEmitter& emit) {
+    for (const Mesh& p : parts) emit(p);
+  };
+  for (bool ascii : {false, true}) {
+    WriteMeshParts((d / "parts.ply").string(), t, each, ascii);
+    const Mesh r = ReadMesh((d / "parts.ply").string());
+    ASSERT_EQ(r.vertices.size(), 12u);
+    ASSERT_EQ(r.faces.size(), 6u);
+    for (size_t k = 0; k < 3; ++k)
+      for (size_t f = 0; f < 2; ++f)
+        for (size_t c = 0; c < 3; ++c) {
+          const uint32_t own = parts[k].faces[f][c];
+          const uint32_t joined = r.faces[2 * k + f][c];
+          EXPECT_EQ(joined, 4 * k + own);
+          EXPECT_LT((r.vertices[joined] - parts[k].vertices[own]).norm(), 1e-6);
+          EXPECT_EQ(r.colors[joined], parts[k].colors[own]);
+        }
+  }
+  MeshTotals wrong = t;
+  wrong.faces = 5;
+  EXPECT_THROW(WriteMeshParts((d / "wrong.ply").string(), wrong, each), Error);
+  EXPECT_FALSE(std::filesystem::exists(d / "wrong.ply"));
+}
+
 TEST(MeshIo, ReportsWhatIsMissing) {
   auto d = test::FreshDir("mesh-missing");
   test::WriteFile(d / "p.ply",
