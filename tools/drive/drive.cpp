@@ -20,6 +20,7 @@
 #include "drive/controls_tsv.h"
 #include "drive/ground.h"
 #include "drive/lane_change.h"
+#include "drive/road_car.h"
 #include "io/colmap_model.h"
 #include "io/mesh_io.h"
 #include "io/trajectory.h"
@@ -160,13 +161,10 @@ std::vector<fs::path> DriveInputs(const DriveOptions& o, const Workspace& ws) {
   return inputs;
 }
 
-// Drives the car and writes OUT.
-void MakeDrive(const DriveOptions& o, const Workspace& ws, const ControlsLog& log,
-               DriveReport& rep) {
-  const MeshRaycaster mesh(ReadMesh(ws.MeshPath().string()));
-  const CarOnRoad set = SetUpCar(
-      ws, mesh, {o.scale, o.metric, o.wheelbase, o.track, o.camera_offset, o.pass, o.start},
-      "drive");
+// Drives the car set on its road (on `ground`, which `follow` replaces as the car moves when
+// given) and writes OUT.
+void DriveCar(const DriveOptions& o, const CarOnRoad& set, const MeshRaycaster& ground,
+              const ControlsLog& log, DriveReport& rep, const FollowGround& follow = nullptr) {
   const Recorded& r = set.rec;
   const CarGeometry& car = set.car;
   const RoadFrame& frame = set.frame;
@@ -178,78 +176,24 @@ void MakeDrive(const DriveOptions& o, const Workspace& ws, const ControlsLog& lo
   const CarPath path = o.lane_change.empty()
                            ? SteeredCarPath(log, o, car, PlanarCamera(frame, r.w2c[r.start]), rep)
                            : LaneChangeCarPath(r, frame, o, car);
-  const std::vector<StampedPose> poses = Place(mesh, frame, car, path, rep);
+  const std::vector<StampedPose> poses = Place(ground, frame, car, path, rep, follow);
   rep.poses = poses.size();
   rep.duration = path.times.back() - path.times.front();
   WriteOutput(o, r, poses);
 }
 
-// ---- a road (ROAD/Graph.txt): the ground of the fragment the car is in and its neighbours ----
-
-// The road's recorded drive: its recorded frames whose names start with --pass, in name order,
-// from --start. The images point into `where`'s models.
-RecordedDrive RoadRecordedDrive(const RoadLocator& where, const DriveOptions& o,
-                                std::vector<size_t>& homes) {
-  std::vector<const ImageRecord*> images;
-  std::map<const ImageRecord*, size_t> home_of;
-  for (const RoadRecordedFrame& f : where.frames()) {
-    images.push_back(f.image);
-    home_of[f.image] = f.home;
-  }
-  // Name order, as on a workspace: a pass driven against the path of record is in its own order.
-  RecordedDrive r = SelectRecordedDrive(images, o.pass, o.start, where.road().GraphPath().string(),
-                                        "owned by a fragment of the road");
-  for (const ImageRecord* im : r.images) homes.push_back(home_of.at(im));
-  const Reconstruction& home = where.model(homes[r.start]);
-  r.rec.cameras = home.cameras;  // the camera a COLMAP OUT is written with
-  return r;
+CarOptions CarOptionsOf(const DriveOptions& o) {
+  return {o.scale, o.metric, o.wheelbase, o.track, o.camera_offset, o.pass, o.start};
 }
 
-// The ground along a road: the own triangles of the fragment the car is in and of its
-// neighbours. When the car enters another fragment (its nearest recorded image is owned there),
-// that fragment's ground replaces it; the fragments two steps away are read ahead on a second
-// thread, and the others are dropped.
-class RoadGround {
- public:
-  RoadGround(const RoadLocator& where, size_t home) : where_(where), meshes_(where.road()) {
-    Enter(home);
-  }
-  const MeshRaycaster& ray() const { return *ray_; }
-  size_t home() const { return home_; }
-  size_t entered() const { return entered_.size(); }  // distinct fragments the car was in
-  // The ground after the camera reached `centre` at time t (the fragment it is in now).
-  const MeshRaycaster* Follow(const Eigen::Vector3d& centre, double t) {
-    const size_t k = where_.Locate(centre, home_, "the car at t = " + FormatDouble(t) + " s");
-    if (k != home_) Enter(k);
-    return ray_.get();
-  }
+// Drives the car on a workspace's mesh and writes OUT.
+void MakeDrive(const DriveOptions& o, const Workspace& ws, const ControlsLog& log,
+               DriveReport& rep) {
+  const MeshRaycaster mesh(ReadMesh(ws.MeshPath().string()));
+  DriveCar(o, SetUpCar(ws, mesh, CarOptionsOf(o), "drive"), mesh, log, rep);
+}
 
- private:
-  void Enter(size_t k) {
-    const Road& road = where_.road();
-    const std::vector<size_t> resident = road.Resident(k);
-    auto listed = [](const std::vector<size_t>& v, size_t x) {
-      return std::find(v.begin(), v.end(), x) != v.end();
-    };
-    std::vector<size_t> next;
-    for (size_t n : resident)
-      for (size_t m : road.Resident(n))
-        if (!listed(resident, m) && !listed(next, m)) next.push_back(m);
-    Mesh mesh = meshes_.Union(resident, next);
-    if (mesh.faces.empty())
-      throw Error(road.fragments()[k].dir.string(), 0,
-                  "no triangles in this fragment or its neighbours");
-    ray_ = std::make_unique<MeshRaycaster>(mesh);  // (it copies the mesh)
-    home_ = k;
-    entered_.insert(k);
-  }
-
-  const RoadLocator& where_;
-  RoadMeshes meshes_;
-  std::unique_ptr<MeshRaycaster> ray_;
-  size_t home_ = 0;
-  std::set<size_t> entered_;
-};
+// ---- a road (ROAD/Graph.txt): the ground of the fragment the car is in and its neighbours ----
 
 // Every file OUT depends on, on a road: Graph.txt, each fragment's model, mesh and record,
 // CONTROLS, and the start fragment's metric record when the scale comes from it.
@@ -276,32 +220,12 @@ void MakeRoadDrive(const DriveOptions& o, const Road& road, const ControlsLog& l
                    DriveReport& rep) {
   const RoadLocator where(road);
   std::vector<size_t> homes;
-  const RecordedDrive r = RoadRecordedDrive(where, o, homes);
+  const RecordedDrive r = RoadRecordedDrive(where, o.pass, o.start, homes);
   RoadGround ground(where, homes[r.start]);
-  const Workspace ws(road.fragments()[ground.home()].dir);
-  const Eigen::Vector3d up = RecordedUp(r.w2c);
-  const std::vector<size_t> resident = road.Resident(ground.home());
-  std::vector<Rigid3d> near;
-  for (size_t i = 0; i < r.w2c.size(); ++i)
-    if (std::find(resident.begin(), resident.end(), homes[i]) != resident.end())
-      near.push_back(r.w2c[i]);
-  const std::vector<double> heights = CameraHeights(ground.ray(), near, up);
-  rep.height_cameras = heights.size();
-  rep.scale = ResolveScale(o.scale, o.metric, ws, heights, "drive", rep.scale_source);
-  const CarGeometry car = MakeCar(o.wheelbase, o.track, o.camera_offset, ws, heights, rep.scale,
-                                  &rep.height_from_workspace);
-  const RoadFrame frame = FrameAtCamera(r.w2c[r.start], up, rep.scale);
-  rep.camera_height = car.camera_offset.z();
-  const CarPath path = o.lane_change.empty()
-                           ? SteeredCarPath(log, o, car, PlanarCamera(frame, r.w2c[r.start]), rep)
-                           : LaneChangeCarPath(r, frame, o, car);
-  const std::vector<StampedPose> poses =
-      Place(ground.ray(), frame, car, path, rep,
-            [&ground](const Eigen::Vector3d& c, double t) { return ground.Follow(c, t); });
-  rep.poses = poses.size();
+  const CarOnRoad set = SetUpRoadCar(where, ground, r, homes, CarOptionsOf(o), "drive");
+  DriveCar(o, set, ground.ray(), log, rep,
+           [&ground](const Eigen::Vector3d& c, double t) { return ground.Follow(c, t); });
   rep.fragments = ground.entered();
-  rep.duration = path.times.back() - path.times.front();
-  WriteOutput(o, r, poses);
 }
 
 }  // namespace

@@ -23,6 +23,7 @@
 #include "devices.h"
 #include "drive/car_setup.h"
 #include "drive/controls_tsv.h"
+#include "drive/road_car.h"
 #include "image/async_writer.h"
 #include "index/view_selection.h"
 #include "io/mesh_io.h"
@@ -31,6 +32,8 @@
 #include "render/renderer.h"
 #include "screen.h"
 #include "workspace/projector_sources.h"
+#include "workspace/road.h"
+#include "workspace/road_locator.h"
 #include "workspace/workspace.h"
 
 namespace mvtm {
@@ -95,7 +98,7 @@ OptionTable DeclareOptions(SimulateOptions& o) {
   OptionTable t("simulate");
   t.Positional("WS", &o.workspace,
                "Workspace folder (sparse/, images/, mesh.ply; depth/, masks/, textures/ used "
-               "when present)")
+               "when present), or a road folder (Graph.txt: roadsplit), streamed")
       .Dir();
   t.Text("--size", &o.size,
          "One screen's size WxH (default: the camera's); the camera's horizontal field of view "
@@ -165,22 +168,31 @@ double Seconds(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double>(b - a).count();
 }
 
-// The road the car drives: the car set on it as drive sets it (CarOnRoad), the mesh it is
-// placed on, and the recorded drive as a path in metres.
-struct Road : CarOnRoad {
-  std::unique_ptr<MeshRaycaster> ray;
+// What the car drives: the car set on it as drive sets it (CarOnRoad), the ground it is placed
+// on, and the recorded drive as a path in metres. On a workspace the ground is its whole mesh;
+// on a road (ROAD/Graph.txt) it is the fragment the car is in and its neighbours (RoadGround),
+// following the car.
+struct Track : CarOnRoad {
+  std::unique_ptr<MeshRaycaster> ray;  // a workspace's mesh
+  std::unique_ptr<RoadLocator> where;  // a road
+  std::unique_ptr<RoadGround> ground;
+  std::vector<size_t> homes;           // a road: the fragment owning each recorded image
   std::unique_ptr<RecordedPath> path;  // the recorded camera feet
   std::vector<PlanarPose> rear;        // the rear axle under each recorded camera
   std::vector<size_t> along;           // the recorded images the path runs through
   BicycleParams bicycle;
+
+  const MeshRaycaster& Ground() const { return ground ? ground->ray() : *ray; }
+  // The ground after the car's camera reached `centre` at time t.
+  const MeshRaycaster& Follow(const Eigen::Vector3d& centre, double t) {
+    return ground ? *ground->Follow(centre, t) : *ray;
+  }
+  // The ground under recorded image i (the car put down there).
+  const MeshRaycaster& GroundAt(size_t i) { return ground ? *ground->JumpTo(homes[i]) : *ray; }
 };
 
-Road LoadRoad(const SimulateOptions& o, const Workspace& ws, const Mesh& mesh) {
-  Road r;
-  r.ray = std::make_unique<MeshRaycaster>(mesh);
-  static_cast<CarOnRoad&>(r) = SetUpCar(
-      ws, *r.ray, {o.scale, o.metric, o.wheelbase, o.track, o.camera_offset, o.pass, o.start},
-      "simulate");
+// The recorded path, the rear axles and the bicycle of a track whose car is set.
+void MeasureTrack(const SimulateOptions& o, Track& r) {
   // The car is set up as drive sets it up (the up axis and height from every recorded image of
   // --pass), but the path it is measured against is the start image's own drive (its name's
   // prefix before '_', without --pass), not every drive of the road in name order.
@@ -195,6 +207,28 @@ Road LoadRoad(const SimulateOptions& o, const Workspace& ws, const Mesh& mesh) {
   }
   r.path = std::make_unique<RecordedPath>(feet);
   r.bicycle = BicycleParams{o.wheelbase, o.steering_ratio, o.max_steer};
+}
+
+CarOptions CarOptionsOf(const SimulateOptions& o) {
+  return {o.scale, o.metric, o.wheelbase, o.track, o.camera_offset, o.pass, o.start};
+}
+
+Track LoadTrack(const SimulateOptions& o, const Workspace& ws, const Mesh& mesh) {
+  Track r;
+  r.ray = std::make_unique<MeshRaycaster>(mesh);
+  static_cast<CarOnRoad&>(r) = SetUpCar(ws, *r.ray, CarOptionsOf(o), "simulate");
+  MeasureTrack(o, r);
+  return r;
+}
+
+Track LoadRoadTrack(const SimulateOptions& o, const Road& road) {
+  Track r;
+  r.where = std::make_unique<RoadLocator>(road);
+  const RecordedDrive drive = RoadRecordedDrive(*r.where, o.pass, o.start, r.homes);
+  r.ground = std::make_unique<RoadGround>(*r.where, r.homes[drive.start]);
+  static_cast<CarOnRoad&>(r) =
+      SetUpRoadCar(*r.where, *r.ground, drive, r.homes, CarOptionsOf(o), "simulate");
+  MeasureTrack(o, r);
   return r;
 }
 
@@ -208,13 +242,13 @@ Eigen::Vector2d FootOf(const PlanarPose& rear, const CarGeometry& car) {
 // The car as it drives: its path (a segment per reset), its ground and its speed.
 class LiveCar {
  public:
-  LiveCar(const Road& road, const PlanarPose& rear, double t) : road_(road) { Restart(rear, t); }
+  LiveCar(Track& road, const PlanarPose& rear, double t) : road_(road) { Restart(rear, t); }
   // Puts the car at `rear`, standing, from time t: a new segment. `ground` (metres along up;
   // NaN: the start's) is the ground height there, where the wheels' rays start from.
   void Restart(const PlanarPose& rear, double t, double ground = std::nan("")) {
     path_ = std::make_unique<SteeredPath>(std::vector<ControlSample>{{t, 0, 0, 0}}, road_.bicycle,
                                           rear);
-    placer_ = std::make_unique<GroundPlacer>(*road_.ray, road_.frame, road_.car);
+    placer_ = std::make_unique<GroundPlacer>(road_.Ground(), road_.frame, road_.car);
     if (!std::isnan(ground)) placer_->StartFromGround(ground);
     speed_ = 0;
     steer_ = 0;
@@ -233,13 +267,19 @@ class LiveCar {
     return true;
   }
   PlanarPose At(double t) const { return path_->Continued(t); }
-  Placement Place(double t) { return placer_->Place(At(t), t); }
+  // The car placed at time t; on a road, the next placement is on the ground of the fragment
+  // its camera is in now.
+  Placement Place(double t) {
+    const Placement p = placer_->Place(At(t), t);
+    if (road_.ground) placer_->UseMesh(road_.Follow(p.camera_to_world.t, t));
+    return p;
+  }
   double speed() const { return speed_; }
   double steer() const { return steer_; }
   double segment_start() const { return path_->start_time(); }
 
  private:
-  const Road& road_;
+  Track& road_;
   std::unique_ptr<SteeredPath> path_;
   std::unique_ptr<GroundPlacer> placer_;
   double speed_ = 0, steer_ = 0;
@@ -450,6 +490,14 @@ class LiveView {
   }
   // The survey and plan from the start view and recorded views along the drive.
   void Plan(const Rigid3d& start_c2w, const std::vector<Rigid3d>& recorded_w2c);
+  // Goes on from `prev` (the view of the fragment the car left): its survey and plan (a road has
+  // one plan, upgraded live as on a workspace) and its totals.
+  void Adopt(const LiveView& prev) {
+    survey_ = prev.survey_;
+    plan_ = prev.plan_;
+    stats_ = prev.stats_;
+    load_ms_ = prev.load_ms_;
+  }
   const SceneSurvey& survey() const { return survey_; }
   const EffectsPlan& plan() const { return plan_; }
   const RenderStats& stats() const { return stats_; }  // totals over every render
@@ -563,6 +611,54 @@ std::vector<Image> LiveView::Render(const Rigid3d& c2w, const Quality& q, double
   return frames;
 }
 
+// The view the car's camera is rendered in: one for a workspace; on a road, the view of the
+// fragment the car's ground is in (that fragment's photos as projectors, the mesh the ground
+// holds: its own and its neighbours' triangles), made when the car enters it and going on with
+// the road's plan.
+class Views {
+ public:
+  Views(const SimulateOptions& o, Track& track) : o_(o), track_(track) {}
+  // A workspace's view (`ws` outlives it).
+  void Open(const Workspace& ws, const Reconstruction& rec, const Mesh& mesh) {
+    view_ = std::make_unique<LiveView>(o_, ws, rec, mesh, track_.scale);
+  }
+  // A road's view of the fragment the car starts in.
+  void OpenRoad() { view_ = MakeFragmentView(track_.ground->home()); }
+  LiveView& view() { return *view_; }
+  // The view for the car where its ground is now (on a road, made anew when it entered another
+  // fragment; `log` says so).
+  LiveView& Current(double t, std::vector<std::string>& log) {
+    if (!track_.ground || track_.ground->home() == home_) return *view_;
+    const auto t0 = Clock::now();
+    std::unique_ptr<Workspace> old_ws = std::move(ws_);
+    std::unique_ptr<LiveView> next = MakeFragmentView(track_.ground->home());
+    next->Adopt(*view_);
+    view_ = std::move(next);
+    old_ws.reset();
+    char note[160];
+    std::snprintf(note, sizeof note, "t=%s s: fragment %s entered: its view made in %.0f ms",
+                  FormatShort(std::round(t * 1000) / 1000).c_str(),
+                  track_.where->road().fragments()[home_].id.c_str(),
+                  Seconds(t0, Clock::now()) * 1e3);
+    log.push_back(note);
+    return *view_;
+  }
+
+ private:
+  std::unique_ptr<LiveView> MakeFragmentView(size_t home) {
+    home_ = home;
+    ws_ = std::make_unique<Workspace>(track_.where->road().fragments()[home].dir);
+    return std::make_unique<LiveView>(o_, *ws_, track_.where->model(home), track_.ground->mesh(),
+                                      track_.scale);
+  }
+
+  const SimulateOptions& o_;
+  Track& track_;
+  std::unique_ptr<Workspace> ws_;  // a road: the fragment's
+  std::unique_ptr<LiveView> view_;
+  size_t home_ = 0;
+};
+
 // Where the projectors' depth maps come from, when the plan needs them ("" when it does not).
 std::string DepthSource(const Workspace& ws, const Reconstruction& rec, const EffectsPlan& plan) {
   if (!(plan.occlusion || plan.skybox)) return "";
@@ -599,11 +695,11 @@ struct SdlSession {
 // The running session: the car, its input, the screens, the record.
 class Session {
  public:
-  Session(const SimulateOptions& o, Road& road, LiveView& view, Devices& devices, Screen* screen,
+  Session(const SimulateOptions& o, Track& road, Views& views, Devices& devices, Screen* screen,
           Recorder& rec, const ControlsLog* log, SimulateReport& rep)
       : o_(o),
         road_(road),
-        view_(view),
+        views_(views),
         devices_(devices),
         screen_(screen),
         rec_(rec),
@@ -627,7 +723,7 @@ class Session {
     if (!detail.empty()) {
       char note[96];
       std::snprintf(note, sizeof note, "levels of detail for %zu distances prepared in %.2f s",
-                    detail.size(), view_.PrepareDetail(detail));
+                    detail.size(), views_.view().PrepareDetail(detail));
       rep_.log.push_back(note);
     }
   }
@@ -649,8 +745,8 @@ class Session {
   bool Frame(double T, double display);  // false: the session ends
 
   const SimulateOptions& o_;
-  Road& road_;
-  LiveView& view_;
+  Track& road_;
+  Views& views_;
   Devices& devices_;
   Screen* screen_;
   Recorder& rec_;
@@ -678,8 +774,8 @@ class Session {
     std::vector<const Image*> ptrs;
     for (const Image& f : last_frames_) ptrs.push_back(&f);
     if (ptrs.empty()) return Image();
-    return Compose(ptrs, int(view_.screen().width) * o_.screens, int(view_.screen().height),
-                   hud_ ? &last_hud_ : nullptr);
+    return Compose(ptrs, int(views_.view().screen().width) * o_.screens,
+                   int(views_.view().screen().height), hud_ ? &last_hud_ : nullptr);
   }
 };
 
@@ -708,7 +804,7 @@ void Session::Step(double t) {
     }
   } else if (o_.max_offset > 0 && std::abs(offset_) > o_.max_offset) {
     Reset(t,
-          FormatDouble(std::round(std::abs(offset_) * 100) / 100) +
+          FormatShort(std::round(std::abs(offset_) * 100) / 100) +
               " m from the recorded path (--max-offset)",
           false);
   }
@@ -725,6 +821,7 @@ void Session::Reset(double t, const std::string& why, bool to_start) {
     where = road_.rec.images[i]->name;
     // The recorded camera's height less the car's camera height: the ground under it.
     ground = road_.frame.Height(road_.rec.w2c[i].Centre()) - road_.car.camera_offset.z();
+    road_.GroundAt(i);  // on a road, that image's fragment
   }
   car_.Restart(at, t, ground);
   rec_.Restart(t);  // this step's row (if any) is the car's before the reset: dropped
@@ -737,7 +834,7 @@ void Session::Reset(double t, const std::string& why, bool to_start) {
   measures_.Reset();
   rec_.Comment("reset at " + FormatDouble(t) + " s to " + where + ": " + why);
   rec_.Control(t, car_.steer(), car_.speed(), Pedals());
-  rep_.log.push_back("t=" + FormatDouble(std::round(t * 1000) / 1000) + " s: car put " +
+  rep_.log.push_back("t=" + FormatShort(std::round(t * 1000) / 1000) + " s: car put " +
                      (where.find(' ') == std::string::npos ? "at " : "") + where + ": " + why);
   offset_ = road_.path->Project(FootOf(at, road_.car)).offset;
 }
@@ -745,7 +842,8 @@ void Session::Reset(double t, const std::string& why, bool to_start) {
 bool Session::Frame(double T, double display) {
   const auto t_start = Clock::now();
   const InputEvents ev = devices_.Poll();
-  for (const std::string& l : ev.log) rep_.log.push_back("t=" + FormatDouble(T) + " s: " + l);
+  for (const std::string& l : ev.log)
+    rep_.log.push_back("t=" + FormatShort(std::round(T * 1000) / 1000) + " s: " + l);
   if (ev.quit) {
     rep_.quit = true;
     rep_.ended = "quit";
@@ -764,8 +862,10 @@ bool Session::Frame(double T, double display) {
   last_good_ = car_.At(T);
   last_ground_ = road_.frame.Height(p.rear_ground);
   const auto t_render = Clock::now();
-  std::vector<Image> frames = view_.Render(
-      p.camera_to_world, quality_, std::max(0.0, car_.speed()) * 0.5 * road_.scale, rep_.log);
+  std::vector<Image> frames =
+      views_.Current(T, rep_.log)
+          .Render(p.camera_to_world, quality_, std::max(0.0, car_.speed()) * 0.5 * road_.scale,
+                  rep_.log);
   rep_.render_ms += Seconds(t_render, Clock::now()) * 1e3;
   const HudState hs{car_.speed() * 3.6, car_.steer(), pedals_.reverse, quality_.level(),
                     quality_.levels()};
@@ -780,7 +880,7 @@ bool Session::Frame(double T, double display) {
   last_shown_ = T;
   if (o_.record_frames) {  // as shown: each screen at the screen's size (nearest, as the window)
     std::vector<Image> shown;
-    const int w = int(view_.screen().width), h = int(view_.screen().height);
+    const int w = int(views_.view().screen().width), h = int(views_.view().screen().height);
     for (const Image& f : frames)
       shown.push_back(f.width == w && f.height == h ? f : Compose({&f}, w, h, nullptr));
     rec_.Frame(rep_.frames, std::move(shown));
@@ -829,11 +929,11 @@ void Session::Run() {
   rep_.final_scale = quality_.scale();
   rep_.final_projectors = quality_.projectors();
   rep_.final_lod_m = quality_.lod_m();
-  const RenderStats& st = view_.stats();
+  const RenderStats& st = views_.view().stats();
   const double n = double(std::max<size_t>(1, rep_.frames));
   rep_.stages = {{"draw_ms", st.draw_ms / n},         {"shade_ms", st.shade_ms / n},
                  {"readback_ms", st.readback_ms / n}, {"fill_ms", st.fill_ms / n},
-                 {"cull_ms", st.cull_ms / n},         {"load_ms", view_.load_ms() / n}};
+                 {"cull_ms", st.cull_ms / n},         {"load_ms", views_.view().load_ms() / n}};
   rep_.driving = measures_.Summary();
   if (rep_.ended.empty()) rep_.ended = log_ ? "the end of the log" : "--duration reached";
 }
@@ -881,6 +981,51 @@ nlohmann::json SummaryJson(const SimulateOptions& o, const SimulateReport& r) {
           {"log", r.log}};
 }
 
+// What the car drives: a workspace (its whole mesh) or a road (ROAD/Graph.txt: roadsplit)
+// streamed by its graph. Held by pointer: the track refers to the road.
+struct Drivable {
+  std::optional<Road> road;
+  std::optional<Workspace> workspace;
+  Mesh mesh;  // a workspace's
+  Track track;
+  // The workspace, or the fragment the car starts in.
+  Workspace StartWorkspace() const {
+    return road ? Workspace(road->fragments()[track.ground->home()].dir) : *workspace;
+  }
+};
+
+std::unique_ptr<Drivable> OpenDrivable(const SimulateOptions& o) {
+  auto d = std::make_unique<Drivable>();
+  if (Road::IsRoad(o.workspace)) {
+    d->road.emplace(o.workspace);
+    d->track = LoadRoadTrack(o, *d->road);
+    return d;
+  }
+  d->workspace.emplace(o.workspace);
+  d->workspace->Require("simulate", {WsItem::kSparse, WsItem::kMesh});
+  d->mesh = ReadMesh(d->workspace->MeshPath().string());
+  if (d->mesh.faces.empty())
+    throw Error(d->workspace->MeshPath().string(), 0, "the mesh has no triangles");
+  d->track = LoadTrack(o, *d->workspace, d->mesh);
+  return d;
+}
+
+// The car at the start image (an error naming the mesh when it is off it) and the view's plan
+// from there and the recorded views.
+void PlanAtStart(const Track& track, LiveView& view, const Workspace& ws) {
+  GroundPlacer start_placer(track.Ground(), track.frame, track.car);
+  Placement start;
+  try {
+    start = start_placer.Place(track.rear[track.rec.start], 0);
+  } catch (const Error& e) {
+    throw Error(ws.MeshPath().string(), 0,
+                "the car at the start image " + track.rec.images[track.rec.start]->name +
+                    " is off the mesh (" + e.what() + "): choose another --start or " +
+                    "--camera-offset");
+  }
+  view.Plan(start.camera_to_world, track.rec.w2c);
+}
+
 }  // namespace
 
 SimulateReport RunSimulate(const SimulateOptions& o, std::ostream& out) {
@@ -891,11 +1036,12 @@ SimulateReport RunSimulate(const SimulateOptions& o, std::ostream& out) {
   const InputMapping mapping = o.mapping.empty() ? InputMapping() : ReadInputMapping(o.mapping);
   std::vector<VirtualRow> script;
   if (!o.virtual_input.empty()) script = ReadVirtualScript(o.virtual_input);
-  const Workspace ws(o.workspace);
-  ws.Require("simulate", {WsItem::kSparse, WsItem::kMesh});
-  const Mesh mesh = ReadMesh(ws.MeshPath().string());
-  if (mesh.faces.empty()) throw Error(ws.MeshPath().string(), 0, "the mesh has no triangles");
-  Road road = LoadRoad(o, ws, mesh);
+  const std::unique_ptr<Drivable> d = OpenDrivable(o);
+  Track& track = d->track;
+  const std::optional<Road>& road = d->road;
+  const size_t start_home = road ? track.ground->home() : 0;
+  const Workspace ws = d->StartWorkspace();
+  const Reconstruction& start_rec = road ? track.where->model(start_home) : track.rec.rec;
   SimulateReport rep;
   // SDL and the window first: SDL's offscreen video driver sets up EGL state of its own, so the
   // renderer's context is made after it (and stays the current one).
@@ -903,37 +1049,33 @@ SimulateReport RunSimulate(const SimulateOptions& o, std::ostream& out) {
   std::unique_ptr<Screen> screen;
   if (!o.explain) sdl.emplace(!o.no_window);
   if (!o.explain && !o.no_window) {
-    const Camera sc = ScreenCamera(road.rec.rec, o.size);
+    const Camera sc = ScreenCamera(track.rec.rec, o.size);
     screen = std::make_unique<Screen>(int(sc.width) * o.screens, int(sc.height),
                                       "mvtm simulate — " + o.workspace);
   }
   auto ctx = GlContext::Create(o.gl);
   rep.gl = ctx->Describe();
-  LiveView view(o, ws, road.rec.rec, mesh, road.scale);
-  GroundPlacer start_placer(*road.ray, road.frame, road.car);
-  Placement start;
-  try {
-    start = start_placer.Place(road.rear[road.rec.start], 0);
-  } catch (const Error& e) {
-    throw Error(ws.MeshPath().string(), 0,
-                "the car at the start image " + road.rec.images[road.rec.start]->name +
-                    " is off the mesh (" + e.what() + "): choose another --start or " +
-                    "--camera-offset");
-  }
-  view.Plan(start.camera_to_world, road.rec.w2c);
+  Views views(o, track);
+  if (road)
+    views.OpenRoad();
+  else
+    views.Open(ws, start_rec, d->mesh);
+  LiveView& view = views.view();
+  PlanAtStart(track, view, ws);
   if (o.explain) {
     nlohmann::json j;
     j["screens"] = o.screens;
     j["render_size"] = {view.screen().width, view.screen().height};
     j["gl"] = rep.gl;
+    if (road) j["fragment"] = road->fragments()[start_home].id;
     j["effects"] = ExplainEffects(view.survey(), view.plan());
     j["shader_defines"] = view.plan().Defines();
-    j["depth_maps"] = DepthSource(ws, road.rec.rec, view.plan());
+    j["depth_maps"] = DepthSource(ws, start_rec, view.plan());
     out << j.dump(2) << "\n";
     return rep;
   }
-  if (const std::string d = DepthSource(ws, road.rec.rec, view.plan()); !d.empty())
-    rep.log.push_back(d);
+  if (const std::string depth = DepthSource(ws, start_rec, view.plan()); !depth.empty())
+    rep.log.push_back(road ? depth + " in the start fragment" : depth);
   Devices devices(mapping, script, !o.no_window);
   rep.device = o.replay.empty() ? devices.Describe() : "replay of " + o.replay;
   if (rep.device == "none")
@@ -941,7 +1083,7 @@ SimulateReport RunSimulate(const SimulateOptions& o, std::ostream& out) {
         "no input device: the car stands until a wheel or game controller is plugged in (or "
         "open a window for the keyboard)");
   Recorder rec(o.record);
-  Session session(o, road, view, devices, screen.get(), rec, o.replay.empty() ? nullptr : &log,
+  Session session(o, track, views, devices, screen.get(), rec, o.replay.empty() ? nullptr : &log,
                   rep);
   session.Run();
   rec.Finish(SummaryJson(o, rep));
