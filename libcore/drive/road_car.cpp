@@ -26,8 +26,8 @@ RecordedDrive RoadRecordedDrive(const RoadLocator& where, const std::string& pas
   return r;
 }
 
-RoadGround::RoadGround(const RoadLocator& where, size_t home)
-    : where_(where), meshes_(where.road()) {
+RoadGround::RoadGround(const RoadLocator& where, size_t home, bool keep_mesh)
+    : where_(where), meshes_(where.road()), keep_mesh_(keep_mesh) {
   Enter(home);
 }
 
@@ -57,7 +57,7 @@ void RoadGround::Enter(size_t k) {
     throw Error(road.fragments()[k].dir.string(), 0,
                 "no triangles in this fragment or its neighbours");
   ray_ = std::make_unique<MeshRaycaster>(mesh);  // (it copies the mesh)
-  mesh_ = std::move(mesh);
+  mesh_ = keep_mesh_ ? std::move(mesh) : Mesh();
   home_ = k;
   entered_.insert(k);
 }

@@ -30,9 +30,11 @@ RecordedDrive RoadRecordedDrive(const RoadLocator& where, const std::string& pas
 
 class RoadGround {
  public:
-  RoadGround(const RoadLocator& where, size_t home);
+  // `keep_mesh`: also keep the triangles (mesh()) beside the raycaster's copy.
+  RoadGround(const RoadLocator& where, size_t home, bool keep_mesh = false);
   const MeshRaycaster& ray() const { return *ray_; }
-  // The triangles under ray(): the fragment's own and its neighbours' (RoadMeshes::Union).
+  // The triangles under ray(): the fragment's own and its neighbours' (RoadMeshes::Union);
+  // empty unless kept.
   const Mesh& mesh() const { return mesh_; }
   size_t home() const { return home_; }
   size_t entered() const { return entered_.size(); }  // distinct fragments the car was in
@@ -47,6 +49,7 @@ class RoadGround {
 
   const RoadLocator& where_;
   RoadMeshes meshes_;
+  bool keep_mesh_;
   Mesh mesh_;
   std::unique_ptr<MeshRaycaster> ray_;
   size_t home_ = 0;

@@ -225,7 +225,7 @@ Track LoadRoadTrack(const SimulateOptions& o, const Road& road) {
   Track r;
   r.where = std::make_unique<RoadLocator>(road);
   const RecordedDrive drive = RoadRecordedDrive(*r.where, o.pass, o.start, r.homes);
-  r.ground = std::make_unique<RoadGround>(*r.where, r.homes[drive.start]);
+  r.ground = std::make_unique<RoadGround>(*r.where, r.homes[drive.start], /*keep_mesh=*/true);
   static_cast<CarOnRoad&>(r) =
       SetUpRoadCar(*r.where, *r.ground, drive, r.homes, CarOptionsOf(o), "simulate");
   MeasureTrack(o, r);
@@ -492,11 +492,14 @@ class LiveView {
   void Plan(const Rigid3d& start_c2w, const std::vector<Rigid3d>& recorded_w2c);
   // Goes on from `prev` (the view of the fragment the car left): its survey and plan (a road has
   // one plan, upgraded live as on a workspace) and its totals.
+  // The level of detail in use is built now (the first frame would otherwise).
   void Adopt(const LiveView& prev) {
     survey_ = prev.survey_;
     plan_ = prev.plan_;
     stats_ = prev.stats_;
     load_ms_ = prev.load_ms_;
+    if (prev.lod_m_ > 0) renderer_.SetDetail(prev.lod_m_ * scale_, prev.lod_m_ * scale_ / 25);
+    lod_m_ = prev.lod_m_;
   }
   const SceneSurvey& survey() const { return survey_; }
   const EffectsPlan& plan() const { return plan_; }
