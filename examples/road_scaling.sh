@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Roads of 0.5..8 km (mkroad --length, the default density of frames and points): roadsplit,
+# Roads of 0.5..8 km (mkroad --length, the default density of frames and points, timed): roadsplit,
 # then ptmrender streaming each road, bakedepth on each fragment in turn, densify on fragment
 # A/001 (the same stretch of the same seeded layout on every road), and ptmrender on the whole
 # workspace for contrast; whole processes timed by /usr/bin/time -v. Writes OUT/scaling.tsv (README, "Roads of
@@ -12,13 +12,18 @@ B=${MVTM_BIN:-build/bin}
 export MESA_SHADER_CACHE_DISABLE=true
 mkdir -p "$out"
 tsv=$out/scaling.tsv
-printf 'length_m\tfragments\tframes\tptm_wall_s\tptm_ms_per_frame\tptm_peak_MB\tbake_wall_s\tbake_ms_per_image\tbake_peak_MB\tws_ptm_wall_s\tws_ptm_peak_MB\tdensify_s_per_image\tdensify_peak_MB\n' > "$tsv"
+printf 'length_m\tmkroad_s\tmkroad_peak_MB\tfragments\tframes\tptm_wall_s\tptm_ms_per_frame\tptm_peak_MB\tbake_wall_s\tbake_ms_per_image\tbake_peak_MB\tws_ptm_wall_s\tws_ptm_peak_MB\tdensify_s_per_image\tdensify_peak_MB\n' > "$tsv"
 wall() { awk '/Elapsed \(wall/ {n = split($NF, t, ":"); print (n == 3 ? t[1] * 3600 + t[2] * 60 + t[3] : t[1] * 60 + t[2])}' "$1"; }
 peak() { awk '/Maximum resident/ {print $NF / 1024}' "$1"; }
 for L in $lengths; do
   d=$out/mk$L r=$out/road$L
-  [ -f "$d/truth/mkroad.txt" ] || "$B/mkroad" -q --force --length "$L" --supersample 1 --offpath-every 0 \
-    --fullsize-frames 0 "$d"
+  # The fixture (made in stretches: flat memory, time linear in length); '-' when reused.
+  mk_s=- mk_mb=-
+  if [ ! -f "$d/truth/mkroad.txt" ]; then
+    /usr/bin/time -v "$B/mkroad" -q --force --length "$L" --supersample 1 --offpath-every 0 \
+      --fullsize-frames 0 "$d" 2> "$out/t_mk.txt"
+    mk_s=$(wall "$out/t_mk.txt") mk_mb=$(peak "$out/t_mk.txt")
+  fi
   "$B/roadsplit" -q "$d" "$r"
   rm -rf "$out/out$L"
   /usr/bin/time -v "$B/ptmrender" -q "$r" "$out/out$L" 2> "$out/t_ptm.txt"
@@ -37,7 +42,7 @@ for L in $lengths; do
   /usr/bin/time -v "$B/ptmrender" -q "$d" "$out/ws$L" 2> "$out/t_ws.txt"
   rm -rf "$out/ws$L"
   pw=$(wall "$out/t_ptm.txt")
-  printf '%s\t%s\t%s\t%s\t%.3f\t%s\t%s\t%.3f\t%s\t%s\t%s\t%.3f\t%s\n' "$L" \
+  printf '%s\t%s\t%s\t%s\t%s\t%s\t%.3f\t%s\t%s\t%.3f\t%s\t%s\t%s\t%.3f\t%s\n' "$L" "$mk_s" "$mk_mb" \
     "$(grep -vc '^#' "$r/Graph.txt")" "$frames" "$pw" "$(echo "1000 * $pw / $frames" | bc -l)" \
     "$(peak "$out/t_ptm.txt")" "$bw" "$(echo "1000 * $bw / $nimg" | bc -l)" "$bm" \
     "$(wall "$out/t_ws.txt")" "$(peak "$out/t_ws.txt")" \
