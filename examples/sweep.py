@@ -20,7 +20,7 @@ tool and OUT/index.html, the page to read before choosing settings. Work folders
   bakedepth  --scale: share of the truth's surface pixels whose looked-up depth is within 1 %,
              against bakedepth's own milliseconds per map (render + write)
   ptmrender  --projectors, --bias, baked depth scale or a depth pre-pass, effects off, blending
-             weights (--blend-power, --feather, --res-weight, --soft): SSIM
+             weights (--blend-power, --feather, --res-weight, --soft), --sky-distance: SSIM
              against the ray-traced off-path truth, against ptmrender's own ms per frame
   densify    (examples/sweep_densify.py) depth within 2 % against densify's ms per image
 
@@ -406,6 +406,8 @@ def sweep_ptmrender(c):
         settings += [("blend", f"feather {f} px", ["--feather", f], 1) for f in (0, 48)]
         settings += [("blend", f"res weight {r}", ["--res-weight", r], 1) for r in (0, 1)]
         settings += [("blend", f"soft occlusion {x}", ["--soft", x], 1) for x in (0, 0.05)]
+        settings += [("sky", f"sky distance {d}", ["--sky-distance", d], 1)
+                     for d in (0, 20, 200)]
     rows, baked = [], "unset"
     for group, name, extra, scale in settings:
         if scale != baked:
@@ -428,7 +430,9 @@ def sweep_ptmrender(c):
         "effects turned off (<code>--no-occlusion</code>, <code>--no-skybox</code>, "
         "<code>--no-masks</code>, <code>--no-blend</code>, <code>--no-fill</code>), the blending "
         "weights (<code>--blend-power</code>, <code>--feather</code>, <code>--res-weight</code>, "
-        "<code>--soft</code>), and vertex colours only (<code>--mode vertex</code>) as the "
+        "<code>--soft</code>), the skybox's distance (<code>--sky-distance</code>: 0 at "
+        "infinity; by default the scene's far end, the 98th percentile of the sparse points' "
+        "depths), and vertex colours only (<code>--mode vertex</code>) as the "
         "baseline. Each knob is varied alone; masks: the fixture's truth masks. Poses: the "
         "fixture's off-path truth poses (1.5 m lane changes and 15&deg; turns of drive A), "
         "projected from the recorded photographs of both drives. <b>Accuracy:</b> mean SSIM "

@@ -4,9 +4,10 @@
 // vertex-colour rendering.
 //
 // A pixel with no surface is background (§5.3.3). With MVTM_SKYBOX the view direction is
-// projected into the projectors as a point at infinity (rotation only), so distant sky and
-// far-away scenery come from the photographs; otherwise, and where no projector sees sky in
-// that direction, a constant colour.
+// projected into the projectors as a point at u_sky_distance along it (the scene's far end:
+// far scenery beyond the mesh keeps some parallax), or at infinity (rotation only) when that is
+// 0, so distant sky and far-away scenery come from the photographs; otherwise, and where no
+// projector sees sky in that direction, a constant colour.
 in vec2 v_ndc;
 layout(location = 0) out vec4 o_colour;
 layout(location = 1) out uint o_source;  // projector rank, 254 = vertex colour, 255 = background
@@ -17,6 +18,9 @@ uniform vec3 u_background;          // 0..1
 uniform mat3 u_Rt;                  // render camera → world rotation
 uniform vec4 u_K;                   // render fx fy cx cy
 uniform vec2 u_size;                // render size
+#ifdef MVTM_SKYBOX
+uniform float u_sky_distance;       // model units from the camera; 0 = at infinity
+#endif
 #ifdef MVTM_EXPOSURE
 uniform vec2 u_render_exposure;     // gain, offset/255: the render camera's exposure
 #endif
@@ -58,7 +62,9 @@ void main() {
 #ifdef MVTM_SKYBOX
   vec2 pix = vec2((v_ndc.x + 1.0) * 0.5 * u_size.x, (1.0 - v_ndc.y) * 0.5 * u_size.y);
   vec3 dir = u_Rt * vec3((pix - u_K.zw) / u_K.xy, 1.0);
-  if (FirstProjector(dir, 0.0, true, k, c)) {
+  bool sky = u_sky_distance > 0.0 ? FirstProjector(normalize(dir) * u_sky_distance, 1.0, true, k, c)
+                                  : FirstProjector(dir, 0.0, true, k, c);
+  if (sky) {
     o_colour = vec4(Expose(c), 1.0);
     o_source = uint(k);
   }

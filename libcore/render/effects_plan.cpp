@@ -77,6 +77,7 @@ EffectsPlan PlanEffects(const SceneSurvey& s) {
   plan.occlusion = s.ptm && !s.no_occlusion && s.projector_differs;
   plan.masks = s.ptm && !s.no_masks && !s.mask_example.empty();
   plan.skybox = s.ptm && !s.no_skybox && s.frames_with_holes > 0;
+  if (plan.skybox) plan.sky_distance = s.sky_distance >= 0 ? s.sky_distance : s.scene_far;
   plan.exposure = s.ptm && !s.no_exposure && !s.exposure_example.empty();
   plan.blend = plan.projectors > 1 && !s.no_blend;
   plan.weights = s.blend_weights;
@@ -90,6 +91,16 @@ std::string ShortDouble(double v) {
   char b[32];
   std::snprintf(b, sizeof b, "%g", v);
   return b;
+}
+
+std::string SkyDistanceReason(const SceneSurvey& s, const EffectsPlan& plan) {
+  if (plan.sky_distance <= 0)
+    return s.sky_distance == 0 ? "at infinity (--sky-distance 0)"
+                               : "at infinity (no sparse points give the scene's far end)";
+  if (s.sky_distance > 0) return "at " + ShortDouble(plan.sky_distance) + " (--sky-distance)";
+  return "at " + ShortDouble(plan.sky_distance) +
+         ", the scene's far end (98th percentile of the depths its images see their sparse "
+         "points at), so far scenery beyond the mesh keeps its parallax";
 }
 
 nlohmann::json Choice(bool on, const std::string& why_on, const std::string& why_off) {
@@ -143,7 +154,8 @@ nlohmann::json ExplainEffects(const SceneSurvey& s, const EffectsPlan& plan) {
       {"skybox",
        Choice(plan.skybox,
               std::to_string(s.frames_with_holes) + " of " + std::to_string(s.frames_surveyed) +
-                  " frames see no surface somewhere (e.g. " + s.hole_example + ")",
+                  " frames see no surface somewhere (e.g. " + s.hole_example + "); " +
+                  SkyDistanceReason(s, plan),
               !s.ptm        ? vertex_mode
               : s.no_skybox ? "turned off by --no-skybox"
                             : "every pixel of every frame sees the mesh")},

@@ -37,9 +37,12 @@ struct EffectsPlan {
   int projectors = 1;      // projectors tried in rank order (≥ 1)
   bool occlusion = false;  // test against projector depth maps
   bool masks = false;      // skip masked projector texels
-  bool skybox = false;     // background from projectors at infinity (else constant colour)
-  bool exposure = false;   // projectors' samples brought to the common exposure (gain, offset)
-  double bias = 0.005;     // relative occlusion bias: occluded when z > d·(1 + bias)
+  bool skybox = false;     // background from projectors (else constant colour)
+  // The skybox's distance from the render camera in model units (0: at infinity, rotation only):
+  // far scenery the mesh does not reach keeps some parallax when the camera moves.
+  double sky_distance = 0;
+  bool exposure = false;  // projectors' samples brought to the common exposure (gain, offset)
+  double bias = 0.005;    // relative occlusion bias: occluded when z > d·(1 + bias)
   // Blending (MVTM_BLEND): every projector that sees a point, weighted (BlendWeights); off: the
   // first projector in rank order that sees the point (thesis Alg. 3).
   bool blend = false;
@@ -62,6 +65,7 @@ struct SceneSurvey {
   bool no_occlusion = false, no_masks = false, no_skybox = false;  // the user's switches
   bool no_exposure = false;                                        // the user's switch
   bool no_blend = false, no_fill = false;                          // the user's switches
+  double sky_distance = -1;  // --sky-distance: < 0 the scene's far end (scene_far), 0 infinity
   BlendWeights blend_weights;
   // The inputs.
   bool projector_differs = false;   // some selected projector is not the pose it serves
@@ -72,8 +76,13 @@ struct SceneSurvey {
   size_t frames_with_holes = 0;     // ... of which see no surface somewhere
   std::string hole_example;         // one of those ("": none)
   double min_coverage = 1.0;        // least share of a view's surface its first projector covers
+  double scene_far = 0;             // the scene's far end (SceneFarEnd: 0 when no points)
 };
 
+// The --sky-distance option's help (ptmrender, simulate): SceneSurvey::sky_distance.
+inline constexpr const char* kSkyDistanceHelp =
+    "Skybox distance in model units: negative (-1) the scene's far end (98th percentile of the "
+    "depths at which the images see their sparse points), 0 at infinity";
 class Renderer;
 struct View;
 struct Image;

@@ -714,6 +714,8 @@ void Renderer::Impl::Shade(const View& view, const std::vector<Projector>& proje
               float(view.camera.cx()), float(view.camera.cy()));
   glUniform2f(glGetUniformLocation(prog, "u_size"), float(view.camera.width),
               float(view.camera.height));
+  if (plan.skybox)
+    glUniform1f(glGetUniformLocation(prog, "u_sky_distance"), float(plan.sky_distance));
   if (plan.ptm || plan.skybox) SetProjectors(prog, view, projectors, plan, layer_of);
   glUniform2f(glGetUniformLocation(prog, "u_render_exposure"), exposure.gain,
               exposure.offset / 255.f);

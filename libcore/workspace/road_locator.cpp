@@ -16,6 +16,7 @@ RoadLocator::RoadLocator(const Road& road) : road_(road) {
     const RoadFragment& f = road.fragments()[k];
     models_.push_back(ReadColmapModel(Workspace(f.dir).SparseDir().string()));
     // Poses and cameras are what a route needs: the points would grow with the road.
+    far_ends_.push_back(SceneFarEnd(models_.back()));
     models_.back().points3D.clear();
     for (auto& [id, im] : models_.back().images) std::vector<Point2D>().swap(im.points2D);
     for (const std::string& name : f.owned_images) {

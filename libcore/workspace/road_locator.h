@@ -37,6 +37,8 @@ class RoadLocator {
   // A fragment's model: its cameras and images (poses), without points (no points3D, no
   // points2D: they would grow with the road).
   const Reconstruction& model(size_t fragment) const { return models_[fragment]; }
+  // A fragment's far end (SceneFarEnd of its model with the points).
+  double far_end(size_t fragment) const { return far_ends_[fragment]; }
 
   // The fragment `centre` is in. `from`: the fragment the route was in (none for its first
   // point). Throws Error("AT is D from the nearest recorded image (NAME): it leaves the road")
@@ -47,6 +49,7 @@ class RoadLocator {
  private:
   const Road& road_;
   std::vector<Reconstruction> models_;
+  std::vector<double> far_ends_;
   std::vector<RoadRecordedFrame> frames_;
   std::vector<Eigen::Vector3d> centres_;
 };

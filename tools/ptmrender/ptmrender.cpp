@@ -67,6 +67,7 @@ OptionTable DeclareOptions(PtmRenderOptions& o) {
       .AtLeast(0);
   t.Flag("--no-occlusion", &o.no_occlusion, "Never test projector depth (off even when needed)");
   t.Flag("--no-skybox", &o.no_skybox, "Constant background instead of projected sky");
+  t.Real("--sky-distance", &o.sky_distance, kSkyDistanceHelp).AtLeast(-1).Alternative("0");
   t.Flag("--no-masks", &o.no_masks, "Ignore masks/ (vehicles are projected too)");
   t.Flag("--no-exposure", &o.no_exposure,
          "Ignore exposure.tsv (each projector at its own exposure)");
@@ -227,6 +228,8 @@ SceneSurvey StartSurvey(const PtmRenderOptions& o, const Workspace& ws, const Sc
   s.no_exposure = o.no_exposure;
   s.no_blend = o.no_blend;
   s.no_fill = o.no_fill;
+  s.sky_distance = o.sky_distance;
+  if (s.ptm && !o.no_skybox) s.scene_far = SceneFarEnd(scene.rec);
   s.blend_weights = o.blend;
   s.projector_differs = picks.differs;
   s.several_admissible = picks.several;

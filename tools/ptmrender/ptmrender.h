@@ -39,6 +39,7 @@ struct PtmRenderOptions : WorkOptions {
   bool no_exposure = false;  // ignore exposure.tsv (projectors at their own exposures)
   bool no_blend = false;     // the first projector that sees a point, not a weighted blend
   bool no_fill = false;      // constant background where nothing is seen, not push-pull
+  double sky_distance = -1;  // skybox distance, model units (< 0: the scene's far end, 0: infinity)
   BlendWeights blend;        // --blend-power, --feather, --res-weight, --soft
   RenderExposure render_exposure = RenderExposure::kNearest;
   std::string size;         // WxH render size (default: the camera's)

@@ -86,6 +86,7 @@ void DeclareRenderOptions(OptionTable& t, SimulateOptions& o) {
       .Range(0, 1, false, true);
   t.Flag("--no-occlusion", &o.no_occlusion, "Never test projector depth");
   t.Flag("--no-skybox", &o.no_skybox, "Constant background instead of projected sky");
+  t.Real("--sky-distance", &o.sky_distance, kSkyDistanceHelp).AtLeast(-1).Alternative("0");
   t.Flag("--no-masks", &o.no_masks, "Ignore masks/ (vehicles are projected too)");
   t.Flag("--no-exposure", &o.no_exposure, "Ignore exposure.tsv");
   t.Flag("--no-blend", &o.no_blend, "The first projector that sees a point, not a blend");
@@ -464,15 +465,17 @@ Camera ScreenCamera(const Reconstruction& rec, const std::string& size) {
 // ptmrender's rendering of the workspace, for live views.
 class LiveView {
  public:
+  // `scene_far`: the scene's far end (SceneFarEnd of the model with its points).
   LiveView(const SimulateOptions& o, const Workspace& ws, const Reconstruction& rec,
-           const Mesh& mesh, double scale)
+           const Mesh& mesh, double scale, double scene_far)
       : o_(o),
         ws_(ws),
         rec_(rec),
         images_(rec.ImagesByName()),
         renderer_(mesh),
         sources_(ws, rec, images_, &renderer_, /*prefer_textures=*/true),
-        scale_(scale) {
+        scale_(scale),
+        scene_far_(scene_far) {
     for (const ImageRecord* im : images_) candidates_.push_back(im->world_to_camera);
     screen_ = ScreenCamera(rec, o.size);
     const double hfov = 2 * std::atan(screen_.width / (2 * screen_.fx())) * 180 / M_PI;
@@ -491,11 +494,13 @@ class LiveView {
   // The survey and plan from the start view and recorded views along the drive.
   void Plan(const Rigid3d& start_c2w, const std::vector<Rigid3d>& recorded_w2c);
   // Goes on from `prev` (the view of the fragment the car left): its survey and plan (a road has
-  // one plan, upgraded live as on a workspace) and its totals.
+  // one plan, upgraded live as on a workspace; the sky is put at this fragment's own far end, as
+  // ptmrender does on a road) and its totals.
   // The level of detail in use is built now (the first frame would otherwise).
   void Adopt(const LiveView& prev) {
     survey_ = prev.survey_;
-    plan_ = prev.plan_;
+    survey_.scene_far = scene_far_;
+    plan_ = PlanEffects(survey_);
     stats_ = prev.stats_;
     load_ms_ = prev.load_ms_;
     if (prev.lod_m_ > 0) renderer_.SetDetail(prev.lod_m_ * scale_, prev.lod_m_ * scale_ / 25);
@@ -528,6 +533,7 @@ class LiveView {
   Renderer renderer_;
   ProjectorSources sources_;
   double scale_;      // model units per metre
+  double scene_far_;  // the scene's far end (SceneFarEnd), model units
   double lod_m_ = 0;  // the level of detail in use (metres; 0: full)
   Camera screen_;
   double screen_yaw_ = 0;
@@ -548,6 +554,8 @@ void LiveView::Plan(const Rigid3d& start_c2w, const std::vector<Rigid3d>& record
   s.no_exposure = o_.no_exposure;
   s.no_blend = o_.no_blend;
   s.no_fill = o_.no_fill;
+  s.sky_distance = o_.sky_distance;
+  s.scene_far = scene_far_;
   s.projector_differs = true;  // a live car is never exactly at a recorded pose
   s.several_admissible = o_.projectors > 1 && images_.size() > 1;
   std::set<size_t> all;
@@ -623,7 +631,7 @@ class Views {
   Views(const SimulateOptions& o, Track& track) : o_(o), track_(track) {}
   // A workspace's view (`ws` outlives it).
   void Open(const Workspace& ws, const Reconstruction& rec, const Mesh& mesh) {
-    view_ = std::make_unique<LiveView>(o_, ws, rec, mesh, track_.scale);
+    view_ = std::make_unique<LiveView>(o_, ws, rec, mesh, track_.scale, SceneFarEnd(rec));
   }
   // A road's view of the fragment the car starts in.
   void OpenRoad() { view_ = MakeFragmentView(track_.ground->home()); }
@@ -652,7 +660,7 @@ class Views {
     home_ = home;
     ws_ = std::make_unique<Workspace>(track_.where->road().fragments()[home].dir);
     return std::make_unique<LiveView>(o_, *ws_, track_.where->model(home), track_.ground->mesh(),
-                                      track_.scale);
+                                      track_.scale, track_.where->far_end(home));
   }
 
   const SimulateOptions& o_;

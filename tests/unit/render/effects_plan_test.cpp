@@ -46,11 +46,33 @@ TEST(EffectsPlan, EverythingTheSceneCallsForIsOn) {
             "pixels are filled from their surroundings (push-pull), never the constant "
             "background");
   EXPECT_EQ(j["masks"]["reason"], "selected projector A_0001.png has masked pixels");
-  EXPECT_EQ(j["skybox"]["reason"], "1 of 4 frames see no surface somewhere (e.g. A_0002.png)");
+  EXPECT_EQ(j["skybox"]["reason"],
+            "1 of 4 frames see no surface somewhere (e.g. A_0002.png); at infinity (no sparse "
+            "points give the scene's far end)");
   EXPECT_EQ(j["several_projectors"]["reason"],
             "up to 3 projectors per pixel, nearest first, then vertex colours; the first projector "
             "covers as "
             "little as 25.0 % of a view");
+}
+
+TEST(EffectsPlan, SkyAtTheScenesFarEndUnlessTold) {
+  // The skybox's distance: the scene's far end by default (-1), the user's when given, infinity
+  // (0) when asked for or when the model has no points; none without a skybox.
+  SceneSurvey s = Everything();
+  s.scene_far = 125.5;
+  EXPECT_EQ(PlanEffects(s).sky_distance, 125.5);
+  EXPECT_EQ(ExplainEffects(s, PlanEffects(s))["skybox"]["reason"],
+            "1 of 4 frames see no surface somewhere (e.g. A_0002.png); at 125.5, the scene's far "
+            "end (98th percentile of the depths its images see their sparse points at), so far "
+            "scenery beyond the mesh keeps its parallax");
+  s.sky_distance = 40;
+  EXPECT_EQ(PlanEffects(s).sky_distance, 40);
+  s.sky_distance = 0;
+  EXPECT_EQ(PlanEffects(s).sky_distance, 0);
+  s.sky_distance = -1;
+  s.no_skybox = true;
+  EXPECT_FALSE(PlanEffects(s).skybox);
+  EXPECT_EQ(PlanEffects(s).sky_distance, 0);
 }
 
 TEST(EffectsPlan, NothingTheSceneDoesNotCallFor) {

@@ -186,7 +186,9 @@ TEST_F(PtmTruth, OffPathConfigurationsTable) {
        }},
       {"+blend",
        [](PtmRenderOptions& o) { o.projectors = 4, o.no_skybox = true, o.no_fill = true; }},
-      {"+skybox", [](PtmRenderOptions& o) { o.projectors = 4, o.no_fill = true; }},
+      {"+skybox",
+       [](PtmRenderOptions& o) { o.projectors = 4, o.no_fill = true, o.sky_distance = 0; }},
+      {"+sky far", [](PtmRenderOptions& o) { o.projectors = 4, o.no_fill = true; }},
       {"+fill", [](PtmRenderOptions& o) { o.projectors = 4; }},
   };
   std::printf("[off-path] mean SSIM against ray-traced truth\n%-12s", "variant");

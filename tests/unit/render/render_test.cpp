@@ -266,6 +266,53 @@ TEST_F(RenderTest, ProjectorThatSeesNoGeometry) {
   for (float s : f.source.data) ASSERT_EQ(s, kSourceVertex);
 }
 
+TEST_F(RenderTest, SkyAtADistanceKeepsTheParallaxOfFarScenery) {
+  // Nothing in view (the mesh is behind both cameras): every pixel is sky, from a projector whose
+  // image is a ramp (red 10 + 2·u, green 20 + 3·v at pixel coordinates u, v: bilinear sampling
+  // of it is exact). The render camera is 1 to the projector's right. With the sky at distance D
+  // a render pixel's ray meets it at X = C + D·ray/|ray|, which the projector sees at K·X/X.z
+  // (hand-derived: the colour is the ramp there); at infinity (0) the ray's direction alone, the
+  // same pixel. At D = 20 the two differ by f·b/D = 2.5 pixels, 5 grey levels. The same scene
+  // scaled by 0.2 at UTM coordinates (D scaled with it) renders the same.
+  for (const double scale : {1.0, 0.2}) {
+    const Eigen::Vector3d o =
+        scale == 1.0 ? Eigen::Vector3d::Zero() : Eigen::Vector3d(451000, 5410000, 120);
+    Renderer r(Plane(50 * scale, -10 * scale, o));
+    Image ramp(64, 48, 3, 8);
+    for (int y = 0; y < 48; ++y)
+      for (int x = 0; x < 64; ++x) {
+        ramp.at(x, y, 0) = float(10 + 2 * (x + 0.5));
+        ramp.at(x, y, 1) = float(20 + 3 * (y + 0.5));
+        ramp.at(x, y, 2) = 0;
+      }
+    const View proj{Cam(), LookingDownZ(o)};
+    Image d = r.RenderDepth(proj);
+    for (float z : d.data) ASSERT_TRUE(std::isinf(z));
+    const View view{Cam(), LookingDownZ(o + Eigen::Vector3d(scale, 0, 0))};
+    EffectsPlan plan;
+    plan.occlusion = plan.skybox = true;
+    for (const double D : {20.0, 0.0}) {
+      plan.sky_distance = D * scale;
+      Renderer::Frame f = r.Render(view, {Projector{proj, &ramp, &d, nullptr}}, plan);
+      size_t checked = 0;
+      for (int y = 2; y < 46; y += 3)
+        for (int x = 2; x < 62; x += 3) {
+          const Eigen::Vector3d ray = view.camera.Unproject({x + 0.5, y + 0.5}, 1.0);
+          Eigen::Vector2d uv(x + 0.5, y + 0.5);
+          if (D > 0) uv = proj.camera.Project(Eigen::Vector3d(1, 0, 0) + D * ray.normalized());
+          if (uv.x() < 1 || uv.x() > 63 || uv.y() < 1 || uv.y() > 47) continue;
+          ASSERT_EQ(f.source.at(x, y), 0.f) << x << "," << y;
+          EXPECT_NEAR(f.colour.at(x, y, 0), 10 + 2 * uv.x(), 1.0) << D << " " << x << "," << y;
+          EXPECT_NEAR(f.colour.at(x, y, 1), 20 + 3 * uv.y(), 1.0) << D << " " << x << "," << y;
+          ++checked;
+        }
+      EXPECT_GT(checked, 250u);
+      const double shift = D > 0 ? 5.0 : 0.0;  // 2 grey levels per pixel of parallax
+      EXPECT_NEAR(f.colour.at(32, 24, 0) - (10 + 2 * 32.5), shift, 1.0);
+    }
+  }
+}
+
 TEST_F(RenderTest, OcclusionUsesTheProjectorsDepth) {
   // A small occluder (z = 5) between the projector and a wall (z = 10): the wall pixels behind
   // the occluder, seen from a side camera, must not take the occluder's texture.
