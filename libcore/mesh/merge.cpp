@@ -5,11 +5,69 @@
 #include <cmath>
 #include <map>
 #include <set>
+#include <unordered_map>
 #include <vector>
 
 #include "base/error.h"
 
 namespace mvtm {
+
+namespace {
+
+Eigen::Vector3d FaceNormal(const Mesh& m, const std::array<uint32_t, 3>& f) {
+  return (m.vertices[f[1]] - m.vertices[f[0]]).cross(m.vertices[f[2]] - m.vertices[f[0]]);
+}
+
+Eigen::Vector3d Centroid(const Mesh& m, const std::array<uint32_t, 3>& f) {
+  return (m.vertices[f[0]] + m.vertices[f[1]] + m.vertices[f[2]]) / 3.0;
+}
+
+}  // namespace
+
+double ProxyGroundAbove(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3d& up,
+                        double reach, double bound) {
+  if (!(up.norm() > 0) || !(reach > 0) || !(bound > 0))
+    throw Error("merge: the up direction, reach and bound must be non-zero");
+  const Eigen::Vector3d u = up.normalized();
+  const Eigen::Vector3d e1 = u.unitOrthogonal(), e2 = u.cross(e1);
+  // The proxy's ground face centroids in cells of `reach` across `up`; coordinates relative to
+  // the first vertex, so a road at UTM coordinates keeps its precision.
+  const Eigen::Vector3d o = proxy.vertices.empty() ? Eigen::Vector3d::Zero() : proxy.vertices[0];
+  auto cell = [&](double a, double b) {
+    return (static_cast<int64_t>(std::floor(a / reach)) << 32) ^
+           static_cast<int64_t>(static_cast<uint32_t>(static_cast<int32_t>(std::floor(b / reach))));
+  };
+  std::unordered_map<int64_t, std::vector<Eigen::Vector3d>> grid;  // (a, b, height)
+  for (const auto& f : proxy.faces) {
+    const Eigen::Vector3d n = FaceNormal(proxy, f);
+    if (!(n.norm() > 0) || n.normalized().dot(u) < std::cos(M_PI / 4)) continue;
+    const Eigen::Vector3d c = Centroid(proxy, f) - o;
+    grid[cell(c.dot(e1), c.dot(e2))].push_back({c.dot(e1), c.dot(e2), c.dot(u)});
+  }
+  std::vector<double> h;
+  for (const auto& f : dense.faces) {
+    const Eigen::Vector3d n = FaceNormal(dense, f);
+    if (!(n.norm() > 0) || std::abs(n.normalized().dot(u)) < std::cos(M_PI / 6)) continue;
+    const Eigen::Vector3d c = Centroid(dense, f) - o;
+    const double a = c.dot(e1), b = c.dot(e2);
+    double best = reach * reach, height = 0;
+    bool found = false;
+    for (int i = -1; i <= 1; ++i)
+      for (int j = -1; j <= 1; ++j) {
+        auto it = grid.find(cell(a + i * reach, b + j * reach));
+        if (it == grid.end()) continue;
+        for (const Eigen::Vector3d& p : it->second) {
+          const double d2 = (p.x() - a) * (p.x() - a) + (p.y() - b) * (p.y() - b);
+          if (d2 <= best) best = d2, height = p.z(), found = true;
+        }
+      }
+    const double above = height - c.dot(u);
+    if (found && std::abs(above) <= bound) h.push_back(above);
+  }
+  if (h.size() < 50) return 0;
+  std::nth_element(h.begin(), h.begin() + static_cast<std::ptrdiff_t>(h.size() / 2), h.end());
+  return h[h.size() / 2];
+}
 
 Mesh MergeProxyBehind(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3d& up,
                       double ground_below, double walls_behind, MergeReport* report) {

@@ -27,6 +27,17 @@ struct MergeReport {
   size_t ground_faces = 0, wall_faces = 0;  // proxy faces appended
 };
 
+// How far the proxy's ground lies above the dense surface's ground where both are: the median,
+// over the dense faces whose normal is within 30° of up (either side) and the proxy ground face
+// (normal within 45° of up) nearest to each in the plane across `up` within `reach`, of the proxy
+// face's height above the dense face's (centroids, along `up`), counting only heights within
+// ±`bound` (canopies and roofs above the road, pits below it, are not the road). Negative: the
+// proxy is below. 0 when fewer than 50 pairs are found. A proxy ground fitted too high (a camera
+// height from a few sparse points) hides the dense road in front of it; lowering it by this
+// much (MergeProxyBehind's ground_below) puts it back under the road.
+double ProxyGroundAbove(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3d& up,
+                        double reach, double bound);
+
 // The proxy needs vertex normals for its walls (Mesh::ComputeNormals) unless walls_behind <= 0.
 Mesh MergeProxyBehind(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3d& up,
                       double ground_below, double walls_behind, MergeReport* report = nullptr);

@@ -36,8 +36,10 @@ int RunAndReport(mvtm::RoadMeshOptions& o) {
   if (!o.quiet && o.dense)
     std::fprintf(stderr,
                  "roadmesh: dense: %zu depth maps fused into %zu triangles; %zu corridor ground "
-                 "and %zu wall triangles behind it close its holes\n",
-                 r.dense_views, r.dense_faces, r.corridor_faces, r.corridor_wall_faces);
+                 "(lowered %.3g under the fused road) and %zu wall triangles behind it close its "
+                 "holes\n",
+                 r.dense_views, r.dense_faces, r.corridor_faces, r.ground_lowered,
+                 r.corridor_wall_faces);
   return 0;
 }
 

@@ -179,8 +179,14 @@ Mesh DenseMesh(const Workspace& ws, const Reconstruction& rec, const RoadMeshOpt
   DriveAxes(w2c, down, side);
   MergeReport mr;
   const double voxel = o.voxel * MedianCameraSpacing(views);
+  // The corridor's ground comes from a camera height fitted to a few sparse points: where it lies
+  // above the fused road it would hide it, so it goes down to it (where the fused road has holes
+  // the corridor shows at the fused road's height).
+  const double unit = o.metric ? 1.0 : rep.unit.unit;
+  const double above = ProxyGroundAbove(dense, corridor, -down, o.resolution * unit, 0.5 * unit);
+  rep.ground_lowered = o.ground_below * voxel + std::max(0.0, above);
   Mesh out =
-      MergeProxyBehind(dense, corridor, -down, o.ground_below * voxel, o.walls_behind * voxel, &mr);
+      MergeProxyBehind(dense, corridor, -down, rep.ground_lowered, o.walls_behind * voxel, &mr);
   rep.dense_views = views.size();
   rep.dense_faces = dense.faces.size();
   rep.corridor_faces = mr.ground_faces;
@@ -268,7 +274,7 @@ OptionTable DeclareOptions(RoadMeshOptions& o) {
       .Range(1, 16);
   t.Real("--ground-below", &o.ground_below,
          "--dense: lower the corridor ground by this many voxels under the fused surface "
-         "(0: at its fitted height)")
+         "(0: at its fitted height, or just under the fused road where it lies above it)")
       .Range(0, 100);
   t.Real("--walls-behind", &o.walls_behind,
          "--dense: move the corridor walls back by this many voxels behind the fused surface, "

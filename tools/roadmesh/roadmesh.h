@@ -93,6 +93,8 @@ struct RoadMeshReport {
          dense_faces = 0;          // --dense: depth maps fused, triangles of the fused surface
   size_t corridor_faces = 0;       // --dense: corridor ground triangles kept in the holes
   size_t corridor_wall_faces = 0;  // --dense: corridor wall triangles behind the fused surface
+  double ground_lowered = 0;       // --dense: how far the corridor ground went down, model units:
+                                   // --ground-below, plus as much as it lay above the fused road
   std::string gl;
   std::string mesh_path;
   bool up_to_date = false;  // mesh.ply was up to date: nothing was built (the rest is unset)

@@ -67,6 +67,55 @@ TEST(Merge, AWallMovedBackTakesItsFootDownSoNoGapOpensAtTheGroundsEdge) {
   EXPECT_NEAR(same.vertices[4].z(), 0, 1e-12);
 }
 
+// A flat grid of n x n quads of side `step` over [0, n·step]² in the plane z = height (up +z),
+// scaled by `k` about the origin and moved by `o`.
+Mesh Flat(int n, double step, double height, double k = 1, const Eigen::Vector3d& o = {0, 0, 0}) {
+  Mesh m;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i)
+      m.vertices.push_back(k * Eigen::Vector3d(i * step, j * step, height) + o);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+      m.faces.push_back({a, b, d});
+      m.faces.push_back({a, d, c});
+    }
+  return m;
+}
+
+// Appends `b` to `a`.
+void Append(Mesh& a, const Mesh& b) {
+  const uint32_t base = static_cast<uint32_t>(a.vertices.size());
+  a.vertices.insert(a.vertices.end(), b.vertices.begin(), b.vertices.end());
+  for (auto f : b.faces) a.faces.push_back({f[0] + base, f[1] + base, f[2] + base});
+}
+
+TEST(Merge, TheProxyGroundAboveTheFusedRoadIsMeasuredAndGoesUnderIt) {
+  // The fused road at z = 0 (20 x 20 quads of 0.5) under a wider tree canopy at z = 4 (more
+  // faces than the road; not the road: beyond the bound); the proxy's ground (a grid of 1.0) at z =
+  // 0.1, with a wall. Every pair is 0.1 apart: the median is 0.1, by hand. Lowered by it, the
+  // proxy's ground lies at the road's height. The same scene scaled by 0.2 at UTM coordinates:
+  // 0.02. A proxy below the road: negative. Fewer than 50 pairs (a road of 4 quads): 0.
+  for (const double k : {1.0, 0.2}) {
+    const Eigen::Vector3d o =
+        k == 1.0 ? Eigen::Vector3d::Zero() : Eigen::Vector3d(451000, 5410000, 120);
+    Mesh dense = Flat(20, 0.5, 0.0, k, o);
+    Append(dense, Flat(28, 0.35, 4.0, k, o));  // more canopy than road
+    Mesh proxy = Flat(10, 1.0, 0.1, k, o);
+    Append(proxy, Proxy());  // a wall (and a second ground quad at z = 0: one pair of many)
+    proxy.ComputeNormals();
+    const double above = ProxyGroundAbove(dense, proxy, {0, 0, 1}, 1.0 * k, 0.5 * k);
+    EXPECT_NEAR(above, 0.1 * k, 1e-6 * k) << k;
+    const Mesh m = MergeProxyBehind(dense, Flat(10, 1.0, 0.1, k, o), {0, 0, 1}, above, -1);
+    for (size_t v = dense.vertices.size(); v < m.vertices.size(); ++v)
+      EXPECT_NEAR(m.vertices[v].z(), o.z(), 1e-6) << v;
+    EXPECT_NEAR(ProxyGroundAbove(dense, Flat(10, 1.0, -0.2, k, o), {0, 0, 1}, 1.0 * k, 0.5 * k),
+                -0.2 * k, 1e-6 * k);
+  }
+  EXPECT_EQ(ProxyGroundAbove(Flat(2, 0.5, 0), Flat(10, 1.0, 0.1), {0, 0, 1}, 1.0, 0.5), 0.0);
+  EXPECT_THROW(ProxyGroundAbove(Flat(2, 0.5, 0), Flat(10, 1.0, 0.1), {0, 0, 1}, 0, 0.5), Error);
+}
+
 TEST(Merge, NoWallsAndBadInput) {
   MergeReport r;
   const Mesh m = MergeProxyBehind(Mesh(), Proxy(), {0, 0, 2}, 0, -1, &r);
