@@ -5,13 +5,13 @@
 # lane changes, 15 degree turns) scored with ssim against the ray-traced truth; once with the sky
 # at infinity (--sky-distance 0) and once at the scene's far end (the default).
 #
-# usage: examples/offpath_table.sh SEED OUT
+# usage: examples/offpath_table.sh SEED OUT   (the build in OUT/dynamic1, or OUT/dynamic0)
 # environment: MVTM_BIN (default build/bin), DYNAMIC (passed to road-build.sh; default 1)
 set -euo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
 bin=${MVTM_BIN:-$top/build/bin}
 [ $# -eq 2 ] || { echo "usage: $0 SEED OUT" >&2; exit 2; }
-seed=$1; out=$2
+seed=$1; out=$2/dynamic${DYNAMIC:-1}
 mkdir -p "$out"; out=$(cd "$out" && pwd)
 [ -d "$out/M" ] || "$bin/mkroad" -q --seed "$seed" --frames 12 --size 640x192 --vehicles 0 --offpath-every 1 "$out/M"
 [ -f "$out/rb/ws/mesh.ply" ] ||

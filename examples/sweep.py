@@ -432,7 +432,7 @@ def sweep_ptmrender(c):
         "weights (<code>--blend-power</code>, <code>--feather</code>, <code>--res-weight</code>, "
         "<code>--soft</code>), the skybox's distance (<code>--sky-distance</code>: 0 at "
         "infinity; by default the scene's far end, the 98th percentile of the sparse points' "
-        "depths), and vertex colours only (<code>--mode vertex</code>) as the "
+        "distances), and vertex colours only (<code>--mode vertex</code>) as the "
         "baseline. Each knob is varied alone; masks: the fixture's truth masks. Poses: the "
         "fixture's off-path truth poses (1.5 m lane changes and 15&deg; turns of drive A), "
         "projected from the recorded photographs of both drives. <b>Accuracy:</b> mean SSIM "

@@ -76,12 +76,12 @@ float FootprintDepth(int k, vec2 uv) {
 }
 #endif
 
-bool Usable(int k, vec2 uv, float z, bool at_infinity) {
+bool Usable(int k, vec2 uv, float z, bool sky) {
 #ifdef MVTM_MASKS
   if (texelFetch(u_masks, Texel(k, uv), 0).r > 0.5) return false;
 #endif
 #ifdef MVTM_SKYBOX
-  if (at_infinity) {
+  if (sky) {
     float d = texelFetch(u_depths, Texel(k, uv), 0).r;
     return isinf(d) || d > 1e30;                      // sky in the projector too
   }
@@ -103,15 +103,16 @@ vec3 Sample(int k, vec2 uv) {
 }
 
 // The first projector, in rank order, that sees camera-relative point `rel` (or direction,
-// w = 0, at_infinity), is not masked there and is not occluded (at infinity: sees sky there):
+// w = 0), or the sky point in that direction (sky: at infinity or at the sky distance), is not
+// masked there and is not occluded (for the sky: the projector sees sky there too):
 // true with its rank k and colour c; false when none does.
-bool FirstProjector(vec3 rel, float w, bool at_infinity, out int k, out vec3 c) {
+bool FirstProjector(vec3 rel, float w, bool sky, out int k, out vec3 c) {
   for (k = 0; k < MVTM_MAX_PROJECTORS; ++k) {
     if (k >= u_num_projectors) break;
     vec2 uv;
     float z;
     if (!ProjectInto(k, rel, w, uv, z)) continue;
-    if (!Usable(k, uv, z, at_infinity)) continue;
+    if (!Usable(k, uv, z, sky)) continue;
     c = Sample(k, uv);
     return true;
   }

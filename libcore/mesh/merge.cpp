@@ -1,6 +1,7 @@
 #include "mesh/merge.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <map>
@@ -33,16 +34,17 @@ double ProxyGroundAbove(const Mesh& dense, const Mesh& proxy, const Eigen::Vecto
   // The proxy's ground face centroids in cells of `reach` across `up`; coordinates relative to
   // the first vertex, so a road at UTM coordinates keeps its precision.
   const Eigen::Vector3d o = proxy.vertices.empty() ? Eigen::Vector3d::Zero() : proxy.vertices[0];
-  auto cell = [&](double a, double b) {
-    return (static_cast<int64_t>(std::floor(a / reach)) << 32) ^
-           static_cast<int64_t>(static_cast<uint32_t>(static_cast<int32_t>(std::floor(b / reach))));
+  auto index = [&](double a) { return static_cast<int64_t>(std::floor(a / reach)); };
+  auto key = [](int64_t ia, int64_t ib) {  // unsigned: no shift of a negative value
+    return (static_cast<uint64_t>(static_cast<uint32_t>(static_cast<int32_t>(ia))) << 32) |
+           static_cast<uint32_t>(static_cast<int32_t>(ib));
   };
-  std::unordered_map<int64_t, std::vector<Eigen::Vector3d>> grid;  // (a, b, height)
+  std::unordered_map<uint64_t, std::vector<Eigen::Vector3d>> grid;  // (a, b, height)
   for (const auto& f : proxy.faces) {
     const Eigen::Vector3d n = FaceNormal(proxy, f);
     if (!(n.norm() > 0) || n.normalized().dot(u) < std::cos(M_PI / 4)) continue;
     const Eigen::Vector3d c = Centroid(proxy, f) - o;
-    grid[cell(c.dot(e1), c.dot(e2))].push_back({c.dot(e1), c.dot(e2), c.dot(u)});
+    grid[key(index(c.dot(e1)), index(c.dot(e2)))].push_back({c.dot(e1), c.dot(e2), c.dot(u)});
   }
   std::vector<double> h;
   for (const auto& f : dense.faces) {
@@ -50,11 +52,12 @@ double ProxyGroundAbove(const Mesh& dense, const Mesh& proxy, const Eigen::Vecto
     if (!(n.norm() > 0) || std::abs(n.normalized().dot(u)) < std::cos(M_PI / 6)) continue;
     const Eigen::Vector3d c = Centroid(dense, f) - o;
     const double a = c.dot(e1), b = c.dot(e2);
+    const int64_t ia = index(a), ib = index(b);
     double best = reach * reach, height = 0;
     bool found = false;
-    for (int i = -1; i <= 1; ++i)
-      for (int j = -1; j <= 1; ++j) {
-        auto it = grid.find(cell(a + i * reach, b + j * reach));
+    for (int64_t i = -1; i <= 1; ++i)
+      for (int64_t j = -1; j <= 1; ++j) {
+        auto it = grid.find(key(ia + i, ib + j));
         if (it == grid.end()) continue;
         for (const Eigen::Vector3d& p : it->second) {
           const double d2 = (p.x() - a) * (p.x() - a) + (p.y() - b) * (p.y() - b);
@@ -93,7 +96,7 @@ Mesh MergeProxyBehind(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3
     const Eigen::Vector3d n = (proxy.vertices[f[1]] - proxy.vertices[f[0]])
                                   .cross(proxy.vertices[f[2]] - proxy.vertices[f[0]]);
     if (n.norm() > 0) kind[i] = n.normalized().dot(u) >= std::cos(M_PI / 4) ? 2 : 1;
-    if (kind[i] == 2 && walls_behind > 0)
+    if (kind[i] == 2 && (walls_behind > 0 || (walls_behind >= 0 && ground_below > 0)))
       for (uint32_t v : f) ground_points.insert(key(v));
   }
   Mesh out;
@@ -106,7 +109,8 @@ Mesh MergeProxyBehind(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3
     Eigen::Vector3d shift = ground
                                 ? Eigen::Vector3d(-ground_below * u)
                                 : Eigen::Vector3d(-walls_behind * proxy.normals[v].cast<double>());
-    if (!ground && ground_points.count(key(v))) shift -= walls_behind * u;  // the wall's foot
+    if (!ground && ground_points.count(key(v)))  // the wall's foot: as far down as either went
+      shift -= std::max(walls_behind, ground_below) * u;
     out.vertices.push_back(proxy.vertices[v] + shift);
     return index[v] = static_cast<uint32_t>(out.vertices.size() - 1);
   };

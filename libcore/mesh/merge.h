@@ -9,8 +9,9 @@
 //   * ground faces (face normal within 45° of `up`) are lowered by `ground_below` along `up`;
 //   * wall faces (every other face; a wall's normals face the path) are moved back by
 //     `walls_behind` against their vertex normals, and a wall's foot (its vertices where the
-//     proxy's ground has a vertex) also down by as much, so no gap to nothing opens between the
-//     ground's edge and the wall; `walls_behind` < 0 drops the walls.
+//     proxy's ground has a vertex) down by the larger of `walls_behind` and `ground_below`, so
+//     no gap to nothing opens between the ground's edge and the wall; `walls_behind` < 0 drops
+//     the walls.
 // No face is dropped by a proximity test, so fragments of dense surface never punch holes.
 // Lengths in the model's own unit. Normals are recomputed; colours dropped (bake them
 // afterwards). Thread safety: pure function.

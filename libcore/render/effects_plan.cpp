@@ -99,7 +99,7 @@ std::string SkyDistanceReason(const SceneSurvey& s, const EffectsPlan& plan) {
                                : "at infinity (no sparse points give the scene's far end)";
   if (s.sky_distance > 0) return "at " + ShortDouble(plan.sky_distance) + " (--sky-distance)";
   return "at " + ShortDouble(plan.sky_distance) +
-         ", the scene's far end (98th percentile of the depths its images see their sparse "
+         ", the scene's far end (98th percentile of the distances its images see their sparse "
          "points at), so far scenery beyond the mesh keeps its parallax";
 }
 

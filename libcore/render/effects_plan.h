@@ -82,7 +82,7 @@ struct SceneSurvey {
 // The --sky-distance option's help (ptmrender, simulate): SceneSurvey::sky_distance.
 inline constexpr const char* kSkyDistanceHelp =
     "Skybox distance in model units: negative (-1) the scene's far end (98th percentile of the "
-    "depths at which the images see their sparse points), 0 at infinity";
+    "distances at which the images see their sparse points), 0 at infinity";
 class Renderer;
 struct View;
 struct Image;

@@ -28,18 +28,19 @@ std::vector<const ImageRecord*> Reconstruction::ImagesByName() const {
   return v;
 }
 
-double ObservedDepthQuantile(const Reconstruction& rec, double q) {
+double ObservedDistanceQuantile(const Reconstruction& rec, double q) {
   std::vector<double> z;
   for (const auto& [id, p] : rec.points3D)
     for (const TrackElement& e : p.track) {
       auto im = rec.images.find(e.image_id);
       if (im == rec.images.end()) continue;
-      const double d = (im->second.world_to_camera * p.xyz).z();
-      if (d > 0 && std::isfinite(d)) z.push_back(d);
+      const Eigen::Vector3d x = im->second.world_to_camera * p.xyz;
+      const double d = x.norm();
+      if (x.z() > 0 && std::isfinite(d)) z.push_back(d);
     }
   if (z.empty()) return 0;
-  const size_t k =
-      std::min(z.size() - 1, static_cast<size_t>(std::clamp(q, 0.0, 1.0) * double(z.size())));
+  const size_t k = std::min(
+      z.size() - 1, static_cast<size_t>((q >= 0 ? std::min(q, 1.0) : 0.0) * double(z.size())));
   std::nth_element(z.begin(), z.begin() + static_cast<std::ptrdiff_t>(k), z.end());
   return z[k];
 }

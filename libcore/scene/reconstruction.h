@@ -64,12 +64,13 @@ struct Reconstruction {
   // or it is distorted (see Camera::RequireUndistorted).
   Camera RenderCamera(uint64_t width = 0, uint64_t height = 0) const;
 };
-// The q-quantile (0..1) of the depths (camera z) at which the images see their 3-D points: every
-// track element counts once. 0 when no point is seen in front of its camera. Scales with the
-// model (a similarity leaves it in the model's own unit).
-double ObservedDepthQuantile(const Reconstruction& rec, double q);
-// The scene's far end: the 98th percentile of those depths (0: no points). Renders put their sky
-// there (ptmrender --sky-distance).
-inline double SceneFarEnd(const Reconstruction& rec) { return ObservedDepthQuantile(rec, 0.98); }
+// The q-quantile (0..1; NaN counts as 0) of the distances from the camera centre at which the
+// images see their 3-D points in front of them: every track element counts once. 0 when no
+// point is seen in front of its camera. Scales with the model (a similarity leaves it in the
+// model's own unit).
+double ObservedDistanceQuantile(const Reconstruction& rec, double q);
+// The scene's far end: the 98th percentile of those distances (0: no points). Renders put their
+// sky on a sphere of that radius around the camera (ptmrender --sky-distance).
+inline double SceneFarEnd(const Reconstruction& rec) { return ObservedDistanceQuantile(rec, 0.98); }
 
 }  // namespace mvtm

@@ -202,7 +202,8 @@ nlohmann::json RunFacts(const RoadMeshReport& rep) {
           {"camera_height", rep.camera_height},
           {"ground_points", rep.ground_points},
           {"left_wall", rep.left_wall},
-          {"right_wall", rep.right_wall}};
+          {"right_wall", rep.right_wall},
+          {"ground_lowered", rep.ground_lowered}};
 }
 
 }  // namespace

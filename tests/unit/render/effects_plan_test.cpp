@@ -63,7 +63,7 @@ TEST(EffectsPlan, SkyAtTheScenesFarEndUnlessTold) {
   EXPECT_EQ(PlanEffects(s).sky_distance, 125.5);
   EXPECT_EQ(ExplainEffects(s, PlanEffects(s))["skybox"]["reason"],
             "1 of 4 frames see no surface somewhere (e.g. A_0002.png); at 125.5, the scene's far "
-            "end (98th percentile of the depths its images see their sparse points at), so far "
+            "end (98th percentile of the distances its images see their sparse points at), so far "
             "scenery beyond the mesh keeps its parallax");
   s.sky_distance = 40;
   EXPECT_EQ(PlanEffects(s).sky_distance, 40);
