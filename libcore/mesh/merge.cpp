@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "base/error.h"
+#include "base/stats.h"
 
 namespace mvtm {
 
@@ -21,6 +22,11 @@ Eigen::Vector3d FaceNormal(const Mesh& m, const std::array<uint32_t, 3>& f) {
 
 Eigen::Vector3d Centroid(const Mesh& m, const std::array<uint32_t, 3>& f) {
   return (m.vertices[f[0]] + m.vertices[f[1]] + m.vertices[f[2]]) / 3.0;
+}
+
+// A proxy face is ground when its (non-zero) normal is within 45° of up.
+bool IsProxyGround(const Eigen::Vector3d& n, const Eigen::Vector3d& u) {
+  return n.norm() > 0 && n.normalized().dot(u) >= std::cos(M_PI / 4);
 }
 
 }  // namespace
@@ -41,8 +47,7 @@ double ProxyGroundAbove(const Mesh& dense, const Mesh& proxy, const Eigen::Vecto
   };
   std::unordered_map<uint64_t, std::vector<Eigen::Vector3d>> grid;  // (a, b, height)
   for (const auto& f : proxy.faces) {
-    const Eigen::Vector3d n = FaceNormal(proxy, f);
-    if (!(n.norm() > 0) || n.normalized().dot(u) < std::cos(M_PI / 4)) continue;
+    if (!IsProxyGround(FaceNormal(proxy, f), u)) continue;
     const Eigen::Vector3d c = Centroid(proxy, f) - o;
     grid[key(index(c.dot(e1)), index(c.dot(e2)))].push_back({c.dot(e1), c.dot(e2), c.dot(u)});
   }
@@ -67,9 +72,7 @@ double ProxyGroundAbove(const Mesh& dense, const Mesh& proxy, const Eigen::Vecto
     const double above = height - c.dot(u);
     if (found && std::abs(above) <= bound) h.push_back(above);
   }
-  if (h.size() < 50) return 0;
-  std::nth_element(h.begin(), h.begin() + static_cast<std::ptrdiff_t>(h.size() / 2), h.end());
-  return h[h.size() / 2];
+  return h.size() < 50 ? 0.0 : Median(std::move(h));
 }
 
 Mesh MergeProxyBehind(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3d& up,
@@ -93,9 +96,8 @@ Mesh MergeProxyBehind(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3
   std::vector<uint8_t> kind(proxy.faces.size(), 0);
   for (size_t i = 0; i < proxy.faces.size(); ++i) {
     const auto& f = proxy.faces[i];
-    const Eigen::Vector3d n = (proxy.vertices[f[1]] - proxy.vertices[f[0]])
-                                  .cross(proxy.vertices[f[2]] - proxy.vertices[f[0]]);
-    if (n.norm() > 0) kind[i] = n.normalized().dot(u) >= std::cos(M_PI / 4) ? 2 : 1;
+    const Eigen::Vector3d n = FaceNormal(proxy, f);
+    if (n.norm() > 0) kind[i] = IsProxyGround(n, u) ? 2 : 1;
     if (kind[i] == 2 && (walls_behind > 0 || (walls_behind >= 0 && ground_below > 0)))
       for (uint32_t v : f) ground_points.insert(key(v));
   }

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "base/error.h"
+#include "base/stats.h"
 
 namespace mvtm {
 
@@ -38,11 +39,7 @@ double ObservedDistanceQuantile(const Reconstruction& rec, double q) {
       const double d = x.norm();
       if (x.z() > 0 && std::isfinite(d)) z.push_back(d);
     }
-  if (z.empty()) return 0;
-  const size_t k = std::min(
-      z.size() - 1, static_cast<size_t>((q >= 0 ? std::min(q, 1.0) : 0.0) * double(z.size())));
-  std::nth_element(z.begin(), z.begin() + static_cast<std::ptrdiff_t>(k), z.end());
-  return z[k];
+  return z.empty() ? 0.0 : Percentile(std::move(z), q >= 0 ? std::min(q, 1.0) : 0.0);
 }
 
 }  // namespace mvtm

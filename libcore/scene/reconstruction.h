@@ -64,8 +64,9 @@ struct Reconstruction {
   // or it is distorted (see Camera::RequireUndistorted).
   Camera RenderCamera(uint64_t width = 0, uint64_t height = 0) const;
 };
-// The q-quantile (0..1; NaN counts as 0) of the distances from the camera centre at which the
-// images see their 3-D points in front of them: every track element counts once. 0 when no
+// The q-quantile (base/stats Percentile, q in 0..1; NaN counts as 0) of the distances from the
+// camera centre at which the images see their 3-D points in front of them: every track element
+// counts once. 0 when no
 // point is seen in front of its camera. Scales with the model (a similarity leaves it in the
 // model's own unit).
 double ObservedDistanceQuantile(const Reconstruction& rec, double q);

@@ -34,7 +34,7 @@ Reconstruction Axis(double scale, const Eigen::Vector3d& offset) {
 
 TEST(Reconstruction, ObservedDistanceQuantileIsTheQuantileOfEveryObservation) {
   const Reconstruction rec = Axis(1, Eigen::Vector3d::Zero());
-  // Index floor(q·20) of the sorted distances (clamped to 19).
+  // Index round(q·19) of the sorted distances (base/stats Percentile).
   EXPECT_EQ(ObservedDistanceQuantile(rec, 0.0), 1.0);
   EXPECT_EQ(ObservedDistanceQuantile(rec, 0.5), 7.0);
   EXPECT_EQ(ObservedDistanceQuantile(rec, 0.89), 10.0);
