@@ -1,5 +1,6 @@
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -74,17 +75,20 @@ void FilterView(const std::vector<DepthView>& views, const std::vector<ViewGeome
       }
       const Eigen::Vector3d xc = vi.camera.Unproject({x + 0.5, y + 0.5}, z);
       const Eigen::Vector3d xw = ri_t * (xc - geo[i].t);
-      int agree = 0;
+      int agree = 0, witnesses = 0;
       for (size_t j = 0; j < views.size() && agree < options.min_agree; ++j) {
         if (j == i) continue;
         const Eigen::Vector3d xj = geo[j].r * xw + geo[j].t;
         if (!(xj.z() > 0)) continue;
         const float zj = SampleDepth(views[j].depth, views[j].camera.Project(xj));
-        if (std::isfinite(zj) && std::abs(zj - xj.z()) <= options.relative_tolerance * xj.z()) {
-          ++agree;
-        }
+        if (!std::isfinite(zj)) continue;
+        const double tol = options.relative_tolerance * xj.z();
+        if (zj >= xj.z() - tol) ++witnesses;  // j saw this far along its ray: it could confirm
+        if (std::abs(zj - xj.z()) <= tol) ++agree;
       }
-      out.at(x, y) = agree >= options.min_agree ? z : kNoDepth;
+      const int need = options.witnessed ? std::max(1, std::min(options.min_agree, witnesses))
+                                         : options.min_agree;
+      out.at(x, y) = agree >= need ? z : kNoDepth;
     }
   }
 }

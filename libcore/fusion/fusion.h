@@ -55,6 +55,7 @@ void CheckDepthView(const DepthView& view, size_t index);
 struct ConsistencyOptions {
   int min_agree = 2;                 // other views that must confirm a pixel, >= 1
   double relative_tolerance = 0.01;  // agreement: |z_j - z| <= tolerance · z, in (0, 1)
+  bool witnessed = true;             // fewer than min_agree suffice where fewer views could confirm
 
   void Check() const;  // throws UsageError naming the option
 };
@@ -63,7 +64,12 @@ struct ConsistencyOptions {
 // views confirm: the pixel's 3-D point, reprojected into view j, lands inside j's image in front
 // of j, and j's depth there (inverse depth interpolated bilinearly where the 4 neighbours are
 // finite, which is exact on planes; else the nearest pixel) is within the tolerance of the
-// point's z in j. Throws Error when a view's depth/confidence/camera sizes disagree.
+// point's z in j. With `witnessed`, the views needed are at most those that could confirm (j
+// has a depth there no nearer than the point, within the tolerance: j saw that far; a view
+// that sees nearer is occluded, one with no depth is silent), and at least one: a surface that
+// only one other photo sees unoccluded (a facade leaving the frame, a sparse drive) is kept when
+// that photo agrees, while one that a second photo sees through still needs both. Throws Error
+// when a view's depth/confidence/camera sizes disagree.
 std::vector<Image> FilterConsistentDepth(const std::vector<DepthView>& views,
                                          const ConsistencyOptions& options);
 

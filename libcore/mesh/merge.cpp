@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <set>
 #include <unordered_map>
@@ -24,6 +25,12 @@ Eigen::Vector3d Centroid(const Mesh& m, const std::array<uint32_t, 3>& f) {
   return (m.vertices[f[0]] + m.vertices[f[1]] + m.vertices[f[2]]) / 3.0;
 }
 
+// A grid cell's key from its two integer coordinates (unsigned: no shift of a negative value).
+uint64_t CellKey(int64_t ia, int64_t ib) {
+  return (static_cast<uint64_t>(static_cast<uint32_t>(static_cast<int32_t>(ia))) << 32) |
+         static_cast<uint32_t>(static_cast<int32_t>(ib));
+}
+
 // A proxy face is ground when its (non-zero) normal is within 45° of up.
 bool IsProxyGround(const Eigen::Vector3d& n, const Eigen::Vector3d& u) {
   return n.norm() > 0 && n.normalized().dot(u) >= std::cos(M_PI / 4);
@@ -41,15 +48,11 @@ double ProxyGroundAbove(const Mesh& dense, const Mesh& proxy, const Eigen::Vecto
   // the first vertex, so a road at UTM coordinates keeps its precision.
   const Eigen::Vector3d o = proxy.vertices.empty() ? Eigen::Vector3d::Zero() : proxy.vertices[0];
   auto index = [&](double a) { return static_cast<int64_t>(std::floor(a / reach)); };
-  auto key = [](int64_t ia, int64_t ib) {  // unsigned: no shift of a negative value
-    return (static_cast<uint64_t>(static_cast<uint32_t>(static_cast<int32_t>(ia))) << 32) |
-           static_cast<uint32_t>(static_cast<int32_t>(ib));
-  };
   std::unordered_map<uint64_t, std::vector<Eigen::Vector3d>> grid;  // (a, b, height)
   for (const auto& f : proxy.faces) {
     if (!IsProxyGround(FaceNormal(proxy, f), u)) continue;
     const Eigen::Vector3d c = Centroid(proxy, f) - o;
-    grid[key(index(c.dot(e1)), index(c.dot(e2)))].push_back({c.dot(e1), c.dot(e2), c.dot(u)});
+    grid[CellKey(index(c.dot(e1)), index(c.dot(e2)))].push_back({c.dot(e1), c.dot(e2), c.dot(u)});
   }
   std::vector<double> h;
   for (const auto& f : dense.faces) {
@@ -62,7 +65,7 @@ double ProxyGroundAbove(const Mesh& dense, const Mesh& proxy, const Eigen::Vecto
     bool found = false;
     for (int64_t i = -1; i <= 1; ++i)
       for (int64_t j = -1; j <= 1; ++j) {
-        auto it = grid.find(key(ia + i, ib + j));
+        auto it = grid.find(CellKey(ia + i, ib + j));
         if (it == grid.end()) continue;
         for (const Eigen::Vector3d& p : it->second) {
           const double d2 = (p.x() - a) * (p.x() - a) + (p.y() - b) * (p.y() - b);
@@ -75,13 +78,121 @@ double ProxyGroundAbove(const Mesh& dense, const Mesh& proxy, const Eigen::Vecto
   return h.size() < 50 ? 0.0 : Median(std::move(h));
 }
 
+namespace {
+
+// The dense surface's near-vertical faces (normal within 60° of horizontal) in square cells of
+// `cell` across up: position and unit normal across up, height along it; coordinates relative to
+// `o` (UTM-sized coordinates keep their precision).
+class FacadeGrid {
+ public:
+  FacadeGrid(const Mesh& dense, const Eigen::Vector3d& u, const Eigen::Vector3d& o, double cell)
+      : u_(u), e1_(u.unitOrthogonal()), e2_(u.cross(e1_)), o_(o), cell_(cell) {
+    for (const auto& f : dense.faces) {
+      const Eigen::Vector3d n = FaceNormal(dense, f);
+      const Eigen::Vector2d nh(n.dot(e1_), n.dot(e2_));
+      if (!(n.norm() > 0) || nh.norm() < std::cos(M_PI / 3) * n.norm()) continue;
+      const Eigen::Vector2d at = Across(Centroid(dense, f));
+      grid_[CellKey(Index(at.x()), Index(at.y()))].push_back(
+          {at, nh.normalized(), (Centroid(dense, f) - o_).dot(u_)});
+    }
+  }
+  Eigen::Vector2d Across(const Eigen::Vector3d& p) const { return Direction(p - o_); }
+  Eigen::Vector2d Direction(const Eigen::Vector3d& d) const { return {d.dot(e1_), d.dot(e2_)}; }
+  double Height(const Eigen::Vector3d& p) const { return (p - o_).dot(u_); }
+
+  // (distance behind, height) of the faces facing a wall at `at` with unit normal `wn` (towards
+  // the path): within 45° of it, within search.reach along it, from search.front in front to
+  // search.back behind; found in the cells along the line across the wall and one either side.
+  std::vector<Eigen::Vector2d> Column(const Eigen::Vector2d& at, const Eigen::Vector2d& wn,
+                                      const FacadeSearch& search) const {
+    std::set<uint64_t> cells;
+    for (double t = -search.front;; t += cell_ / 2) {
+      const Eigen::Vector2d c = at - std::min(t, search.back) * wn;
+      for (int64_t i = -1; i <= 1; ++i)
+        for (int64_t j = -1; j <= 1; ++j) cells.insert(CellKey(Index(c.x()) + i, Index(c.y()) + j));
+      if (t >= search.back) break;
+    }
+    const Eigen::Vector2d along(-wn.y(), wn.x());
+    std::vector<Eigen::Vector2d> found;
+    for (uint64_t k : cells) {
+      auto it = grid_.find(k);
+      if (it == grid_.end()) continue;
+      for (const Face& fc : it->second) {
+        if (std::abs(fc.normal.dot(wn)) < std::cos(M_PI / 4)) continue;
+        const Eigen::Vector2d d = fc.at - at;
+        const double b = -d.dot(wn);
+        if (std::abs(d.dot(along)) <= search.reach && b >= -search.front && b <= search.back)
+          found.emplace_back(b, fc.height);
+      }
+    }
+    return found;
+  }
+
+ private:
+  struct Face {
+    Eigen::Vector2d at, normal;
+    double height;
+  };
+  int64_t Index(double a) const { return static_cast<int64_t>(std::floor(a / cell_)); }
+  Eigen::Vector3d u_, e1_, e2_, o_;
+  double cell_;
+  std::unordered_map<uint64_t, std::vector<Face>> grid_;
+};
+
+}  // namespace
+
+std::vector<double> DenseFacadeBehindWalls(const Mesh& dense, const Mesh& proxy,
+                                           const Eigen::Vector3d& up, const FacadeSearch& search) {
+  if (!(up.norm() > 0) || !(search.reach > 0) || !(search.front >= 0) || !(search.back >= 0) ||
+      !std::isfinite(search.front + search.back) || !(search.quantile >= 0) ||
+      !(search.quantile <= 1))
+    throw Error("merge: the facade search needs up, reach > 0, finite front/back >= 0, q in [0,1]");
+  if (!proxy.has_normals()) throw Error("merge: the proxy has no vertex normals");
+  const Eigen::Vector3d u = up.normalized();
+  const FacadeGrid grid(
+      dense, u, proxy.vertices.empty() ? Eigen::Vector3d::Zero() : proxy.vertices[0], search.reach);
+  std::vector<double> out(proxy.vertices.size(), std::numeric_limits<double>::quiet_NaN());
+  std::vector<bool> wall(proxy.vertices.size(), false);
+  for (const auto& f : proxy.faces) {
+    const Eigen::Vector3d n = FaceNormal(proxy, f);
+    if (n.norm() > 0 && !IsProxyGround(n, u))
+      for (uint32_t v : f) wall[v] = true;
+  }
+  // A wall's column (its vertices at one place across up, one normal) gathers its faces once;
+  // each vertex keeps those within `rise` of its height.
+  std::map<std::array<int64_t, 4>, std::vector<Eigen::Vector2d>> columns;
+  const double q = search.reach * 1e-6;
+  std::vector<double> behind;
+  for (size_t v = 0; v < proxy.vertices.size(); ++v) {
+    Eigen::Vector2d wn = grid.Direction(proxy.normals[v].cast<double>());
+    if (!wall[v] || !(wn.norm() > 0)) continue;
+    wn.normalize();
+    const Eigen::Vector2d at = grid.Across(proxy.vertices[v]);
+    const std::array<int64_t, 4> place{std::llround(at.x() / q), std::llround(at.y() / q),
+                                       std::llround(wn.x() * 1e6), std::llround(wn.y() * 1e6)};
+    auto column = columns.find(place);
+    if (column == columns.end()) column = columns.emplace(place, grid.Column(at, wn, search)).first;
+    const double height = grid.Height(proxy.vertices[v]);
+    behind.clear();
+    for (const Eigen::Vector2d& f : column->second)
+      if (std::abs(f.y() - height) <= search.rise) behind.push_back(f.x());
+    if (behind.size() >= std::max<size_t>(search.min_faces, 1) &&
+        Percentile(behind, 0.75) - Percentile(behind, 0.25) <= search.spread)
+      out[v] = Percentile(behind, search.quantile);
+  }
+  return out;
+}
+
 Mesh MergeProxyBehind(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3d& up,
-                      double ground_below, double walls_behind, MergeReport* report) {
+                      double ground_below, double walls_behind, MergeReport* report,
+                      const std::vector<double>& wall_offsets) {
   if (!(ground_below >= 0) || !std::isfinite(ground_below) || !std::isfinite(walls_behind))
     throw Error("merge: the offsets must be finite lengths, ground_below >= 0");
   if (!(up.norm() > 0)) throw Error("merge: the up direction is zero");
-  if (walls_behind > 0 && !proxy.has_normals())
+  if ((walls_behind > 0 || !wall_offsets.empty()) && !proxy.has_normals())
     throw Error("merge: the proxy has no vertex normals");
+  if (!wall_offsets.empty() && wall_offsets.size() != proxy.vertices.size())
+    throw Error("merge: one wall offset per proxy vertex");
   const Eigen::Vector3d u = up.normalized();
   // A wall moved back leaves a gap above the ground's edge through which a ray would see
   // nothing; the wall's foot (its vertices where the ground's edge is) goes down by as much as
@@ -98,7 +209,8 @@ Mesh MergeProxyBehind(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3
     const auto& f = proxy.faces[i];
     const Eigen::Vector3d n = FaceNormal(proxy, f);
     if (n.norm() > 0) kind[i] = IsProxyGround(n, u) ? 2 : 1;
-    if (kind[i] == 2 && (walls_behind > 0 || (walls_behind >= 0 && ground_below > 0)))
+    if (kind[i] == 2 && walls_behind >= 0 &&
+        (walls_behind > 0 || ground_below > 0 || !wall_offsets.empty()))
       for (uint32_t v : f) ground_points.insert(key(v));
   }
   Mesh out;
@@ -108,11 +220,12 @@ Mesh MergeProxyBehind(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3
   auto vertex = [&](uint32_t v, bool ground) {
     auto it = index.find(v);
     if (it != index.end()) return it->second;
-    Eigen::Vector3d shift = ground
-                                ? Eigen::Vector3d(-ground_below * u)
-                                : Eigen::Vector3d(-walls_behind * proxy.normals[v].cast<double>());
+    const double back =
+        !wall_offsets.empty() && std::isfinite(wall_offsets[v]) ? wall_offsets[v] : walls_behind;
+    Eigen::Vector3d shift = ground ? Eigen::Vector3d(-ground_below * u)
+                                   : Eigen::Vector3d(-back * proxy.normals[v].cast<double>());
     if (!ground && ground_points.count(key(v)))  // the wall's foot: as far down as either went
-      shift -= std::max(walls_behind, ground_below) * u;
+      shift -= std::max({back, ground_below, 0.0}) * u;
     out.vertices.push_back(proxy.vertices[v] + shift);
     return index[v] = static_cast<uint32_t>(out.vertices.size() - 1);
   };

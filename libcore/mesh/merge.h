@@ -19,6 +19,8 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <limits>
+#include <vector>
 
 #include "scene/mesh.h"
 
@@ -39,8 +41,32 @@ struct MergeReport {
 double ProxyGroundAbove(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3d& up,
                         double reach, double bound);
 
+// Where the dense surface shows a facade behind (or in front of) the proxy's walls. For each wall
+// vertex of the proxy (a vertex of a face that is not ground; it needs vertex normals, which face
+// the path): the dense faces whose normal is within 45° of the vertex's normal (either side: a
+// facade seen from the road), at most `reach` from the vertex along the wall (horizontally, across
+// its normal; any height) and between `front` in front of it and `back` behind it; the
+// `quantile` of their distances behind the vertex (negative: in front), when at least
+// `min_faces` such faces are found, else NaN. Ground vertices get NaN. Lengths in model units.
+struct FacadeSearch {
+  double reach = 0;                                       // along the wall, > 0
+  double rise = std::numeric_limits<double>::infinity();  // above and below the vertex, > 0
+  double front = 0;       // farthest in front of the wall a facade face counts, >= 0
+  double back = 0;        // farthest behind it, >= 0
+  double quantile = 0.9;  // of the faces' distances behind the wall: the wall goes behind most
+  size_t min_faces = 10;  // fewer: no facade there
+  double spread = 0;      // their interquartile range above this: no facade (vegetation), >= 0
+};
+std::vector<double> DenseFacadeBehindWalls(const Mesh& dense, const Mesh& proxy,
+                                           const Eigen::Vector3d& up, const FacadeSearch& search);
+
 // The proxy needs vertex normals for its walls (Mesh::ComputeNormals) unless walls_behind <= 0.
+// `wall_offsets` (one per proxy vertex, or empty): where finite, a wall vertex goes back by that
+// much instead of `walls_behind` (DenseFacadeBehindWalls plus a gap puts it just behind the dense
+// facade, where a hole of the facade then shows nearly the right depth); a foot vertex goes down
+// by the larger of its offset and `ground_below`.
 Mesh MergeProxyBehind(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3d& up,
-                      double ground_below, double walls_behind, MergeReport* report = nullptr);
+                      double ground_below, double walls_behind, MergeReport* report = nullptr,
+                      const std::vector<double>& wall_offsets = {});
 
 }  // namespace mvtm

@@ -37,9 +37,9 @@ int RunAndReport(mvtm::RoadMeshOptions& o) {
     std::fprintf(stderr,
                  "roadmesh: dense: %zu depth maps fused into %zu triangles; %zu corridor ground "
                  "(lowered %.3g under the fused road) and %zu wall triangles behind it close its "
-                 "holes\n",
+                 "holes (%zu wall vertices just behind a fused facade)\n",
                  r.dense_views, r.dense_faces, r.corridor_faces, r.ground_lowered,
-                 r.corridor_wall_faces);
+                 r.corridor_wall_faces, r.walls_at_facades);
   return 0;
 }
 

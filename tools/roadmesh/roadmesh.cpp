@@ -170,6 +170,7 @@ Mesh DenseMesh(const Workspace& ws, const Reconstruction& rec, const RoadMeshOpt
   const std::vector<DepthView> views = LoadStereoViews(ws, rec);
   FusionOptions fo;
   fo.consistency.min_agree = o.min_agree;
+  fo.consistency.witnessed = !o.strict_agree;
   fo.tsdf.voxel_per_spacing = o.voxel;
   fo.tsdf.max_depth_spacings = o.max_depth;
   const Mesh dense = FuseDepthViews(views, fo);
@@ -185,8 +186,24 @@ Mesh DenseMesh(const Workspace& ws, const Reconstruction& rec, const RoadMeshOpt
   const double unit = o.metric ? 1.0 : rep.unit.unit;
   const double above = ProxyGroundAbove(dense, corridor, -down, o.resolution * unit, 0.5 * unit);
   rep.ground_lowered = o.ground_below * voxel + std::max(0.0, above);
-  Mesh out =
-      MergeProxyBehind(dense, corridor, -down, rep.ground_lowered, o.walls_behind * voxel, &mr);
+  std::vector<double> wall_offsets;
+  if (o.walls_gap >= 0 && o.walls_behind >= 0) {
+    // Facade faces within 2 resolutions along the wall and half of one up or down; a facade is
+    // flat (interquartile range of its depths within 0.3 m-eq.: not a hedge or a tree) and lies
+    // within 3 m-eq. in front of the fitted wall or 30 behind it.
+    FacadeSearch fs;
+    fs.reach = 4 * o.resolution * unit;
+    fs.rise = 2 * o.resolution * unit;
+    fs.front = 3 * unit;
+    fs.back = 30 * unit;
+    fs.spread = 0.3 * unit;
+    fs.quantile = 0.5;
+    wall_offsets = DenseFacadeBehindWalls(dense, corridor, -down, fs);
+    for (double& w : wall_offsets)
+      if (std::isfinite(w)) w += o.walls_gap * voxel, ++rep.walls_at_facades;
+  }
+  Mesh out = MergeProxyBehind(dense, corridor, -down, rep.ground_lowered, o.walls_behind * voxel,
+                              &mr, wall_offsets);
   rep.dense_views = views.size();
   rep.dense_faces = dense.faces.size();
   rep.corridor_faces = mr.ground_faces;
@@ -203,7 +220,8 @@ nlohmann::json RunFacts(const RoadMeshReport& rep) {
           {"ground_points", rep.ground_points},
           {"left_wall", rep.left_wall},
           {"right_wall", rep.right_wall},
-          {"ground_lowered", rep.ground_lowered}};
+          {"ground_lowered", rep.ground_lowered},
+          {"walls_at_facades", rep.walls_at_facades}};
 }
 
 }  // namespace
@@ -271,8 +289,12 @@ OptionTable DeclareOptions(RoadMeshOptions& o) {
       .Range(0, 10, true);
   t.Real("--max-depth", &o.max_depth, "--dense: depth used, in median camera spacings")
       .Range(0, 1000, true);
-  t.Integer("--min-agree", &o.min_agree, "--dense: other views that must confirm a depth pixel")
+  t.Integer("--min-agree", &o.min_agree,
+            "--dense: other views that must confirm a depth pixel (fewer where fewer views see "
+            "that far along their rays)")
       .Range(1, 16);
+  t.Flag("--strict-agree", &o.strict_agree,
+         "--dense: --min-agree confirming views even where fewer views see the pixel's point");
   t.Real("--ground-below", &o.ground_below,
          "--dense: lower the corridor ground by this many voxels under the fused surface "
          "(0: at its fitted height, or just under the fused road where it lies above it)")
@@ -280,6 +302,10 @@ OptionTable DeclareOptions(RoadMeshOptions& o) {
   t.Real("--walls-behind", &o.walls_behind,
          "--dense: move the corridor walls back by this many voxels behind the fused surface, "
          "so they show only through its holes (-1: no walls)")
+      .Range(-1, 1000);
+  t.Real("--walls-gap", &o.walls_gap,
+         "--dense: where the fused surface shows a flat facade near a wall, put the wall this "
+         "many voxels behind it instead (-1: --walls-behind everywhere)")
       .Range(-1, 1000);
   t.Flag("--force", &o.force, "Replace an existing mesh").Cosmetic();
   t.Choice("--gl", &o.gl, GlBackendTable(), "OpenGL backend");

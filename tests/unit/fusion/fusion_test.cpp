@@ -350,10 +350,17 @@ int Inside(const DepthView& j, const Eigen::Vector2d& p) {
 }
 
 TEST(Consistency, KeepsWhatThreeViewsSeeAndDropsTheRest) {
+  // Strict (every pixel needs min_agree = 2 others): kept iff views 1 and 2 both see it.
+  // Witnessed (the default): view j can confirm where its depth reaches the point; on a bare
+  // wall every view that sees the point does, so a pixel is kept iff at least one other view
+  // sees it (the wall's part that view 2 has left behind is kept on view 1's word alone).
   const Scene s = WallScene();
   const std::vector<DepthView> views = WallViews(s, 3);
-  const std::vector<Image> f = FilterConsistentDepth(views, {});
-  size_t kept = 0, dropped = 0;
+  ConsistencyOptions strict;
+  strict.witnessed = false;
+  const std::vector<Image> f = FilterConsistentDepth(views, strict);
+  const std::vector<Image> w = FilterConsistentDepth(views, {});
+  size_t kept = 0, dropped = 0, by_one = 0;
   for (int y = 0; y < 120; ++y) {
     for (int x = 0; x < 160; ++x) {
       const int a = Inside(views[2], Reproject(views, 0, 2, x, y));
@@ -362,11 +369,56 @@ TEST(Consistency, KeepsWhatThreeViewsSeeAndDropsTheRest) {
       const bool seen_by_three = a == 1 && b == 1;
       EXPECT_EQ(std::isfinite(f[0].at(x, y)), seen_by_three) << x << "," << y;
       EXPECT_TRUE(!std::isfinite(f[0].at(x, y)) || f[0].at(x, y) == views[0].depth.at(x, y));
+      EXPECT_EQ(std::isfinite(w[0].at(x, y)), a == 1 || b == 1) << x << "," << y;
       (seen_by_three ? kept : dropped)++;
+      by_one += !seen_by_three && (a == 1 || b == 1);
     }
   }
   EXPECT_GT(kept, 5000u);
   EXPECT_GT(dropped, 1000u);
+  EXPECT_GT(by_one, 500u);
+}
+
+TEST(Consistency, ASurfaceThatAThirdViewSeesThroughNeedsTwoConfirmations) {
+  // A box 3 in front of the wall that views 0 and 1 saw and view 2 did not (it drove away):
+  // view 2's wall lies behind the box's points, so view 2 could have confirmed them and did
+  // not: with views 1 and 2 both witnesses, min_agree 2 drops the box from view 0 wherever view
+  // 2 sees that part of the wall. Where view 2's image does not reach, view 1 is the only
+  // witness and its agreement keeps the box. min_agree 1 keeps it everywhere (strict or not).
+  Scene with_box = WallScene();
+  with_box.boxes.push_back({{-0.5, -0.5, 2.4}, {0.5, 0.5, 3.4}});
+  const Camera cam = MakeCamera(160, 120, 120);
+  std::vector<DepthView> views;
+  for (int i = 0; i < 3; ++i) {
+    const Eigen::Vector3d c(0.5 * i, 0, 0);
+    views.push_back(
+        Render(i < 2 ? with_box : WallScene(), cam, LookAt(c, c + Eigen::Vector3d(0, 0, 1))));
+  }
+  const std::vector<Image> w = FilterConsistentDepth(views, {});
+  ConsistencyOptions one;
+  one.min_agree = 1;
+  const std::vector<Image> w1 = FilterConsistentDepth(views, one);
+  const DepthView wall0 = Render(WallScene(), cam, views[0].world_to_camera);
+  size_t box = 0, dropped = 0, kept_alone = 0;
+  for (int y = 1; y < 119; ++y) {
+    for (int x = 1; x < 159; ++x) {
+      if (!(views[0].depth.at(x, y) < wall0.depth.at(x, y) - 1.0)) continue;  // the box's
+      const int a = Inside(views[2], Reproject(views, 0, 2, x, y));
+      const int b = Inside(views[1], Reproject(views, 0, 1, x, y));
+      if (a < 0 || b != 1) continue;
+      ++box;
+      EXPECT_TRUE(std::isfinite(w1[0].at(x, y))) << x << "," << y;
+      if (a == 1) {
+        EXPECT_FALSE(std::isfinite(w[0].at(x, y))) << x << "," << y;
+        ++dropped;
+      } else {
+        EXPECT_TRUE(std::isfinite(w[0].at(x, y))) << x << "," << y;
+        ++kept_alone;
+      }
+    }
+  }
+  EXPECT_GT(box, 500u);
+  EXPECT_GT(dropped, 100u);
 }
 
 TEST(Consistency, RemovesAnOutlierPatch) {

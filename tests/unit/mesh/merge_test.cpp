@@ -3,6 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <vector>
+
 #include "base/error.h"
 
 namespace mvtm {
@@ -114,6 +117,88 @@ TEST(Merge, TheProxyGroundAboveTheFusedRoadIsMeasuredAndGoesUnderIt) {
   }
   EXPECT_EQ(ProxyGroundAbove(Flat(2, 0.5, 0), Flat(10, 1.0, 0.1), {0, 0, 1}, 1.0, 0.5), 0.0);
   EXPECT_THROW(ProxyGroundAbove(Flat(2, 0.5, 0), Flat(10, 1.0, 0.1), {0, 0, 1}, 0, 0.5), Error);
+}
+
+// A vertical grid in the plane y = `y` over x in [x0, x0 + na·step], z in [0, nz·step], wound to
+// face −y (towards a path at y = 0); scaled by `k` about the origin and moved by `o`.
+Mesh Upright(double x0, int na, int nz, double step, double y, double k = 1,
+             const Eigen::Vector3d& o = {0, 0, 0}) {
+  Mesh m;
+  for (int j = 0; j <= nz; ++j)
+    for (int i = 0; i <= na; ++i)
+      m.vertices.push_back(k * Eigen::Vector3d(x0 + i * step, y, j * step) + o);
+  for (int j = 0; j < nz; ++j)
+    for (int i = 0; i < na; ++i) {
+      const uint32_t a = j * (na + 1) + i, b = a + 1, c = a + na + 1, d = c + 1;
+      m.faces.push_back({a, b, d});
+      m.faces.push_back({a, d, c});
+    }
+  return m;
+}
+
+TEST(Merge, AWallGoesJustBehindAFlatFusedFacadeAndNotBehindAHedge) {
+  // The proxy's wall at y = 5 (x 0..20, z 0..6, step 1). Fused: a flat facade at y = 7 (x 0..10,
+  // z 0..3, step 0.25: 2 behind the wall) and a hedge of two layers at y = 5.5 and 8.5 (x 12..20,
+  // z 0..6: interquartile range 3). With reach 1 along the wall, rise 0.5, spread 0.3: the wall's
+  // vertices at x <= 9, z <= 3 see only facade faces, all 2 behind: offset 2 (the median), by
+  // hand; at z >= 4 the facade's faces are more than 0.5 below: none; at x >= 13 the hedge's
+  // spread is 3 > 0.3: none. Merged with offset + 0.5, those vertices go to y = 7.5; the rest
+  // to y = 5 + 20 (walls_behind). The same scene scaled by 0.2 at UTM coordinates: 0.2 of each.
+  for (const double k : {1.0, 0.2}) {
+    const Eigen::Vector3d o =
+        k == 1.0 ? Eigen::Vector3d::Zero() : Eigen::Vector3d(451000, 5410000, 120);
+    Mesh proxy = Upright(0, 20, 6, 1.0, 5.0, k, o);
+    proxy.ComputeNormals();
+    ASSERT_NEAR(proxy.normals[0].y(), -1, 1e-6);
+    Mesh dense = Upright(0, 40, 12, 0.25, 7.0, k, o);
+    Append(dense, Upright(12, 32, 24, 0.25, 5.5, k, o));
+    Append(dense, Upright(12, 32, 24, 0.25, 8.5, k, o));
+    FacadeSearch fs;
+    fs.reach = 1.0 * k;
+    fs.rise = 0.5 * k;
+    fs.front = 3 * k;
+    fs.back = 30 * k;
+    fs.spread = 0.3 * k;
+    fs.quantile = 0.5;
+    const std::vector<double> behind = DenseFacadeBehindWalls(dense, proxy, {0, 0, 1}, fs);
+    ASSERT_EQ(behind.size(), proxy.vertices.size());
+    size_t facade = 0, none = 0;
+    auto region = [&](const Eigen::Vector3d& p) {  // 1 facade, 0 none, -1 not asserted
+      const Eigen::Vector3d q = (p - o) / k;
+      if (q.x() <= 9 + 1e-9 && q.z() <= 3 + 1e-9) return 1;
+      if (q.x() >= 13 - 1e-9 || q.z() >= 4 - 1e-9) return 0;
+      return -1;
+    };
+    for (size_t v = 0; v < proxy.vertices.size(); ++v) {
+      const int r = region(proxy.vertices[v]);
+      if (r == 1) {
+        EXPECT_NEAR(behind[v], 2.0 * k, 1e-6 * k) << v;
+        ++facade;
+      } else if (r == 0) {
+        EXPECT_TRUE(std::isnan(behind[v])) << v << " " << behind[v];
+        ++none;
+      }
+    }
+    EXPECT_EQ(facade, 40u);  // x 0..9, z 0..3
+    EXPECT_GT(none, 60u);
+    std::vector<double> offsets = behind;
+    for (double& b : offsets) b += 0.5 * k;
+    MergeReport r;
+    const Mesh m = MergeProxyBehind(dense, proxy, {0, 0, 1}, 0, 20 * k, &r, offsets);
+    EXPECT_EQ(r.wall_faces, proxy.faces.size());
+    for (size_t v = dense.vertices.size(); v < m.vertices.size(); ++v) {
+      const int reg = region(m.vertices[v]);
+      const double y = (m.vertices[v].y() - o.y()) / k;
+      if (reg == 1) {
+        EXPECT_NEAR(y, 7.5, 1e-6) << v;
+      } else if (reg == 0) {
+        EXPECT_NEAR(y, 25.0, 1e-6) << v;
+      }
+    }
+  }
+  FacadeSearch bad;
+  EXPECT_THROW(DenseFacadeBehindWalls(Mesh(), Proxy(), {0, 0, 1}, bad), Error);  // reach 0
+  EXPECT_THROW(MergeProxyBehind(Mesh(), Proxy(), {0, 0, 1}, 0, 1, nullptr, {1.0}), Error);
 }
 
 TEST(Merge, NoWallsAndBadInput) {
