@@ -171,6 +171,7 @@ Mesh DenseMesh(const Workspace& ws, const Reconstruction& rec, const RoadMeshOpt
   FusionOptions fo;
   fo.consistency.min_agree = o.min_agree;
   fo.consistency.witnessed = !o.strict_agree;
+  fo.consistency.relative_tolerance = o.agree_tolerance;
   fo.tsdf.voxel_per_spacing = o.voxel;
   fo.tsdf.max_depth_spacings = o.max_depth;
   const Mesh dense = FuseDepthViews(views, fo);
@@ -293,6 +294,9 @@ OptionTable DeclareOptions(RoadMeshOptions& o) {
             "--dense: other views that must confirm a depth pixel (fewer where fewer views see "
             "that far along their rays)")
       .Range(1, 16);
+  t.Real("--agree-tolerance", &o.agree_tolerance,
+         "--dense: a view confirms a depth pixel within this fraction of the depth")
+      .Range(0, 1, true, true);
   t.Flag("--strict-agree", &o.strict_agree,
          "--dense: --min-agree confirming views even where fewer views see the pixel's point");
   t.Real("--ground-below", &o.ground_below,

@@ -35,14 +35,15 @@ struct RoadMeshOptions {
   double voxel = 0.1;     // --dense: voxel size as a fraction of the median camera spacing, (0, 10]
   double max_depth = 40;  // --dense: depth used, in median camera spacings, (0, 1000]
   int min_agree = 2;      // --dense: other views that must confirm a depth pixel, 1..16
-  double ground_below = 0;    // --dense: corridor ground lowered by this many voxels (0: at its
-                              // fitted height), [0, 100]
-  double walls_behind = 20;   // --dense: corridor walls moved back by this many voxels behind the
-                              // fused surface; -1: no walls, [0, 1000]
-  double walls_gap = -1;      // --dense: where the fused surface shows a flat facade near a wall,
-                              // the wall goes this many voxels behind it instead; -1: never
-  bool strict_agree = false;  // --dense: min_agree confirming views even where fewer see it
-  bool force = false;         // replace an existing mesh, even one roadmesh did not make
+  double ground_below = 0;   // --dense: corridor ground lowered by this many voxels (0: at its
+                             // fitted height), [0, 100]
+  double walls_behind = 20;  // --dense: corridor walls moved back by this many voxels behind the
+                             // fused surface; -1: no walls, [0, 1000]
+  double walls_gap = -1;     // --dense: where the fused surface shows a flat facade near a wall,
+                             // the wall goes this many voxels behind it instead; -1: never
+  double agree_tolerance = 0.01;    // --dense: confirmation within this fraction of the depth
+  bool strict_agree = false;        // --dense: min_agree confirming views even where fewer see it
+  bool force = false;               // replace an existing mesh, even one roadmesh did not make
   GlBackend gl = GlBackend::kAuto;  // depth maps for the colour visibility test
   bool quiet = false;
 
