@@ -70,20 +70,26 @@ TEST(Merge, AWallMovedBackTakesItsFootDownSoNoGapOpensAtTheGroundsEdge) {
   EXPECT_NEAR(same.vertices[4].z(), 0, 1e-12);
 }
 
-// A flat grid of n x n quads of side `step` over [0, n·step]² in the plane z = height (up +z),
-// scaled by `k` about the origin and moved by `o`.
-Mesh Flat(int n, double step, double height, double k = 1, const Eigen::Vector3d& o = {0, 0, 0}) {
+// A grid of na x nb quads of side `step` from `corner` along the unit axes `ea` and `eb` (faces
+// wound to face ea x eb), scaled by `k` about the origin and moved by `o`.
+Mesh Grid(const Eigen::Vector3d& corner, const Eigen::Vector3d& ea, const Eigen::Vector3d& eb,
+          int na, int nb, double step, double k, const Eigen::Vector3d& o) {
   Mesh m;
-  for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i)
-      m.vertices.push_back(k * Eigen::Vector3d(i * step, j * step, height) + o);
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      const uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+  for (int j = 0; j <= nb; ++j)
+    for (int i = 0; i <= na; ++i) m.vertices.push_back(k * (corner + step * (i * ea + j * eb)) + o);
+  for (int j = 0; j < nb; ++j)
+    for (int i = 0; i < na; ++i) {
+      const uint32_t a = j * (na + 1) + i, b = a + 1, c = a + na + 1, d = c + 1;
       m.faces.push_back({a, b, d});
       m.faces.push_back({a, d, c});
     }
   return m;
+}
+
+// A flat grid of n x n quads of side `step` over [0, n·step]² in the plane z = height (up +z),
+// scaled by `k` about the origin and moved by `o`.
+Mesh Flat(int n, double step, double height, double k = 1, const Eigen::Vector3d& o = {0, 0, 0}) {
+  return Grid({0, 0, height}, Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), n, n, step, k, o);
 }
 
 // Appends `b` to `a`.
@@ -123,17 +129,7 @@ TEST(Merge, TheProxyGroundAboveTheFusedRoadIsMeasuredAndGoesUnderIt) {
 // face −y (towards a path at y = 0); scaled by `k` about the origin and moved by `o`.
 Mesh Upright(double x0, int na, int nz, double step, double y, double k = 1,
              const Eigen::Vector3d& o = {0, 0, 0}) {
-  Mesh m;
-  for (int j = 0; j <= nz; ++j)
-    for (int i = 0; i <= na; ++i)
-      m.vertices.push_back(k * Eigen::Vector3d(x0 + i * step, y, j * step) + o);
-  for (int j = 0; j < nz; ++j)
-    for (int i = 0; i < na; ++i) {
-      const uint32_t a = j * (na + 1) + i, b = a + 1, c = a + na + 1, d = c + 1;
-      m.faces.push_back({a, b, d});
-      m.faces.push_back({a, d, c});
-    }
-  return m;
+  return Grid({x0, y, 0}, Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitZ(), na, nz, step, k, o);
 }
 
 TEST(Merge, AWallGoesJustBehindAFlatFusedFacadeAndNotBehindAHedge) {
