@@ -106,7 +106,7 @@ class FacadeGrid {
   std::vector<Eigen::Vector2d> Column(const Eigen::Vector2d& at, const Eigen::Vector2d& wn,
                                       const FacadeSearch& search) const {
     std::set<uint64_t> cells;
-    for (double t = -search.front;; t += cell_ / 2) {
+    for (double t = -search.front;; t += cell_ / 4) {  // no face within reach falls between
       const Eigen::Vector2d c = at - std::min(t, search.back) * wn;
       for (int64_t i = -1; i <= 1; ++i)
         for (int64_t j = -1; j <= 1; ++j) cells.insert(CellKey(Index(c.x()) + i, Index(c.y()) + j));
@@ -143,10 +143,12 @@ class FacadeGrid {
 
 std::vector<double> DenseFacadeBehindWalls(const Mesh& dense, const Mesh& proxy,
                                            const Eigen::Vector3d& up, const FacadeSearch& search) {
-  if (!(up.norm() > 0) || !(search.reach > 0) || !(search.front >= 0) || !(search.back >= 0) ||
-      !std::isfinite(search.front + search.back) || !(search.quantile >= 0) ||
-      !(search.quantile <= 1))
-    throw Error("merge: the facade search needs up, reach > 0, finite front/back >= 0, q in [0,1]");
+  if (!(up.norm() > 0) || !(search.reach > 0) || !(search.rise > 0) || !(search.front >= 0) ||
+      !(search.back >= 0) || !std::isfinite(search.front + search.back) || !(search.spread >= 0) ||
+      !(search.quantile >= 0) || !(search.quantile <= 1))
+    throw Error(
+        "merge: the facade search needs up, reach and rise > 0, finite front and back >= 0, "
+        "spread >= 0, quantile in [0, 1]");
   if (!proxy.has_normals()) throw Error("merge: the proxy has no vertex normals");
   const Eigen::Vector3d u = up.normalized();
   const FacadeGrid grid(
@@ -189,7 +191,7 @@ Mesh MergeProxyBehind(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3
   if (!(ground_below >= 0) || !std::isfinite(ground_below) || !std::isfinite(walls_behind))
     throw Error("merge: the offsets must be finite lengths, ground_below >= 0");
   if (!(up.norm() > 0)) throw Error("merge: the up direction is zero");
-  if ((walls_behind > 0 || !wall_offsets.empty()) && !proxy.has_normals())
+  if (walls_behind >= 0 && (walls_behind > 0 || !wall_offsets.empty()) && !proxy.has_normals())
     throw Error("merge: the proxy has no vertex normals");
   if (!wall_offsets.empty() && wall_offsets.size() != proxy.vertices.size())
     throw Error("merge: one wall offset per proxy vertex");
@@ -222,8 +224,11 @@ Mesh MergeProxyBehind(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3
     if (it != index.end()) return it->second;
     const double back =
         !wall_offsets.empty() && std::isfinite(wall_offsets[v]) ? wall_offsets[v] : walls_behind;
-    Eigen::Vector3d shift = ground ? Eigen::Vector3d(-ground_below * u)
-                                   : Eigen::Vector3d(-back * proxy.normals[v].cast<double>());
+    Eigen::Vector3d shift = Eigen::Vector3d::Zero();  // a wall not moved needs no normals
+    if (ground)
+      shift = -ground_below * u;
+    else if (back != 0)
+      shift = -back * proxy.normals[v].cast<double>();
     if (!ground && ground_points.count(key(v)))  // the wall's foot: as far down as either went
       shift -= std::max({back, ground_below, 0.0}) * u;
     out.vertices.push_back(proxy.vertices[v] + shift);

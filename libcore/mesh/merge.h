@@ -8,10 +8,11 @@
 // depth test keeps the nearer surface) and the proxy shows only through the holes:
 //   * ground faces (face normal within 45° of `up`) are lowered by `ground_below` along `up`;
 //   * wall faces (every other face; a wall's normals face the path) are moved back by
-//     `walls_behind` against their vertex normals, and a wall's foot (its vertices where the
-//     proxy's ground has a vertex) down by the larger of `walls_behind` and `ground_below`, so
-//     no gap to nothing opens between the ground's edge and the wall; `walls_behind` < 0 drops
-//     the walls.
+//     `walls_behind` against their vertex normals (or, vertex by vertex, by a given offset: just
+//     behind a flat dense facade, DenseFacadeBehindWalls), and a wall's foot (its vertices where
+//     the proxy's ground has a vertex) down by the larger of that and `ground_below`, so no gap
+//     to nothing opens between the ground's edge and the wall; `walls_behind` < 0 drops the
+//     walls (offsets or not).
 // No face is dropped by a proximity test, so fragments of dense surface never punch holes.
 // Lengths in the model's own unit. Normals are recomputed; colours dropped (bake them
 // afterwards). Thread safety: pure function.
@@ -41,13 +42,17 @@ struct MergeReport {
 double ProxyGroundAbove(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3d& up,
                         double reach, double bound);
 
-// Where the dense surface shows a facade behind (or in front of) the proxy's walls. For each wall
-// vertex of the proxy (a vertex of a face that is not ground; it needs vertex normals, which face
-// the path): the dense faces whose normal is within 45° of the vertex's normal (either side: a
-// facade seen from the road), at most `reach` from the vertex along the wall (horizontally, across
-// its normal; any height) and between `front` in front of it and `back` behind it; the
-// `quantile` of their distances behind the vertex (negative: in front), when at least
-// `min_faces` such faces are found, else NaN. Ground vertices get NaN. Lengths in model units.
+// Where the dense surface shows a flat facade behind (or in front of) the proxy's walls. For each
+// wall vertex of the proxy (a vertex of a face that is not ground; it needs vertex normals, which
+// face the path): the dense faces that stand upright (normal within 60° of horizontal) and whose
+// horizontal normal is within 45° of the vertex's (either side: a facade seen from the road), at
+// most `reach` from the vertex along the wall (horizontally, across its normal), within `rise` of
+// its height, and between `front` in front of it and `back` behind it (face centroids). When at
+// least `min_faces` are found and the interquartile range of their distances behind the vertex
+// is at most `spread` (flat: not a hedge or a tree), the `quantile` of those distances (negative:
+// in front); else NaN. Ground vertices get NaN. Lengths in model units. Throws Error on an
+// invalid search (reach or rise not > 0, front, back or spread negative, front or back not
+// finite, quantile outside [0, 1]) or a proxy without normals.
 struct FacadeSearch {
   double reach = 0;                                       // along the wall, > 0
   double rise = std::numeric_limits<double>::infinity();  // above and below the vertex, > 0
@@ -55,12 +60,14 @@ struct FacadeSearch {
   double back = 0;        // farthest behind it, >= 0
   double quantile = 0.9;  // of the faces' distances behind the wall: the wall goes behind most
   size_t min_faces = 10;  // fewer: no facade there
-  double spread = 0;      // their interquartile range above this: no facade (vegetation), >= 0
+  double spread = std::numeric_limits<double>::infinity();  // interquartile range of their
+                                                            // distances above this: no facade
 };
 std::vector<double> DenseFacadeBehindWalls(const Mesh& dense, const Mesh& proxy,
                                            const Eigen::Vector3d& up, const FacadeSearch& search);
 
-// The proxy needs vertex normals for its walls (Mesh::ComputeNormals) unless walls_behind <= 0.
+// The proxy needs vertex normals for its walls (Mesh::ComputeNormals) unless walls_behind < 0,
+// or walls_behind == 0 with no offsets.
 // `wall_offsets` (one per proxy vertex, or empty): where finite, a wall vertex goes back by that
 // much instead of `walls_behind` (DenseFacadeBehindWalls plus a gap puts it just behind the dense
 // facade, where a hole of the facade then shows nearly the right depth); a foot vertex goes down

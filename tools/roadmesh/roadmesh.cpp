@@ -189,9 +189,9 @@ Mesh DenseMesh(const Workspace& ws, const Reconstruction& rec, const RoadMeshOpt
   rep.ground_lowered = o.ground_below * voxel + std::max(0.0, above);
   std::vector<double> wall_offsets;
   if (o.walls_gap >= 0 && o.walls_behind >= 0) {
-    // Facade faces within 2 resolutions along the wall and half of one up or down; a facade is
-    // flat (interquartile range of its depths within 0.3 m-eq.: not a hedge or a tree) and lies
-    // within 3 m-eq. in front of the fitted wall or 30 behind it.
+    // Facade faces within 4 resolutions along the wall and 2 up or down (2 and 1 m-eq. at the
+    // default); a facade is flat (interquartile range of its distances within 0.3 m-eq.: not a
+    // hedge or a tree) and lies from 3 m-eq. in front of the fitted wall to 30 behind it.
     FacadeSearch fs;
     fs.reach = 4 * o.resolution * unit;
     fs.rise = 2 * o.resolution * unit;

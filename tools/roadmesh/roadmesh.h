@@ -40,7 +40,7 @@ struct RoadMeshOptions {
   double walls_behind = 20;  // --dense: corridor walls moved back by this many voxels behind the
                              // fused surface; -1: no walls, [0, 1000]
   double walls_gap = -1;     // --dense: where the fused surface shows a flat facade near a wall,
-                             // the wall goes this many voxels behind it instead; -1: never
+                             // the wall goes this many voxels behind it instead; < 0: never
   double agree_tolerance = 0.01;    // --dense: confirmation within this fraction of the depth
   bool strict_agree = false;        // --dense: min_agree confirming views even where fewer see it
   bool force = false;               // replace an existing mesh, even one roadmesh did not make
