@@ -139,7 +139,7 @@ TEST(Densify, MkroadDepthAgainstRayTracedTruth) {
         "on %.3f of truth pixels\n",
         name, x.median_rel, x.within1, x.within2, x.within5, x.completeness);
   // Where the fused surface exists it is nearer the truth than the corridor proxy (the numbers
-  // measured with the strict consistency filter, before 5 Dec 2026)...
+  // measured with the strict consistency filter, before 4 Dec 2026)...
   EXPECT_GT(fused.within1, corridor.within1 + 0.03);  // measured 0.65 vs 0.59
   EXPECT_GT(fused.within5, corridor.within5 + 0.05);  // measured 0.86 vs 0.75
   EXPECT_GT(fused.completeness, 0.75);                // measured 0.80
