@@ -31,9 +31,33 @@ uint64_t CellKey(int64_t ia, int64_t ib) {
          static_cast<uint32_t>(static_cast<int32_t>(ib));
 }
 
-// A proxy face is ground when its (non-zero) normal is within 45° of up.
-bool IsProxyGround(const Eigen::Vector3d& n, const Eigen::Vector3d& u) {
-  return n.norm() > 0 && n.normalized().dot(u) >= std::cos(M_PI / 4);
+// Each proxy face once: 0 degenerate, 1 wall, 2 ground (normal within 45° of unit `u`).
+std::vector<uint8_t> ProxyFaceKinds(const Mesh& proxy, const Eigen::Vector3d& u) {
+  std::vector<uint8_t> kind(proxy.faces.size(), 0);
+  for (size_t i = 0; i < proxy.faces.size(); ++i) {
+    const Eigen::Vector3d n = FaceNormal(proxy, proxy.faces[i]);
+    if (n.norm() > 0) kind[i] = n.normalized().dot(u) >= std::cos(M_PI / 4) ? 2 : 1;
+  }
+  return kind;
+}
+
+// Coordinates across and along unit `u`, relative to `o` (UTM-sized coordinates keep their
+// precision), and square grid cells of side `cell` across it.
+struct UpFrame {
+  UpFrame(const Eigen::Vector3d& up, const Eigen::Vector3d& origin, double cell_side)
+      : u(up), e1(up.unitOrthogonal()), e2(up.cross(e1)), o(origin), cell(cell_side) {}
+  Eigen::Vector2d Direction(const Eigen::Vector3d& d) const { return {d.dot(e1), d.dot(e2)}; }
+  Eigen::Vector2d Across(const Eigen::Vector3d& p) const { return Direction(p - o); }
+  double Height(const Eigen::Vector3d& p) const { return (p - o).dot(u); }
+  int64_t Index(double a) const { return static_cast<int64_t>(std::floor(a / cell)); }
+  uint64_t Cell(const Eigen::Vector2d& a) const { return CellKey(Index(a.x()), Index(a.y())); }
+  Eigen::Vector3d u, e1, e2, o;
+  double cell;
+};
+
+// The frame of a proxy: its first vertex as the origin.
+UpFrame ProxyFrame(const Mesh& proxy, const Eigen::Vector3d& u, double cell) {
+  return {u, proxy.vertices.empty() ? Eigen::Vector3d::Zero() : proxy.vertices[0], cell};
 }
 
 }  // namespace
@@ -43,24 +67,24 @@ double ProxyGroundAbove(const Mesh& dense, const Mesh& proxy, const Eigen::Vecto
   if (!(up.norm() > 0) || !(reach > 0) || !(bound > 0))
     throw Error("merge: the up direction, reach and bound must be non-zero");
   const Eigen::Vector3d u = up.normalized();
-  const Eigen::Vector3d e1 = u.unitOrthogonal(), e2 = u.cross(e1);
-  // The proxy's ground face centroids in cells of `reach` across `up`; coordinates relative to
-  // the first vertex, so a road at UTM coordinates keeps its precision.
-  const Eigen::Vector3d o = proxy.vertices.empty() ? Eigen::Vector3d::Zero() : proxy.vertices[0];
-  auto index = [&](double a) { return static_cast<int64_t>(std::floor(a / reach)); };
+  // The proxy's ground face centroids in cells of `reach` across `up`.
+  const UpFrame frame = ProxyFrame(proxy, u, reach);
+  const std::vector<uint8_t> kind = ProxyFaceKinds(proxy, u);
   std::unordered_map<uint64_t, std::vector<Eigen::Vector3d>> grid;  // (a, b, height)
-  for (const auto& f : proxy.faces) {
-    if (!IsProxyGround(FaceNormal(proxy, f), u)) continue;
-    const Eigen::Vector3d c = Centroid(proxy, f) - o;
-    grid[CellKey(index(c.dot(e1)), index(c.dot(e2)))].push_back({c.dot(e1), c.dot(e2), c.dot(u)});
+  for (size_t i = 0; i < proxy.faces.size(); ++i) {
+    if (kind[i] != 2) continue;
+    const Eigen::Vector3d c = Centroid(proxy, proxy.faces[i]);
+    const Eigen::Vector2d a = frame.Across(c);
+    grid[frame.Cell(a)].push_back({a.x(), a.y(), frame.Height(c)});
   }
   std::vector<double> h;
   for (const auto& f : dense.faces) {
     const Eigen::Vector3d n = FaceNormal(dense, f);
     if (!(n.norm() > 0) || std::abs(n.normalized().dot(u)) < std::cos(M_PI / 6)) continue;
-    const Eigen::Vector3d c = Centroid(dense, f) - o;
-    const double a = c.dot(e1), b = c.dot(e2);
-    const int64_t ia = index(a), ib = index(b);
+    const Eigen::Vector3d c = Centroid(dense, f);
+    const Eigen::Vector2d ab = frame.Across(c);
+    const double a = ab.x(), b = ab.y();
+    const int64_t ia = frame.Index(a), ib = frame.Index(b);
     double best = reach * reach, height = 0;
     bool found = false;
     for (int64_t i = -1; i <= 1; ++i)
@@ -72,7 +96,7 @@ double ProxyGroundAbove(const Mesh& dense, const Mesh& proxy, const Eigen::Vecto
           if (d2 <= best) best = d2, height = p.z(), found = true;
         }
       }
-    const double above = height - c.dot(u);
+    const double above = height - frame.Height(c);
     if (found && std::abs(above) <= bound) h.push_back(above);
   }
   return h.size() < 50 ? 0.0 : Median(std::move(h));
@@ -80,25 +104,20 @@ double ProxyGroundAbove(const Mesh& dense, const Mesh& proxy, const Eigen::Vecto
 
 namespace {
 
-// The dense surface's near-vertical faces (normal within 60° of horizontal) in square cells of
-// `cell` across up: position and unit normal across up, height along it; coordinates relative to
-// `o` (UTM-sized coordinates keep their precision).
+// The dense surface's near-vertical faces (normal within 60° of horizontal) in the frame's cells
+// across up: position and unit normal across up, height along it.
 class FacadeGrid {
  public:
-  FacadeGrid(const Mesh& dense, const Eigen::Vector3d& u, const Eigen::Vector3d& o, double cell)
-      : u_(u), e1_(u.unitOrthogonal()), e2_(u.cross(e1_)), o_(o), cell_(cell) {
+  FacadeGrid(const Mesh& dense, const UpFrame& frame) : frame_(frame) {
     for (const auto& f : dense.faces) {
       const Eigen::Vector3d n = FaceNormal(dense, f);
-      const Eigen::Vector2d nh(n.dot(e1_), n.dot(e2_));
+      const Eigen::Vector2d nh = frame_.Direction(n);
       if (!(n.norm() > 0) || nh.norm() < std::cos(M_PI / 3) * n.norm()) continue;
-      const Eigen::Vector2d at = Across(Centroid(dense, f));
-      grid_[CellKey(Index(at.x()), Index(at.y()))].push_back(
-          {at, nh.normalized(), (Centroid(dense, f) - o_).dot(u_)});
+      const Eigen::Vector3d c = Centroid(dense, f);
+      const Eigen::Vector2d at = frame_.Across(c);
+      grid_[frame_.Cell(at)].push_back({at, nh.normalized(), frame_.Height(c)});
     }
   }
-  Eigen::Vector2d Across(const Eigen::Vector3d& p) const { return Direction(p - o_); }
-  Eigen::Vector2d Direction(const Eigen::Vector3d& d) const { return {d.dot(e1_), d.dot(e2_)}; }
-  double Height(const Eigen::Vector3d& p) const { return (p - o_).dot(u_); }
 
   // (distance behind, height) of the faces facing a wall at `at` with unit normal `wn` (towards
   // the path): within 45° of it, within search.reach along it, from search.front in front to
@@ -106,10 +125,11 @@ class FacadeGrid {
   std::vector<Eigen::Vector2d> Column(const Eigen::Vector2d& at, const Eigen::Vector2d& wn,
                                       const FacadeSearch& search) const {
     std::set<uint64_t> cells;
-    for (double t = -search.front;; t += cell_ / 4) {  // no face within reach falls between
+    for (double t = -search.front;; t += frame_.cell / 4) {  // no face within reach falls between
       const Eigen::Vector2d c = at - std::min(t, search.back) * wn;
       for (int64_t i = -1; i <= 1; ++i)
-        for (int64_t j = -1; j <= 1; ++j) cells.insert(CellKey(Index(c.x()) + i, Index(c.y()) + j));
+        for (int64_t j = -1; j <= 1; ++j)
+          cells.insert(CellKey(frame_.Index(c.x()) + i, frame_.Index(c.y()) + j));
       if (t >= search.back) break;
     }
     const Eigen::Vector2d along(-wn.y(), wn.x());
@@ -133,9 +153,7 @@ class FacadeGrid {
     Eigen::Vector2d at, normal;
     double height;
   };
-  int64_t Index(double a) const { return static_cast<int64_t>(std::floor(a / cell_)); }
-  Eigen::Vector3d u_, e1_, e2_, o_;
-  double cell_;
+  const UpFrame frame_;
   std::unordered_map<uint64_t, std::vector<Face>> grid_;
 };
 
@@ -151,30 +169,29 @@ std::vector<double> DenseFacadeBehindWalls(const Mesh& dense, const Mesh& proxy,
         "spread >= 0, quantile in [0, 1]");
   if (!proxy.has_normals()) throw Error("merge: the proxy has no vertex normals");
   const Eigen::Vector3d u = up.normalized();
-  const FacadeGrid grid(
-      dense, u, proxy.vertices.empty() ? Eigen::Vector3d::Zero() : proxy.vertices[0], search.reach);
+  const UpFrame frame = ProxyFrame(proxy, u, search.reach);
+  const FacadeGrid grid(dense, frame);
   std::vector<double> out(proxy.vertices.size(), std::numeric_limits<double>::quiet_NaN());
+  const std::vector<uint8_t> kind = ProxyFaceKinds(proxy, u);
   std::vector<bool> wall(proxy.vertices.size(), false);
-  for (const auto& f : proxy.faces) {
-    const Eigen::Vector3d n = FaceNormal(proxy, f);
-    if (n.norm() > 0 && !IsProxyGround(n, u))
-      for (uint32_t v : f) wall[v] = true;
-  }
+  for (size_t i = 0; i < proxy.faces.size(); ++i)
+    if (kind[i] == 1)
+      for (uint32_t v : proxy.faces[i]) wall[v] = true;
   // A wall's column (its vertices at one place across up, one normal) gathers its faces once;
   // each vertex keeps those within `rise` of its height.
   std::map<std::array<int64_t, 4>, std::vector<Eigen::Vector2d>> columns;
   const double q = search.reach * 1e-6;
   std::vector<double> behind;
   for (size_t v = 0; v < proxy.vertices.size(); ++v) {
-    Eigen::Vector2d wn = grid.Direction(proxy.normals[v].cast<double>());
+    Eigen::Vector2d wn = frame.Direction(proxy.normals[v].cast<double>());
     if (!wall[v] || !(wn.norm() > 0)) continue;
     wn.normalize();
-    const Eigen::Vector2d at = grid.Across(proxy.vertices[v]);
+    const Eigen::Vector2d at = frame.Across(proxy.vertices[v]);
     const std::array<int64_t, 4> place{std::llround(at.x() / q), std::llround(at.y() / q),
                                        std::llround(wn.x() * 1e6), std::llround(wn.y() * 1e6)};
     auto column = columns.find(place);
     if (column == columns.end()) column = columns.emplace(place, grid.Column(at, wn, search)).first;
-    const double height = grid.Height(proxy.vertices[v]);
+    const double height = frame.Height(proxy.vertices[v]);
     behind.clear();
     for (const Eigen::Vector2d& f : column->second)
       if (std::abs(f.y() - height) <= search.rise) behind.push_back(f.x());
@@ -205,16 +222,12 @@ Mesh MergeProxyBehind(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3
     const Eigen::Vector3f p = proxy.vertices[v].cast<float>();
     return std::array<float, 3>{p.x(), p.y(), p.z()};
   };
-  // Each proxy face once: 0 degenerate (dropped), 1 wall, 2 ground (normal within 45° of up).
-  std::vector<uint8_t> kind(proxy.faces.size(), 0);
-  for (size_t i = 0; i < proxy.faces.size(); ++i) {
-    const auto& f = proxy.faces[i];
-    const Eigen::Vector3d n = FaceNormal(proxy, f);
-    if (n.norm() > 0) kind[i] = IsProxyGround(n, u) ? 2 : 1;
-    if (kind[i] == 2 && walls_behind >= 0 &&
-        (walls_behind > 0 || ground_below > 0 || !wall_offsets.empty()))
-      for (uint32_t v : f) ground_points.insert(key(v));
-  }
+  // Degenerate faces are dropped.
+  const std::vector<uint8_t> kind = ProxyFaceKinds(proxy, u);
+  if (walls_behind >= 0 && (walls_behind > 0 || ground_below > 0 || !wall_offsets.empty()))
+    for (size_t i = 0; i < proxy.faces.size(); ++i)
+      if (kind[i] == 2)
+        for (uint32_t v : proxy.faces[i]) ground_points.insert(key(v));
   Mesh out;
   out.vertices = dense.vertices;
   out.faces = dense.faces;
