@@ -1,5 +1,7 @@
 #include "mesh/merge.h"
 
+#include <tbb/parallel_for.h>
+
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
@@ -12,6 +14,7 @@
 
 #include "base/error.h"
 #include "base/stats.h"
+#include "raycast/mesh_raycaster.h"
 
 namespace mvtm {
 
@@ -258,6 +261,107 @@ Mesh MergeProxyBehind(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3
   }
   out.ComputeNormals();
   if (report) *report = r;
+  return out;
+}
+
+namespace {
+
+// The walls of a proxy: for each vertex, the wall it belongs to (wall faces connected through
+// shared vertices), or -1 for a vertex of no wall face.
+std::vector<int64_t> WallComponents(const Mesh& proxy, const std::vector<uint8_t>& kind) {
+  std::vector<int64_t> parent(proxy.vertices.size(), -1);
+  auto root = [&](int64_t v) {
+    while (parent[size_t(v)] != v) v = parent[size_t(v)] = parent[size_t(parent[size_t(v)])];
+    return v;
+  };
+  for (size_t i = 0; i < proxy.faces.size(); ++i) {
+    if (kind[i] != 1) continue;
+    for (uint32_t v : proxy.faces[i])
+      if (parent[v] < 0) parent[v] = v;
+    for (int k = 1; k < 3; ++k) parent[size_t(root(proxy.faces[i][k]))] = root(proxy.faces[i][0]);
+  }
+  for (size_t v = 0; v < parent.size(); ++v)
+    if (parent[v] >= 0) parent[v] = root(int64_t(v));
+  return parent;
+}
+
+// Gives each wall vertex without a value (NaN in `out`) the median of the values of its column
+// (the vertices of its wall at the same place across up), else of its wall; a wall with no value
+// stays NaN.
+void FillUnseenWalls(const Mesh& proxy, const UpFrame& frame, const std::vector<int64_t>& wall,
+                     std::vector<double>& out) {
+  const double q = frame.cell * 1e-6;
+  auto column = [&](size_t v) {
+    const Eigen::Vector2d at = frame.Across(proxy.vertices[v]);
+    return std::array<int64_t, 3>{wall[v], std::llround(at.x() / q), std::llround(at.y() / q)};
+  };
+  std::map<std::array<int64_t, 3>, std::vector<double>> by_column;
+  std::map<int64_t, std::vector<double>> by_wall;
+  for (size_t v = 0; v < out.size(); ++v)
+    if (wall[v] >= 0 && std::isfinite(out[v]))
+      by_column[column(v)].push_back(out[v]), by_wall[wall[v]].push_back(out[v]);
+  std::map<std::array<int64_t, 3>, double> column_median;
+  for (auto& [k, values] : by_column) column_median[k] = Median(values);
+  std::map<int64_t, double> wall_median;
+  for (auto& [k, values] : by_wall) wall_median[k] = Median(values);
+  for (size_t v = 0; v < out.size(); ++v) {
+    if (wall[v] < 0 || std::isfinite(out[v])) continue;
+    if (auto c = column_median.find(column(v)); c != column_median.end())
+      out[v] = c->second;
+    else if (auto w = wall_median.find(wall[v]); w != wall_median.end())
+      out[v] = w->second;
+  }
+}
+
+}  // namespace
+
+std::vector<double> SeenWallDistances(const Mesh& proxy, const Eigen::Vector3d& up,
+                                      const std::vector<Sight>& sights,
+                                      const SeenWallSearch& search) {
+  if (!(up.norm() > 0) || !(search.reach > 0) || !(search.rise > 0) || !(search.back > 0) ||
+      !std::isfinite(search.back) || !(search.quantile >= 0) || !(search.quantile <= 1))
+    throw Error(
+        "merge: the seen-wall search needs up, reach, rise and a finite back > 0, quantile in "
+        "[0, 1]");
+  const Eigen::Vector3d u = up.normalized();
+  const std::vector<uint8_t> kind = ProxyFaceKinds(proxy, u);
+  const UpFrame frame = ProxyFrame(proxy, u, search.reach);
+  const MeshRaycaster caster(proxy);
+  // Each sight that meets a wall before its point: where (across up, height) and how far behind.
+  std::vector<Eigen::Vector4d> hit(sights.size(), Eigen::Vector4d::Constant(NAN));
+  tbb::parallel_for(size_t{0}, sights.size(), [&](size_t i) {
+    const Eigen::Vector3d d = sights[i].point - sights[i].origin;
+    if (!(d.norm() > 0) || !d.allFinite()) return;
+    const auto h = caster.Closest(sights[i].origin, d, 0, 1);
+    if (!h || kind[h->triangle] != 1) return;
+    const Eigen::Vector3d n = h->normal.dot(d) < 0 ? h->normal : Eigen::Vector3d(-h->normal);
+    const Eigen::Vector2d at = frame.Across(h->point);
+    hit[i] = {at.x(), at.y(), frame.Height(h->point),
+              std::clamp((h->point - sights[i].point).dot(n), 0.0, search.back)};
+  });
+  std::unordered_map<uint64_t, std::vector<Eigen::Vector4d>> grid;
+  for (const Eigen::Vector4d& h : hit)
+    if (std::isfinite(h.w())) grid[frame.Cell(h.head<2>())].push_back(h);
+  const std::vector<int64_t> wall = WallComponents(proxy, kind);
+  std::vector<double> out(proxy.vertices.size(), std::numeric_limits<double>::quiet_NaN());
+  std::vector<double> behind;
+  for (size_t v = 0; v < proxy.vertices.size(); ++v) {
+    if (wall[v] < 0) continue;
+    const Eigen::Vector2d at = frame.Across(proxy.vertices[v]);
+    const double height = frame.Height(proxy.vertices[v]);
+    behind.clear();
+    for (int64_t i = -1; i <= 1; ++i)
+      for (int64_t j = -1; j <= 1; ++j) {
+        auto it = grid.find(CellKey(frame.Index(at.x()) + i, frame.Index(at.y()) + j));
+        if (it == grid.end()) continue;
+        for (const Eigen::Vector4d& h : it->second)
+          if ((h.head<2>() - at).norm() <= search.reach && std::abs(h.z() - height) <= search.rise)
+            behind.push_back(h.w());
+      }
+    if (behind.size() >= std::max<size_t>(search.min_samples, 1))
+      out[v] = Percentile(behind, search.quantile);
+  }
+  FillUnseenWalls(proxy, frame, wall, out);
   return out;
 }
 

@@ -34,12 +34,14 @@ int RunAndReport(mvtm::RoadMeshOptions& o) {
         r.left_wall, r.right_wall, r.refined_vertices, r.coloured, r.vertices,
         r.gl.empty() ? "" : "; ", r.gl.c_str(), r.why.empty() ? "" : (" [" + r.why + "]").c_str());
   if (!o.quiet && o.dense)
-    std::fprintf(stderr,
-                 "roadmesh: dense: %zu depth maps fused into %zu triangles; %zu corridor ground "
-                 "(lowered %.3g under the fused road) and %zu wall triangles behind it close its "
-                 "holes (%zu wall vertices just behind a fused facade)\n",
-                 r.dense_views, r.dense_faces, r.corridor_faces, r.ground_lowered,
-                 r.corridor_wall_faces, r.walls_at_facades);
+    std::fprintf(
+        stderr,
+        "roadmesh: dense: %zu depth maps fused into %zu triangles; %zu corridor ground "
+        "(lowered %.3g under the fused road) and %zu wall triangles behind it close its "
+        "holes (%zu wall vertices just behind a fused facade, %zu where the photos saw through "
+        "them)\n",
+        r.dense_views, r.dense_faces, r.corridor_faces, r.ground_lowered, r.corridor_wall_faces,
+        r.walls_at_facades, r.walls_seen);
   return 0;
 }
 

@@ -164,6 +164,22 @@ std::vector<DepthView> LoadStereoViews(const Workspace& ws, const Reconstruction
   return views;
 }
 
+// Every `stride`-th pixel's depth in each view as a sight from the camera centre.
+std::vector<Sight> Sights(const std::vector<DepthView>& views, int stride) {
+  std::vector<Sight> out;
+  for (const DepthView& v : views) {
+    const Rigid3d c2w = v.world_to_camera.Inverse();
+    const Eigen::Vector3d centre = c2w.t;
+    for (int y = stride / 2; y < v.depth.height; y += stride)
+      for (int x = stride / 2; x < v.depth.width; x += stride) {
+        const float z = v.depth.at(x, y);
+        if (std::isfinite(z) && z > 0)
+          out.push_back({centre, c2w * v.camera.Unproject({x + 0.5, y + 0.5}, z)});
+      }
+  }
+  return out;
+}
+
 // The fused surface of the stereo depth maps, closed by the corridor's ground where it has holes.
 Mesh DenseMesh(const Workspace& ws, const Reconstruction& rec, const RoadMeshOptions& o,
                const Mesh& corridor, RoadMeshReport& rep) {
@@ -203,6 +219,20 @@ Mesh DenseMesh(const Workspace& ws, const Reconstruction& rec, const RoadMeshOpt
     for (double& w : wall_offsets)
       if (std::isfinite(w)) w += o.walls_gap * voxel, ++rep.walls_at_facades;
   }
+  if (!o.no_seen_walls && o.walls_behind >= 0) {
+    // Each stretch of wall where the photos saw through it: the median depth behind it of every
+    // second pixel of every second row that meets it within 4 resolutions along and 2 up or
+    // down (2 and 1 m-eq. at the default), at most --max-depth behind.
+    SeenWallSearch ss;
+    ss.reach = 4 * o.resolution * unit;
+    ss.rise = 2 * o.resolution * unit;
+    ss.back = o.max_depth * MedianCameraSpacing(views);
+    const std::vector<double> seen = SeenWallDistances(corridor, -down, Sights(views, 2), ss);
+    if (wall_offsets.empty()) wall_offsets.assign(seen.size(), NAN);
+    for (size_t v = 0; v < seen.size(); ++v)
+      if (std::isfinite(seen[v]) && !std::isfinite(wall_offsets[v]))
+        wall_offsets[v] = seen[v], ++rep.walls_seen;
+  }
   Mesh out = MergeProxyBehind(dense, corridor, -down, rep.ground_lowered, o.walls_behind * voxel,
                               &mr, wall_offsets);
   rep.dense_views = views.size();
@@ -222,7 +252,8 @@ nlohmann::json RunFacts(const RoadMeshReport& rep) {
           {"left_wall", rep.left_wall},
           {"right_wall", rep.right_wall},
           {"ground_lowered", rep.ground_lowered},
-          {"walls_at_facades", rep.walls_at_facades}};
+          {"walls_at_facades", rep.walls_at_facades},
+          {"walls_seen", rep.walls_seen}};
 }
 
 }  // namespace
@@ -305,12 +336,16 @@ OptionTable DeclareOptions(RoadMeshOptions& o) {
       .Range(0, 100);
   t.Real("--walls-behind", &o.walls_behind,
          "--dense: move the corridor walls back by this many voxels behind the fused surface, "
-         "so they show only through its holes (-1: no walls)")
+         "so they show only through its holes, where no photo saw through them (everywhere "
+         "with --no-seen-walls; -1: no walls)")
       .Range(-1, 1000);
   t.Real("--walls-gap", &o.walls_gap,
          "--dense: where the fused surface shows a flat facade near a wall, put the wall this "
          "many voxels behind it instead (-1: --walls-behind everywhere)")
       .Range(-1, 1000);
+  t.Flag("--no-seen-walls", &o.no_seen_walls,
+         "--dense: every wall at --walls-behind (not at the median depth the photos saw "
+         "through it)");
   t.Flag("--force", &o.force, "Replace an existing mesh").Cosmetic();
   t.Choice("--gl", &o.gl, GlBackendTable(), "OpenGL backend");
   DeclareQuietOption(t, o.quiet);

@@ -35,12 +35,14 @@ struct RoadMeshOptions {
   double voxel = 0.1;     // --dense: voxel size as a fraction of the median camera spacing, (0, 10]
   double max_depth = 40;  // --dense: depth used, in median camera spacings, (0, 1000]
   int min_agree = 2;      // --dense: other views that must confirm a depth pixel, 1..16
-  double ground_below = 0;   // --dense: corridor ground lowered by this many voxels (0: at its
-                             // fitted height), [0, 100]
-  double walls_behind = 20;  // --dense: corridor walls moved back by this many voxels behind the
-                             // fused surface; -1: no walls, [0, 1000]
-  double walls_gap = -1;     // --dense: where the fused surface shows a flat facade near a wall,
-                             // the wall goes this many voxels behind it instead; < 0: never
+  double ground_below = 0;     // --dense: corridor ground lowered by this many voxels (0: at its
+                               // fitted height), [0, 100]
+  double walls_behind = 20;    // --dense: corridor walls moved back by this many voxels behind the
+                               // fused surface where no photo saw through them; -1: no walls,
+                               // [0, 1000]
+  double walls_gap = -1;       // --dense: where the fused surface shows a flat facade near a wall,
+                               // the wall goes this many voxels behind it instead; < 0: never
+  bool no_seen_walls = false;  // --dense: walls at walls_behind, not where the photos saw
   double agree_tolerance = 0.01;    // --dense: confirmation within this fraction of the depth
   bool strict_agree = false;        // --dense: min_agree confirming views even where fewer see it
   bool force = false;               // replace an existing mesh, even one roadmesh did not make
@@ -99,6 +101,7 @@ struct RoadMeshReport {
   size_t corridor_wall_faces = 0;  // --dense: corridor wall triangles behind the fused surface
   double ground_lowered = 0;       // --dense: how far the corridor ground went down, model units:
                                    // --ground-below, plus as much as it lay above the fused road
+  size_t walls_seen = 0;           // --dense: wall vertices put where the photos saw through them
   size_t walls_at_facades = 0;     // --dense: wall vertices put just behind a fused facade
   std::string gl;
   std::string mesh_path;

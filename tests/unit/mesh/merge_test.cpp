@@ -197,6 +197,64 @@ TEST(Merge, AWallGoesJustBehindAFlatFusedFacadeAndNotBehindAHedge) {
   EXPECT_THROW(MergeProxyBehind(Mesh(), Proxy(), {0, 0, 1}, 0, 1, nullptr, {1.0}), Error);
 }
 
+TEST(Merge, AWallStandsWhereThePhotosSawThroughIt) {
+  // The proxy: a wall at y = 5 facing the path (x 0..20, z 0..6, step 1), the ground under the
+  // path (z = 0, y -5..5) and a second wall (x 30..40) that no sight meets. Sights from cameras
+  // at y = 0, z = 1.5, 2 behind along x, through the wall at (xh, 5, zh) on a 0.1 grid (z up to
+  // 2.95): the points they saw lie 3 behind the wall for xh < 10 (a facade) and 200 behind for
+  // xh >= 10 (open country; clamped to back = 50). Twice as many sights end in front of the wall
+  // (a tree at 0.8 of the way: they say nothing) and as many go down through the ground (nothing
+  // either). With reach 1 and rise 0.5, by hand: the vertices x <= 8, z <= 3 get 3, those x >= 11
+  // get 50; above z = 3 no sight meets the wall within 0.5, and a vertex takes its column's
+  // median (the same values); the second wall stays NaN; ground vertices NaN. Counting the
+  // trees would put the median at 0; counting the ground sights changes nothing here but they
+  // must not throw. The same scene scaled by 0.2 at UTM coordinates: 0.2 of each.
+  for (const double k : {1.0, 0.2}) {
+    const Eigen::Vector3d o =
+        k == 1.0 ? Eigen::Vector3d::Zero() : Eigen::Vector3d(451000, 5410000, 120);
+    Mesh proxy = Upright(0, 20, 6, 1.0, 5.0, k, o);
+    const size_t first_wall = proxy.vertices.size();
+    Append(proxy, Upright(30, 10, 6, 1.0, 5.0, k, o));
+    const size_t second_wall = proxy.vertices.size();
+    Append(proxy,
+           Grid({0, -5, 0}, Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), 20, 10, 1.0, k, o));
+    std::vector<Sight> sights;
+    for (int i = 0; i < 200; ++i)
+      for (int j = 0; j < 30; ++j) {
+        const double xh = 0.05 + 0.1 * i, zh = 0.05 + 0.1 * j, d = xh < 10 ? 3 : 200;
+        const Eigen::Vector3d c(xh - 2, 0, 1.5), h(xh, 5, zh);
+        auto at = [&](const Eigen::Vector3d& p) { return Eigen::Vector3d(k * p + o); };
+        sights.push_back({at(c), at(c + (h - c) * (5 + d) / 5)});
+        sights.push_back({at(c), at(c + (h - c) * 0.8)});
+        sights.push_back({at(c), at(c + (h - c) * 0.7)});
+        sights.push_back({at(c), at({xh - 1, 2, -1})});
+      }
+    SeenWallSearch s;
+    s.reach = 1.0 * k;
+    s.rise = 0.5 * k;
+    s.back = 50 * k;
+    const std::vector<double> seen = SeenWallDistances(proxy, {0, 0, 1}, sights, s);
+    ASSERT_EQ(seen.size(), proxy.vertices.size());
+    size_t near = 0, far = 0;
+    for (size_t v = 0; v < proxy.vertices.size(); ++v) {
+      const Eigen::Vector3d q = (proxy.vertices[v] - o) / k;
+      if (v < first_wall && q.x() <= 8 + 1e-9) {
+        EXPECT_NEAR(seen[v], 3 * k, 1e-6 * k) << v << " " << q.transpose();
+        ++near;
+      } else if (v < first_wall && q.x() >= 11 - 1e-9) {
+        EXPECT_NEAR(seen[v], 50 * k, 1e-6 * k) << v << " " << q.transpose();
+        ++far;
+      } else if (v >= first_wall) {
+        EXPECT_TRUE(std::isnan(seen[v])) << v << " " << (v < second_wall ? "wall" : "ground");
+      }
+    }
+    EXPECT_EQ(near, 9u * 7u);  // x 0..8, z 0..6
+    EXPECT_EQ(far, 10u * 7u);  // x 11..20
+  }
+  SeenWallSearch bad;  // reach 0
+  EXPECT_THROW(SeenWallDistances(Proxy(), {0, 0, 1}, {}, bad), Error);
+}
+
 TEST(Merge, NoWallsAndBadInput) {
   MergeReport r;
   const Mesh m = MergeProxyBehind(Mesh(), Proxy(), {0, 0, 2}, 0, -1, &r);
