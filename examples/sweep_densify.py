@@ -13,7 +13,7 @@ milliseconds per image. --short runs three settings.
 Knobs: --planes (16, 32, 48, 96), --window (5, 7, 11), --neighbours (2, 4, 6), --best-k (1, 2, 3),
 --scale (0.25, 0.5, 1), --min-score (0.3, 0.5, 0.7), --refine (0, 2, 4, 8), sweep directions
 (fronto only, no facade), and the fused mesh of the default setting (roadmesh --dense, baked
-back with bakedepth; also with --strict-agree, --agree-tolerance 0.02, --walls-gap 1 and --no-seen-walls) beside the corridor proxy
+back with bakedepth; also with --strict-agree, --agree-tolerance 0.02, --walls-gap 1, --no-seen-walls and --walls-reach 8) beside the corridor proxy
 alone (in the CSV and the page's table; they have no time of their own).
 """
 import os
@@ -85,7 +85,8 @@ def sweep(c):
                             ("fused, --strict-agree", ["--dense", "--strict-agree"]),
                             ("fused, --agree-tolerance 0.02", ["--dense", "--agree-tolerance", 0.02]),
                             ("fused, --walls-gap 1", ["--dense", "--walls-gap", 1]),
-                            ("fused, --no-seen-walls", ["--dense", "--no-seen-walls"])):
+                            ("fused, --no-seen-walls", ["--dense", "--no-seen-walls"]),
+                            ("fused, --walls-reach 8", ["--dense", "--walls-reach", 8])):
             c.tools.run("roadmesh", "--force", "--no-colours", *extra, ws)
             c.tools.run("bakedepth", "--force", ws)
             within2, coverage = score(ws, os.path.join(ws, "depth"))

@@ -221,11 +221,11 @@ Mesh DenseMesh(const Workspace& ws, const Reconstruction& rec, const RoadMeshOpt
   }
   if (!o.no_seen_walls && o.walls_behind >= 0) {
     // Each stretch of wall where the photos saw through it: the median depth behind it of every
-    // second pixel of every second row that meets it within 4 resolutions along and 2 up or
-    // down (2 and 1 m-eq. at the default), at most --max-depth behind.
+    // second pixel of every second row that meets it within --walls-reach along and half that
+    // up or down, at most --max-depth behind.
     SeenWallSearch ss;
-    ss.reach = 4 * o.resolution * unit;
-    ss.rise = 2 * o.resolution * unit;
+    ss.reach = o.walls_reach * unit;
+    ss.rise = o.walls_reach / 2 * unit;
     ss.back = o.max_depth * MedianCameraSpacing(views);
     const std::vector<double> seen = SeenWallDistances(corridor, -down, Sights(views, 2), ss);
     if (wall_offsets.empty()) wall_offsets.assign(seen.size(), NAN);
@@ -343,6 +343,10 @@ OptionTable DeclareOptions(RoadMeshOptions& o) {
          "--dense: where the fused surface shows a flat facade near a wall, put the wall this "
          "many voxels behind it instead (-1: --walls-behind everywhere)")
       .Range(-1, 1000);
+  t.Real("--walls-reach", &o.walls_reach,
+         "--dense: a wall vertex goes to the median depth seen through the wall within this "
+         "many metre-equivalents along it and half as many up or down")
+      .Range(0.05, 100);
   t.Flag("--no-seen-walls", &o.no_seen_walls,
          "--dense: every wall at --walls-behind (not at the median depth the photos saw "
          "through it)");

@@ -43,6 +43,8 @@ struct RoadMeshOptions {
   double walls_gap = -1;       // --dense: where the fused surface shows a flat facade near a wall,
                                // the wall goes this many voxels behind it instead; < 0: never
   bool no_seen_walls = false;  // --dense: walls at walls_behind, not where the photos saw
+  double walls_reach = 2;      // --dense: seen depth gathered within this many m-eq. along a
+                               // wall vertex and half as many up or down, [0.05, 100]
   double agree_tolerance = 0.01;    // --dense: confirmation within this fraction of the depth
   bool strict_agree = false;        // --dense: min_agree confirming views even where fewer see it
   bool force = false;               // replace an existing mesh, even one roadmesh did not make
