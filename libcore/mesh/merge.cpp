@@ -285,83 +285,117 @@ std::vector<int64_t> WallComponents(const Mesh& proxy, const std::vector<uint8_t
   return parent;
 }
 
-// Gives each wall vertex without a value (NaN in `out`) the median of the values of its column
-// (the vertices of its wall at the same place across up), else of its wall; a wall with no value
-// stays NaN.
+// Gives each wall vertex without a value (NaN in `out`) the median of the values of its wall's
+// vertices within `near` of it across up (its column above and below it, whatever the wall's
+// lean), else of its wall; a wall with no value stays NaN.
 void FillUnseenWalls(const Mesh& proxy, const UpFrame& frame, const std::vector<int64_t>& wall,
-                     std::vector<double>& out) {
-  const double q = frame.cell * 1e-6;
-  auto column = [&](size_t v) {
-    const Eigen::Vector2d at = frame.Across(proxy.vertices[v]);
-    return std::array<int64_t, 3>{wall[v], std::llround(at.x() / q), std::llround(at.y() / q)};
-  };
-  std::map<std::array<int64_t, 3>, std::vector<double>> by_column;
+                     double near, std::vector<double>& out) {
+  std::unordered_map<uint64_t, std::vector<size_t>> grid;  // valued vertices by cell
   std::map<int64_t, std::vector<double>> by_wall;
   for (size_t v = 0; v < out.size(); ++v)
-    if (wall[v] >= 0 && std::isfinite(out[v]))
-      by_column[column(v)].push_back(out[v]), by_wall[wall[v]].push_back(out[v]);
-  std::map<std::array<int64_t, 3>, double> column_median;
-  for (auto& [k, values] : by_column) column_median[k] = Median(values);
+    if (wall[v] >= 0 && std::isfinite(out[v])) {
+      grid[frame.Cell(frame.Across(proxy.vertices[v]))].push_back(v);
+      by_wall[wall[v]].push_back(out[v]);
+    }
   std::map<int64_t, double> wall_median;
   for (auto& [k, values] : by_wall) wall_median[k] = Median(values);
+  std::vector<double> column;
+  std::vector<double> filled = out;
   for (size_t v = 0; v < out.size(); ++v) {
     if (wall[v] < 0 || std::isfinite(out[v])) continue;
-    if (auto c = column_median.find(column(v)); c != column_median.end())
-      out[v] = c->second;
+    const Eigen::Vector2d at = frame.Across(proxy.vertices[v]);
+    column.clear();
+    for (int64_t i = -1; i <= 1; ++i)
+      for (int64_t j = -1; j <= 1; ++j) {
+        auto it = grid.find(CellKey(frame.Index(at.x()) + i, frame.Index(at.y()) + j));
+        if (it == grid.end()) continue;
+        for (size_t w : it->second)
+          if (wall[w] == wall[v] && (frame.Across(proxy.vertices[w]) - at).norm() <= near)
+            column.push_back(out[w]);
+      }
+    if (!column.empty())
+      filled[v] = Median(column);
     else if (auto w = wall_median.find(wall[v]); w != wall_median.end())
-      out[v] = w->second;
+      filled[v] = w->second;
   }
+  out = std::move(filled);
+}
+
+// A sight that met a wall before its point: where (across up, height), how far behind the wall
+// its point lies, and whether the dense surface is there (covered) or not (a hole).
+struct WallSample {
+  Eigen::Vector2d at;
+  double height = 0, behind = NAN;
+  bool covered = false;
+};
+
+std::vector<WallSample> SampleWalls(const Mesh& proxy, const std::vector<uint8_t>& kind,
+                                    const UpFrame& frame, const std::vector<Sight>& sights,
+                                    const Mesh& dense, const SeenWallSearch& s) {
+  const MeshRaycaster walls(proxy), fused(dense);
+  std::vector<WallSample> out(sights.size());
+  tbb::parallel_for(size_t{0}, sights.size(), [&](size_t i) {
+    const Eigen::Vector3d d = sights[i].point - sights[i].origin;
+    if (!(d.norm() > 0) || !d.allFinite()) return;
+    const auto h = walls.Closest(sights[i].origin, d, 0, 1);
+    if (!h || kind[h->triangle] != 1) return;
+    // The dense surface well before the point hides the wall there: no sample.
+    const auto f = fused.Closest(sights[i].origin, d, 0, 1 + s.tolerance);
+    if (f && f->t < 1 - s.tolerance) return;
+    const Eigen::Vector3d n = h->normal.dot(d) < 0 ? h->normal : Eigen::Vector3d(-h->normal);
+    out[i].at = frame.Across(h->point);
+    out[i].height = frame.Height(h->point);
+    out[i].behind = std::clamp((h->point - sights[i].point).dot(n), 0.0, s.back);
+    out[i].covered = f.has_value();
+  });
+  return out;
 }
 
 }  // namespace
 
 std::vector<double> SeenWallDistances(const Mesh& proxy, const Eigen::Vector3d& up,
-                                      const std::vector<Sight>& sights,
+                                      const std::vector<Sight>& sights, const Mesh& dense,
                                       const SeenWallSearch& search) {
-  if (!(up.norm() > 0) || !(search.reach > 0) || !(search.rise > 0) || !(search.back > 0) ||
-      !std::isfinite(search.back) || !(search.quantile >= 0) || !(search.quantile <= 1))
+  const SeenWallSearch& s = search;
+  if (!(up.norm() > 0) || !(s.reach > 0) || !(s.rise > 0) || !(s.back > 0) ||
+      !std::isfinite(s.back) || !(s.quantile >= 0) || !(s.quantile <= 1) ||
+      !(s.covered_quantile >= 0) || !(s.covered_quantile <= 1) || !(s.tolerance >= 0) ||
+      !(s.tolerance < 1))
     throw Error(
-        "merge: the seen-wall search needs up, reach, rise and a finite back > 0, quantile in "
-        "[0, 1]");
+        "merge: the seen-wall search needs up, reach, rise and a finite back > 0, quantiles in "
+        "[0, 1], tolerance in [0, 1)");
   const Eigen::Vector3d u = up.normalized();
   const std::vector<uint8_t> kind = ProxyFaceKinds(proxy, u);
-  const UpFrame frame = ProxyFrame(proxy, u, search.reach);
-  const MeshRaycaster caster(proxy);
-  // Each sight that meets a wall before its point: where (across up, height) and how far behind.
-  std::vector<Eigen::Vector4d> hit(sights.size(), Eigen::Vector4d::Constant(NAN));
-  tbb::parallel_for(size_t{0}, sights.size(), [&](size_t i) {
-    const Eigen::Vector3d d = sights[i].point - sights[i].origin;
-    if (!(d.norm() > 0) || !d.allFinite()) return;
-    const auto h = caster.Closest(sights[i].origin, d, 0, 1);
-    if (!h || kind[h->triangle] != 1) return;
-    const Eigen::Vector3d n = h->normal.dot(d) < 0 ? h->normal : Eigen::Vector3d(-h->normal);
-    const Eigen::Vector2d at = frame.Across(h->point);
-    hit[i] = {at.x(), at.y(), frame.Height(h->point),
-              std::clamp((h->point - sights[i].point).dot(n), 0.0, search.back)};
-  });
-  std::unordered_map<uint64_t, std::vector<Eigen::Vector4d>> grid;
-  for (const Eigen::Vector4d& h : hit)
-    if (std::isfinite(h.w())) grid[frame.Cell(h.head<2>())].push_back(h);
+  const UpFrame frame = ProxyFrame(proxy, u, s.reach);
+  const std::vector<WallSample> samples = SampleWalls(proxy, kind, frame, sights, dense, s);
+  std::unordered_map<uint64_t, std::vector<const WallSample*>> grid;
+  for (const WallSample& w : samples)
+    if (std::isfinite(w.behind)) grid[frame.Cell(w.at)].push_back(&w);
   const std::vector<int64_t> wall = WallComponents(proxy, kind);
   std::vector<double> out(proxy.vertices.size(), std::numeric_limits<double>::quiet_NaN());
-  std::vector<double> behind;
+  std::vector<double> hole, covered;
+  const size_t enough = std::max<size_t>(s.min_samples, 1);
   for (size_t v = 0; v < proxy.vertices.size(); ++v) {
     if (wall[v] < 0) continue;
     const Eigen::Vector2d at = frame.Across(proxy.vertices[v]);
     const double height = frame.Height(proxy.vertices[v]);
-    behind.clear();
+    hole.clear();
+    covered.clear();
     for (int64_t i = -1; i <= 1; ++i)
       for (int64_t j = -1; j <= 1; ++j) {
         auto it = grid.find(CellKey(frame.Index(at.x()) + i, frame.Index(at.y()) + j));
         if (it == grid.end()) continue;
-        for (const Eigen::Vector4d& h : it->second)
-          if ((h.head<2>() - at).norm() <= search.reach && std::abs(h.z() - height) <= search.rise)
-            behind.push_back(h.w());
+        for (const WallSample* w : it->second)
+          if ((w->at - at).norm() <= s.reach && std::abs(w->height - height) <= s.rise)
+            (w->covered ? covered : hole).push_back(w->behind);
       }
-    if (behind.size() >= std::max<size_t>(search.min_samples, 1))
-      out[v] = Percentile(behind, search.quantile);
+    if (hole.size() >= enough) out[v] = Percentile(hole, s.quantile);
+    if (covered.size() >= enough) {
+      const double c = Percentile(covered, s.covered_quantile);
+      out[v] = std::isfinite(out[v]) ? std::max(out[v], c) : c;
+    }
   }
-  FillUnseenWalls(proxy, frame, wall, out);
+  FillUnseenWalls(proxy, frame, wall, s.reach / 2, out);
   return out;
 }
 

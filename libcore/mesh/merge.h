@@ -78,24 +78,34 @@ Mesh MergeProxyBehind(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3
 
 // Where the walls should stand, from what the photos saw through them.
 // The corridor's walls (mesh/corridor.h) stand at the median lateral distance of the sparse
-// points; roadmesh --dense moves them back behind the fused surface so that they show only
-// through its holes. What a hole then shows is a projector's colour at the wall's depth: right
-// when the wall lies where the scenery behind the hole is, off by a parallax that grows with the
-// error in inverse depth everywhere else (a building a few metres behind the corridor, open fields
-// a hundred metres away). The photos' own depth maps say where that scenery is, ray by ray.
+// points; roadmesh --dense moves them back so that the dense surface hides them and they show
+// only through its holes. What a hole then shows is a projector's colour at the wall's depth:
+// right when the wall lies where the scenery behind the hole is, off by a parallax that grows
+// with the error in inverse depth everywhere else (a building a few metres behind the corridor,
+// open fields a hundred metres away). The photos' own depth maps say where that scenery is, ray
+// by ray.
 //
 // A sight is a ray from a camera centre to the point its depth map saw. Each sight that meets a
 // wall face of the proxy (unmoved) before its point is a sample of the wall there: how far behind
 // the wall the point lies, along the wall face's normal (towards the path), clamped to
-// [0, search.back]. A wall vertex takes the `quantile` of the samples that met the wall within
-// `reach` of it horizontally and `rise` of its height, when there are at least `min_samples`;
-// else NaN (MergeProxyBehind then uses its fixed distance). The median puts the wall where it
-// minimises the mean error in inverse depth over the pixels that see that stretch of wall: every
-// sample is one pixel, so what covers more of the images weighs more. Sights that end before
-// the wall (a tree, a parked car in front of it) or never reach one (the ground, the sky) say
-// nothing about the wall.
-// Lengths in model units; UTM-sized coordinates are fine (the ray caster works relative to the
-// proxy's centre, the grid relative to its first vertex). The sights are cast on all cores (TBB).
+// [0, search.back]. Cast against the dense surface too, the sample is covered when the dense
+// surface lies at its point (the ray meets it within `tolerance` of the point's ray parameter,
+// relative), a hole when the ray meets no dense surface before that, and no sample when the
+// dense surface lies well before the point (the wall is hidden there anyway). A wall vertex
+// gathers the samples that met the wall within `reach` of it horizontally and `rise` of its
+// height. With at least `min_samples` holes, it takes their `quantile`: the median puts the wall
+// where it minimises the mean error in inverse depth over the pixels that see that stretch of
+// wall through holes (every sample is one pixel: what covers more of the images weighs more).
+// With at least `min_samples` covered samples it goes at least as far back as their
+// `covered_quantile`, so that it does not hide the dense surface it stands in front of. A vertex
+// with neither takes the median of its wall's valued vertices within reach / 2 across up (its
+// column above and below it, whatever the wall's lean), else of its wall's (a wall: wall faces
+// connected through shared vertices); NaN when its wall has none (MergeProxyBehind then uses its
+// fixed distance), and for every vertex of no wall face. Sights that end before the wall (a tree,
+// a parked car in front of it) or never meet one (the ground, the sky) say nothing about it.
+// Lengths in model units; UTM-sized coordinates are fine (the ray casters work relative to their
+// mesh's centre, the grid relative to the proxy's first vertex). The sights are cast on all cores
+// (TBB); memory: about 60 bytes per sight.
 
 struct Sight {
   Eigen::Vector3d origin;  // the camera centre
@@ -103,17 +113,19 @@ struct Sight {
 };
 
 struct SeenWallSearch {
-  double reach = 0;         // horizontal distance from the vertex, > 0
-  double rise = 0;          // above and below its height, > 0
-  double back = 0;          // the farthest a wall goes behind its place, > 0 (farther: this)
-  double quantile = 0.5;    // of the samples' distances behind, in [0, 1]
-  size_t min_samples = 20;  // fewer: NaN
+  double reach = 0;               // horizontal distance from the vertex, > 0
+  double rise = 0;                // above and below its height, > 0
+  double back = 0;                // the farthest a wall goes behind its place, > 0 (farther: this)
+  double quantile = 0.5;          // of the holes' distances behind, in [0, 1]
+  double covered_quantile = 0.9;  // of the covered samples' distances: the least, in [0, 1]
+  double tolerance = 0.05;        // dense surface at the point: within this of its ray parameter
+  size_t min_samples = 20;        // fewer holes (covered samples): no value from them
 };
 
-// One value per proxy vertex (NaN for ground vertices and walls no sight met). The proxy needs
-// at least one face; it need not have normals. Throws Error on an invalid search.
+// One value per proxy vertex (see above). The proxy and the dense surface may be empty (no
+// samples: all NaN). Throws Error on an invalid search.
 std::vector<double> SeenWallDistances(const Mesh& proxy, const Eigen::Vector3d& up,
-                                      const std::vector<Sight>& sights,
+                                      const std::vector<Sight>& sights, const Mesh& dense,
                                       const SeenWallSearch& search);
 
 }  // namespace mvtm

@@ -164,8 +164,15 @@ std::vector<DepthView> LoadStereoViews(const Workspace& ws, const Reconstruction
   return views;
 }
 
-// Every `stride`-th pixel's depth in each view as a sight from the camera centre.
-std::vector<Sight> Sights(const std::vector<DepthView>& views, int stride) {
+// Each view's pixels as sights from its camera centre: every second pixel of every second row,
+// fewer (every third, fourth, ...) when that would make more than kMaxSights in all (a long road
+// in one workspace: memory stays bounded, every stretch of wall still gets many).
+constexpr size_t kMaxSights = 8'000'000;
+std::vector<Sight> Sights(const std::vector<DepthView>& views) {
+  size_t pixels = 0;
+  for (const DepthView& v : views) pixels += size_t(v.depth.width) * size_t(v.depth.height);
+  int stride = 2;
+  while (pixels / size_t(stride * stride) > kMaxSights) ++stride;
   std::vector<Sight> out;
   for (const DepthView& v : views) {
     const Rigid3d c2w = v.world_to_camera.Inverse();
@@ -220,14 +227,15 @@ Mesh DenseMesh(const Workspace& ws, const Reconstruction& rec, const RoadMeshOpt
       if (std::isfinite(w)) w += o.walls_gap * voxel, ++rep.walls_at_facades;
   }
   if (!o.no_seen_walls && o.walls_behind >= 0) {
-    // Each stretch of wall where the photos saw through it: the median depth behind it of every
-    // second pixel of every second row that meets it within --walls-reach along and half that
-    // up or down, at most --max-depth behind.
+    // Each stretch of wall where the photos saw through it: the median distance behind it of
+    // the sights that meet it within --walls-reach along and half that up or down through holes
+    // of the fused surface, at most --max-depth behind, and at least as far as most of the fused
+    // surface they meet behind it.
     SeenWallSearch ss;
     ss.reach = o.walls_reach * unit;
     ss.rise = o.walls_reach / 2 * unit;
     ss.back = o.max_depth * MedianCameraSpacing(views);
-    const std::vector<double> seen = SeenWallDistances(corridor, -down, Sights(views, 2), ss);
+    const std::vector<double> seen = SeenWallDistances(corridor, -down, Sights(views), dense, ss);
     if (wall_offsets.empty()) wall_offsets.assign(seen.size(), NAN);
     for (size_t v = 0; v < seen.size(); ++v)
       if (std::isfinite(seen[v]) && !std::isfinite(wall_offsets[v]))
@@ -341,15 +349,15 @@ OptionTable DeclareOptions(RoadMeshOptions& o) {
       .Range(-1, 1000);
   t.Real("--walls-gap", &o.walls_gap,
          "--dense: where the fused surface shows a flat facade near a wall, put the wall this "
-         "many voxels behind it instead (-1: --walls-behind everywhere)")
+         "many voxels behind it instead (-1: never)")
       .Range(-1, 1000);
   t.Real("--walls-reach", &o.walls_reach,
-         "--dense: a wall vertex goes to the median depth seen through the wall within this "
+         "--dense: a wall vertex goes to the median distance seen behind the wall within this "
          "many metre-equivalents along it and half as many up or down")
       .Range(0.05, 100);
   t.Flag("--no-seen-walls", &o.no_seen_walls,
-         "--dense: every wall at --walls-behind (not at the median depth the photos saw "
-         "through it)");
+         "--dense: every wall at --walls-behind (not at the median distance the photos saw "
+         "behind it)");
   t.Flag("--force", &o.force, "Replace an existing mesh").Cosmetic();
   t.Choice("--gl", &o.gl, GlBackendTable(), "OpenGL backend");
   DeclareQuietOption(t, o.quiet);

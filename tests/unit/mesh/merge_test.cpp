@@ -198,61 +198,83 @@ TEST(Merge, AWallGoesJustBehindAFlatFusedFacadeAndNotBehindAHedge) {
 }
 
 TEST(Merge, AWallStandsWhereThePhotosSawThroughIt) {
-  // The proxy: a wall at y = 5 facing the path (x 0..20, z 0..6, step 1), the ground under the
-  // path (z = 0, y -5..5) and a second wall (x 30..40) that no sight meets. Sights from cameras
-  // at y = 0, z = 1.5, 2 behind along x, through the wall at (xh, 5, zh) on a 0.1 grid (z up to
-  // 2.95): the points they saw lie 3 behind the wall for xh < 10 (a facade) and 200 behind for
-  // xh >= 10 (open country; clamped to back = 50). Twice as many sights end in front of the wall
-  // (a tree at 0.8 of the way: they say nothing) and as many go down through the ground (nothing
-  // either). With reach 1 and rise 0.5, by hand: the vertices x <= 8, z <= 3 get 3, those x >= 11
-  // get 50; above z = 3 no sight meets the wall within 0.5, and a vertex takes its column's
-  // median (the same values); the second wall stays NaN; ground vertices NaN. Counting the
-  // trees would put the median at 0; counting the ground sights changes nothing here but they
-  // must not throw. The same scene scaled by 0.2 at UTM coordinates: 0.2 of each.
-  for (const double k : {1.0, 0.2}) {
-    const Eigen::Vector3d o =
-        k == 1.0 ? Eigen::Vector3d::Zero() : Eigen::Vector3d(451000, 5410000, 120);
-    Mesh proxy = Upright(0, 20, 6, 1.0, 5.0, k, o);
+  // The proxy: a wall at y = 5 facing the path (x 0..30, z 0..6, step 1), the ground under the
+  // path (z = 0, y -5..5, x 0..30) and a second wall (x 40..50) that no sight meets. The dense
+  // surface: a facade at y = 9 (x 12..22, z -2..5). Sights from cameras at y = 0, z = 1.5, 2
+  // behind along x, through the wall at (xh, 5, zh) on a 0.1 grid (xh < 20, zh < 3):
+  //   A  xh < 6:        the point 3 behind the wall (no dense surface: a hole);
+  //   B  6 <= xh < 11:  200 behind (open country; clamped to back = 50; the rays from xh >= 10.4
+  //                     meet the dense facade well before their point: no sample);
+  //   C  11 <= xh < 20: half on the dense facade (4 behind: covered), half 2 behind (a hedge
+  //                     in front of it, seen through a hole of the dense surface).
+  // Twice as many sights end in front of the wall (a tree: nothing) and as many go down to the
+  // ground just in front of the wall's foot (nothing either). Reach 1, rise 0.5; by hand: x <= 4
+  // 3 (the holes' median), 7 <= x <= 10 50, 12 <= x <= 20 4 (the holes say 2, the covered
+  // samples' 0.9 quantile 4: the wall does not hide the facade); above z = 3 no sample within
+  // 0.5, a vertex takes its column's median (the same); x >= 21 no sample within reach and no
+  // valued column within 0.5: the wall's median, 4 (valued vertices: 24 of 3, 40 of 4 (x 11..20),
+  // 16 of 50, 4 between 3 and 50 at x = 6); the second wall and the ground NaN. The same scene
+  // scaled by 0.2 at UTM coordinates: 0.2 of each; and with up leaning by 1.1 degrees (a column
+  // of the wall is then not straight up: its fill must still find it).
+  struct Case {
+    double k;
+    Eigen::Vector3d o, up;
+  };
+  for (const Case& c :
+       {Case{1.0, {0, 0, 0}, {0, 0, 1}}, Case{0.2, {451000, 5410000, 120}, {0, 0, 1}},
+        Case{1.0, {0, 0, 0}, {0, 0.02, 1}}}) {
+    const double k = c.k;
+    const Eigen::Vector3d o = c.o;
+    Mesh proxy = Upright(0, 30, 6, 1.0, 5.0, k, o);
     const size_t first_wall = proxy.vertices.size();
-    Append(proxy, Upright(30, 10, 6, 1.0, 5.0, k, o));
-    const size_t second_wall = proxy.vertices.size();
+    Append(proxy, Upright(40, 10, 6, 1.0, 5.0, k, o));
     Append(proxy,
-           Grid({0, -5, 0}, Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), 20, 10, 1.0, k, o));
+           Grid({0, -5, 0}, Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), 30, 10, 1.0, k, o));
+    const Mesh dense =
+        Grid({12, 9, -2}, Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitZ(), 40, 28, 0.25, k, o);
     std::vector<Sight> sights;
+    auto at = [&](const Eigen::Vector3d& p) { return Eigen::Vector3d(k * p + o); };
     for (int i = 0; i < 200; ++i)
       for (int j = 0; j < 30; ++j) {
-        const double xh = 0.05 + 0.1 * i, zh = 0.05 + 0.1 * j, d = xh < 10 ? 3 : 200;
-        const Eigen::Vector3d c(xh - 2, 0, 1.5), h(xh, 5, zh);
-        auto at = [&](const Eigen::Vector3d& p) { return Eigen::Vector3d(k * p + o); };
-        sights.push_back({at(c), at(c + (h - c) * (5 + d) / 5)});
-        sights.push_back({at(c), at(c + (h - c) * 0.8)});
-        sights.push_back({at(c), at(c + (h - c) * 0.7)});
-        sights.push_back({at(c), at({xh - 1, 2, -1})});
+        const double xh = 0.05 + 0.1 * i, zh = 0.05 + 0.1 * j;
+        const Eigen::Vector3d cam(xh - 2, 0, 1.5), h(xh, 5, zh);
+        const double d = xh < 6 ? 3 : xh < 11 ? 200 : (i + j) % 2 ? 4 : 2;
+        sights.push_back({at(cam), at(cam + (h - cam) * (5 + d) / 5)});
+        sights.push_back({at(cam), at(cam + (h - cam) * 0.8)});
+        sights.push_back({at(cam), at(cam + (h - cam) * 0.7)});
+        sights.push_back({at({xh - 2, 4, 1.5}), at({xh, 4.9, -1})});
       }
     SeenWallSearch s;
     s.reach = 1.0 * k;
     s.rise = 0.5 * k;
     s.back = 50 * k;
-    const std::vector<double> seen = SeenWallDistances(proxy, {0, 0, 1}, sights, s);
+    const std::vector<double> seen = SeenWallDistances(proxy, c.up, sights, dense, s);
     ASSERT_EQ(seen.size(), proxy.vertices.size());
-    size_t near = 0, far = 0;
+    size_t asserted = 0;
     for (size_t v = 0; v < proxy.vertices.size(); ++v) {
       const Eigen::Vector3d q = (proxy.vertices[v] - o) / k;
-      if (v < first_wall && q.x() <= 8 + 1e-9) {
-        EXPECT_NEAR(seen[v], 3 * k, 1e-6 * k) << v << " " << q.transpose();
-        ++near;
-      } else if (v < first_wall && q.x() >= 11 - 1e-9) {
-        EXPECT_NEAR(seen[v], 50 * k, 1e-6 * k) << v << " " << q.transpose();
-        ++far;
-      } else if (v >= first_wall) {
-        EXPECT_TRUE(std::isnan(seen[v])) << v << " " << (v < second_wall ? "wall" : "ground");
+      double want = NAN;
+      if (v >= first_wall)
+        want = NAN;
+      else if (q.x() <= 4 + 1e-9)
+        want = 3;
+      else if (q.x() >= 7 - 1e-9 && q.x() <= 10 + 1e-9)
+        want = 50;
+      else if (q.x() >= 12 - 1e-9)
+        want = 4;
+      else
+        continue;
+      if (std::isnan(want)) {
+        EXPECT_TRUE(std::isnan(seen[v])) << v << " " << q.transpose();
+      } else {
+        EXPECT_NEAR(seen[v], want * k, 1e-6 * k) << v << " " << q.transpose();
       }
+      ++asserted;
     }
-    EXPECT_EQ(near, 9u * 7u);  // x 0..8, z 0..6
-    EXPECT_EQ(far, 10u * 7u);  // x 11..20
+    EXPECT_EQ(asserted, proxy.vertices.size() - 3 * 7);  // all but x = 5, 6, 11
   }
   SeenWallSearch bad;  // reach 0
-  EXPECT_THROW(SeenWallDistances(Proxy(), {0, 0, 1}, {}, bad), Error);
+  EXPECT_THROW(SeenWallDistances(Proxy(), {0, 0, 1}, {}, Mesh(), bad), Error);
 }
 
 TEST(Merge, NoWallsAndBadInput) {
