@@ -287,7 +287,7 @@ std::vector<int64_t> WallComponents(const Mesh& proxy, const std::vector<uint8_t
 
 // Gives each wall vertex without a value (NaN in `out`) the median of the values of its wall's
 // vertices within `near` of it across up (its column above and below it, whatever the wall's
-// lean), else of its wall; a wall with no value stays NaN.
+// lean, and its neighbours'), else of its wall; a wall with no value stays NaN.
 void FillUnseenWalls(const Mesh& proxy, const UpFrame& frame, const std::vector<int64_t>& wall,
                      double near, std::vector<double>& out) {
   std::unordered_map<uint64_t, std::vector<size_t>> grid;  // valued vertices by cell
@@ -339,13 +339,15 @@ std::vector<WallSample> SampleWalls(const Mesh& proxy, const std::vector<uint8_t
     if (!(d.norm() > 0) || !d.allFinite()) return;
     const auto h = walls.Closest(sights[i].origin, d, 0, 1);
     if (!h || kind[h->triangle] != 1) return;
-    // The dense surface well before the point hides the wall there: no sample.
+    // The dense surface in front of the wall hides it there: no sample. Between the wall and the
+    // point (well before the point: this photo saw past it), it is what the wall must not hide.
     const auto f = fused.Closest(sights[i].origin, d, 0, 1 + s.tolerance);
-    if (f && f->t < 1 - s.tolerance) return;
+    if (f && f->t <= h->t) return;
+    const Eigen::Vector3d& end = f && f->t < 1 - s.tolerance ? f->point : sights[i].point;
     const Eigen::Vector3d n = h->normal.dot(d) < 0 ? h->normal : Eigen::Vector3d(-h->normal);
     out[i].at = frame.Across(h->point);
     out[i].height = frame.Height(h->point);
-    out[i].behind = std::clamp((h->point - sights[i].point).dot(n), 0.0, s.back);
+    out[i].behind = std::clamp((h->point - end).dot(n), 0.0, s.back);
     out[i].covered = f.has_value();
   });
   return out;

@@ -88,10 +88,11 @@ Mesh MergeProxyBehind(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3
 // A sight is a ray from a camera centre to the point its depth map saw. Each sight that meets a
 // wall face of the proxy (unmoved) before its point is a sample of the wall there: how far behind
 // the wall the point lies, along the wall face's normal (towards the path), clamped to
-// [0, search.back]. Cast against the dense surface too, the sample is covered when the dense
-// surface lies at its point (the ray meets it within `tolerance` of the point's ray parameter,
-// relative), a hole when the ray meets no dense surface before that, and no sample when the
-// dense surface lies well before the point (the wall is hidden there anyway). A wall vertex
+// [0, search.back]. Cast against the dense surface too (ray parameter 1 at the point), the
+// sample is covered when the ray meets the dense surface within 1 ± `tolerance`, a hole when it
+// meets none before 1 + `tolerance`, no sample when it meets it before the wall (the wall is
+// hidden there), and a covered sample at the dense surface's distance when it meets it between
+// the wall and 1 - `tolerance` (the photo saw past it; the wall must not hide it). A wall vertex
 // gathers the samples that met the wall within `reach` of it horizontally and `rise` of its
 // height. With at least `min_samples` holes, it takes their `quantile`: the median puts the wall
 // where it minimises the mean error in inverse depth over the pixels that see that stretch of
@@ -99,13 +100,14 @@ Mesh MergeProxyBehind(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3
 // With at least `min_samples` covered samples it goes at least as far back as their
 // `covered_quantile`, so that it does not hide the dense surface it stands in front of. A vertex
 // with neither takes the median of its wall's valued vertices within reach / 2 across up (its
-// column above and below it, whatever the wall's lean), else of its wall's (a wall: wall faces
+// column above and below it, whatever the wall's lean, and its neighbours'), else of its wall's
+// (a wall: wall faces
 // connected through shared vertices); NaN when its wall has none (MergeProxyBehind then uses its
 // fixed distance), and for every vertex of no wall face. Sights that end before the wall (a tree,
 // a parked car in front of it) or never meet one (the ground, the sky) say nothing about it.
 // Lengths in model units; UTM-sized coordinates are fine (the ray casters work relative to their
 // mesh's centre, the grid relative to the proxy's first vertex). The sights are cast on all cores
-// (TBB); memory: about 60 bytes per sight.
+// (TBB); memory: about 50 bytes per sight beside the sights themselves.
 
 struct Sight {
   Eigen::Vector3d origin;  // the camera centre

@@ -174,6 +174,7 @@ std::vector<Sight> Sights(const std::vector<DepthView>& views) {
   int stride = 2;
   while (pixels / size_t(stride * stride) > kMaxSights) ++stride;
   std::vector<Sight> out;
+  out.reserve(pixels / size_t(stride * stride));
   for (const DepthView& v : views) {
     const Rigid3d c2w = v.world_to_camera.Inverse();
     const Eigen::Vector3d centre = c2w.t;
@@ -352,8 +353,9 @@ OptionTable DeclareOptions(RoadMeshOptions& o) {
          "many voxels behind it instead (-1: never)")
       .Range(-1, 1000);
   t.Real("--walls-reach", &o.walls_reach,
-         "--dense: a wall vertex goes to the median distance seen behind the wall within this "
-         "many metre-equivalents along it and half as many up or down")
+         "--dense: a wall vertex goes to the median distance seen behind the wall through holes "
+         "of the fused surface within this many metre-equivalents along it and half as many up "
+         "or down")
       .Range(0.05, 100);
   t.Flag("--no-seen-walls", &o.no_seen_walls,
          "--dense: every wall at --walls-behind (not at the median distance the photos saw "
