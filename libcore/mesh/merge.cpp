@@ -54,6 +54,14 @@ struct UpFrame {
   double Height(const Eigen::Vector3d& p) const { return (p - o).dot(u); }
   int64_t Index(double a) const { return static_cast<int64_t>(std::floor(a / cell)); }
   uint64_t Cell(const Eigen::Vector2d& a) const { return CellKey(Index(a.x()), Index(a.y())); }
+  // The cell of `a` and its 8 neighbours (rows of the first coordinate, then the second).
+  std::array<uint64_t, 9> CellsAround(const Eigen::Vector2d& a) const {
+    std::array<uint64_t, 9> keys{};
+    for (int64_t i = -1, k = 0; i <= 1; ++i)
+      for (int64_t j = -1; j <= 1; ++j)
+        keys[size_t(k++)] = CellKey(Index(a.x()) + i, Index(a.y()) + j);
+    return keys;
+  }
   Eigen::Vector3d u, e1, e2, o;
   double cell;
 };
@@ -87,18 +95,16 @@ double ProxyGroundAbove(const Mesh& dense, const Mesh& proxy, const Eigen::Vecto
     const Eigen::Vector3d c = Centroid(dense, f);
     const Eigen::Vector2d ab = frame.Across(c);
     const double a = ab.x(), b = ab.y();
-    const int64_t ia = frame.Index(a), ib = frame.Index(b);
     double best = reach * reach, height = 0;
     bool found = false;
-    for (int64_t i = -1; i <= 1; ++i)
-      for (int64_t j = -1; j <= 1; ++j) {
-        auto it = grid.find(CellKey(ia + i, ib + j));
-        if (it == grid.end()) continue;
-        for (const Eigen::Vector3d& p : it->second) {
-          const double d2 = (p.x() - a) * (p.x() - a) + (p.y() - b) * (p.y() - b);
-          if (d2 <= best) best = d2, height = p.z(), found = true;
-        }
+    for (uint64_t key : frame.CellsAround(ab)) {
+      auto it = grid.find(key);
+      if (it == grid.end()) continue;
+      for (const Eigen::Vector3d& p : it->second) {
+        const double d2 = (p.x() - a) * (p.x() - a) + (p.y() - b) * (p.y() - b);
+        if (d2 <= best) best = d2, height = p.z(), found = true;
       }
+    }
     const double above = height - frame.Height(c);
     if (found && std::abs(above) <= bound) h.push_back(above);
   }
@@ -129,10 +135,7 @@ class FacadeGrid {
                                       const FacadeSearch& search) const {
     std::set<uint64_t> cells;
     for (double t = -search.front;; t += frame_.cell / 4) {  // no face within reach falls between
-      const Eigen::Vector2d c = at - std::min(t, search.back) * wn;
-      for (int64_t i = -1; i <= 1; ++i)
-        for (int64_t j = -1; j <= 1; ++j)
-          cells.insert(CellKey(frame_.Index(c.x()) + i, frame_.Index(c.y()) + j));
+      for (uint64_t key : frame_.CellsAround(at - std::min(t, search.back) * wn)) cells.insert(key);
       if (t >= search.back) break;
     }
     const Eigen::Vector2d along(-wn.y(), wn.x());
@@ -299,26 +302,25 @@ void FillUnseenWalls(const Mesh& proxy, const UpFrame& frame, const std::vector<
     }
   std::map<int64_t, double> wall_median;
   for (auto& [k, values] : by_wall) wall_median[k] = Median(values);
+  // Only the vertices valued before the fill are read (the grid holds no other), so filling in
+  // place does not depend on the order.
   std::vector<double> column;
-  std::vector<double> filled = out;
   for (size_t v = 0; v < out.size(); ++v) {
     if (wall[v] < 0 || std::isfinite(out[v])) continue;
     const Eigen::Vector2d at = frame.Across(proxy.vertices[v]);
     column.clear();
-    for (int64_t i = -1; i <= 1; ++i)
-      for (int64_t j = -1; j <= 1; ++j) {
-        auto it = grid.find(CellKey(frame.Index(at.x()) + i, frame.Index(at.y()) + j));
-        if (it == grid.end()) continue;
-        for (size_t w : it->second)
-          if (wall[w] == wall[v] && (frame.Across(proxy.vertices[w]) - at).norm() <= near)
-            column.push_back(out[w]);
-      }
+    for (uint64_t key : frame.CellsAround(at)) {
+      auto it = grid.find(key);
+      if (it == grid.end()) continue;
+      for (size_t w : it->second)
+        if (wall[w] == wall[v] && (frame.Across(proxy.vertices[w]) - at).norm() <= near)
+          column.push_back(out[w]);
+    }
     if (!column.empty())
-      filled[v] = Median(column);
+      out[v] = Median(column);
     else if (auto w = wall_median.find(wall[v]); w != wall_median.end())
-      filled[v] = w->second;
+      out[v] = w->second;
   }
-  out = std::move(filled);
 }
 
 // A sight that met a wall before its point: where (across up, height), how far behind the wall
@@ -383,14 +385,13 @@ std::vector<double> SeenWallDistances(const Mesh& proxy, const Eigen::Vector3d& 
     const double height = frame.Height(proxy.vertices[v]);
     hole.clear();
     covered.clear();
-    for (int64_t i = -1; i <= 1; ++i)
-      for (int64_t j = -1; j <= 1; ++j) {
-        auto it = grid.find(CellKey(frame.Index(at.x()) + i, frame.Index(at.y()) + j));
-        if (it == grid.end()) continue;
-        for (const WallSample* w : it->second)
-          if ((w->at - at).norm() <= s.reach && std::abs(w->height - height) <= s.rise)
-            (w->covered ? covered : hole).push_back(w->behind);
-      }
+    for (uint64_t key : frame.CellsAround(at)) {
+      auto it = grid.find(key);
+      if (it == grid.end()) continue;
+      for (const WallSample* w : it->second)
+        if ((w->at - at).norm() <= s.reach && std::abs(w->height - height) <= s.rise)
+          (w->covered ? covered : hole).push_back(w->behind);
+    }
     if (hole.size() >= enough) out[v] = Percentile(hole, s.quantile);
     if (covered.size() >= enough) {
       const double c = Percentile(covered, s.covered_quantile);

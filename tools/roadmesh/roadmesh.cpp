@@ -204,7 +204,7 @@ Mesh DenseMesh(const Workspace& ws, const Reconstruction& rec, const RoadMeshOpt
   Eigen::Vector3d down, side;
   DriveAxes(w2c, down, side);
   MergeReport mr;
-  const double voxel = o.voxel * MedianCameraSpacing(views);
+  const double spacing = MedianCameraSpacing(views), voxel = o.voxel * spacing;
   // The corridor's ground comes from a camera height fitted to a few sparse points: where it lies
   // above the fused road it would hide it, so it goes down to it (where the fused road has holes
   // the corridor shows at the fused road's height).
@@ -235,7 +235,7 @@ Mesh DenseMesh(const Workspace& ws, const Reconstruction& rec, const RoadMeshOpt
     SeenWallSearch ss;
     ss.reach = o.walls_reach * unit;
     ss.rise = o.walls_reach / 2 * unit;
-    ss.back = o.max_depth * MedianCameraSpacing(views);
+    ss.back = o.max_depth * spacing;
     const std::vector<double> seen = SeenWallDistances(corridor, -down, Sights(views), dense, ss);
     if (wall_offsets.empty()) wall_offsets.assign(seen.size(), NAN);
     for (size_t v = 0; v < seen.size(); ++v)
