@@ -54,14 +54,35 @@ void main() {
       o_colour = vec4(Expose(c), 1.0);
       o_source = uint(k);
     }
+#ifdef MVTM_SEEN
+    if (SeenSurface(rel / z, 1.0 / (z * (1.0 - u_seen_front)), k, c)) {
+      o_colour = vec4(Expose(c), 1.0);
+      o_source = uint(k);
+    }
+#endif
 #endif
     return;
   }
   o_colour = vec4(u_background, 1.0);
   o_source = 255u;
-#ifdef MVTM_SKYBOX
+#if defined(MVTM_SKYBOX) || defined(MVTM_SEEN)
   vec2 pix = vec2((v_ndc.x + 1.0) * 0.5 * u_size.x, (1.0 - v_ndc.y) * 0.5 * u_size.y);
   vec3 dir = u_Rt * vec3((pix - u_K.zw) / u_K.xy, 1.0);
+#endif
+#ifdef MVTM_SEEN
+  // No mesh here: anything a projector saw on the ray before the sky (a canopy, a pole's top).
+#ifdef MVTM_SKYBOX
+  float w_sky = u_sky_distance > 0.0 ? length(dir) / u_sky_distance : 0.0;
+#else
+  float w_sky = 0.0;
+#endif
+  if (SeenSurface(dir, w_sky, k, c)) {
+    o_colour = vec4(Expose(c), 1.0);
+    o_source = uint(k);
+    return;
+  }
+#endif
+#ifdef MVTM_SKYBOX
   bool sky = u_sky_distance > 0.0 ? FirstProjector(normalize(dir) * u_sky_distance, 1.0, true, k, c)
                                   : FirstProjector(dir, 0.0, true, k, c);
   if (sky) {

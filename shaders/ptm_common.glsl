@@ -9,6 +9,8 @@
 //   MVTM_BLEND                blend every projector that sees a point, weighted in the spirit of
 //                             the unstructured lumigraph (angle, resolution, border feathering,
 //                             soft occlusion), instead of taking the first one
+//   MVTM_SEEN                 what the projectors' photos saw (densify's maps) in front of the
+//                             mesh, on each pixel's ray, takes the pixel (SeenInto)
 uniform int u_num_projectors;
 uniform mat3 u_proj_R[MVTM_MAX_PROJECTORS];   // world → projector camera rotation
 uniform vec3 u_proj_t[MVTM_MAX_PROJECTORS];   // R_k (C_render − C_k), double on the CPU
@@ -175,5 +177,89 @@ bool BlendProjectors(vec3 rel, out int best, out vec3 c) {
   if (!(wsum > 0.0)) return false;
   c = acc / wsum;
   return true;
+}
+#endif
+
+#ifdef MVTM_SEEN
+uniform sampler2DArray u_seens;  // R32F: what each projector's photo saw (densify), +inf = none
+uniform float u_seen_front;      // relative: counts when nearer than the mesh's depth·(1 − this)
+uniform float u_seen_jump;       // relative depth step between successive samples: an edge
+uniform float u_seen_reach;      // pixels of parallax searched in front of the end, a sample
+                                 // every 2
+uniform int u_seen_projectors;   // the first projectors searched
+
+// The render ray r (camera-relative: the point at render depth 1/w is r / w) from inverse depth
+// w_end (its end: the mesh's point moved u_seen_front towards the camera, or the sky) towards
+// the camera, through projector k's seen map. In projector k that point is (b + w·a) / w, with
+// a = u_proj_t[k] (the render centre) and b = R_k r, so its image moves along a line:
+// |uv(w) − uv(w_end)| = |g| (w − w_end) / ((b.z + w·a.z)(b.z + w_end·a.z)), g = f ⊙ (a.xy b.z −
+// b.xy a.z). The march covers u_seen_reach pixels of that line from the end (less when the ray
+// nears the projector's plane first), evenly in w, nearest first; the first sample where the
+// ray has passed behind the seen surface (the sample before it in front, no edge between them)
+// is the hit, refined linearly. True with the hit's inverse depth and colour, unless masked.
+bool SeenInto(int k, vec3 r, float w_end, out float w_hit, out vec3 c) {
+  vec3 a = u_proj_t[k], b = u_proj_R[k] * r;
+  float e = b.z + w_end * a.z;
+  if (!(e > 0.0)) return false;  // the end is behind the projector
+  vec2 f = u_proj_K[k].xy;
+  float g = length(f * (a.xy * b.z - b.xy * a.z));
+  float len = u_seen_reach;
+  int steps = max(1, int(ceil(len / 2.0)));
+  float den = g - len * e * a.z;
+  float w_near = den > 0.0 ? (len * e * b.z + g * w_end) / den : 1e30;
+  if (a.z < 0.0) w_near = min(w_near, w_end + 0.9 * (-b.z / a.z - w_end));  // the plane
+  w_near = min(w_near, w_end + 100.0 / max(length(a), 1e-20));  // 1 % of the baseline away
+  w_end = max(w_end, 1e-6 * w_near);                              // the sky: not at infinity
+  if (!(w_near > w_end)) return false;
+  float w_prev = 0.0, xz_prev = 0.0, d_prev = 0.0;
+  bool before = false;  // the previous sample was in front of a seen surface
+  for (int i = 0; i <= steps; ++i) {
+    float w = mix(w_near, w_end, float(i) / float(steps));
+    vec3 x = b + w * a;
+    vec2 uv = f * (x.xy / x.z) + u_proj_K[k].zw;
+    if (!(x.z > 0.0) || any(lessThan(uv, vec2(0.0))) || any(greaterThanEqual(uv, u_proj_size))) {
+      before = false;
+      continue;
+    }
+    float xz = x.z / w, d = texelFetch(u_seens, Texel(k, uv), 0).r;
+    if (isinf(d) || !(d > 0.0) || d > 1e30) {
+      before = false;
+      continue;
+    }
+    if (xz >= d) {
+      if (!before || abs(d - d_prev) > u_seen_jump * d) return false;  // edge: none here
+      float t = (d_prev - xz_prev) / ((xz - xz_prev) - (d - d_prev));
+      w_hit = mix(w_prev, w, clamp(t, 0.0, 1.0));
+      x = b + w_hit * a;
+      uv = clamp(f * (x.xy / x.z) + u_proj_K[k].zw, vec2(0.0), u_proj_size - 1e-3);
+#ifdef MVTM_MASKS
+      if (texelFetch(u_masks, Texel(k, uv), 0).r > 0.5) return false;  // a vehicle in front
+#endif
+      c = Sample(k, uv);
+      return true;
+    }
+    before = true;
+    w_prev = w;
+    xz_prev = xz;
+    d_prev = d;
+  }
+  return false;
+}
+
+// The nearest surface the first u_seen_projectors projectors saw on render ray r before inverse
+// depth w_end (SeenInto): true with the projector's rank and its colour there.
+bool SeenSurface(vec3 r, float w_end, out int k, out vec3 c) {
+  float best = -1.0;
+  for (int j = 0; j < MVTM_MAX_PROJECTORS; ++j) {
+    if (j >= u_num_projectors || j >= u_seen_projectors) break;
+    float w;
+    vec3 cj;
+    if (SeenInto(j, r, w_end, w, cj) && w > best) {
+      best = w;
+      k = j;
+      c = cj;
+    }
+  }
+  return best > 0.0;
 }
 #endif

@@ -17,6 +17,7 @@ std::vector<std::string> EffectsPlan::Defines() const {
   if (skybox) d.push_back("MVTM_SKYBOX");
   if (exposure) d.push_back("MVTM_EXPOSURE");
   if (ptm && blend && projectors > 1) d.push_back("MVTM_BLEND");
+  if (ptm && seen) d.push_back("MVTM_SEEN");
   return d;
 }
 
@@ -82,6 +83,9 @@ EffectsPlan PlanEffects(const SceneSurvey& s) {
   plan.blend = plan.projectors > 1 && !s.no_blend;
   plan.weights = s.blend_weights;
   plan.fill = s.ptm && !s.no_fill && s.frames_with_holes > 0;
+  plan.seen = s.ptm && !s.no_seen && s.projector_differs && !s.seen_example.empty();
+  plan.seen_surfaces = s.seen_surfaces;
+  plan.seen_surfaces.projectors = std::clamp(plan.seen_surfaces.projectors, 1, plan.projectors);
   return plan;
 }
 
@@ -105,6 +109,26 @@ std::string SkyDistanceReason(const SceneSurvey& s, const EffectsPlan& plan) {
 
 nlohmann::json Choice(bool on, const std::string& why_on, const std::string& why_off) {
   return nlohmann::json{{"on", on}, {"reason", on ? why_on : why_off}};
+}
+
+nlohmann::json SeenChoice(const SceneSurvey& s, const EffectsPlan& plan,
+                          const std::string& vertex_mode) {
+  return
+      Choice(plan.seen,
+              "selected projector " + s.seen_example +
+                  " has densify's map of what its photo saw (stereo/): where the first " +
+                  std::to_string(plan.seen_surfaces.projectors) +
+                  " projector(s) saw a surface on a pixel's ray nearer than the mesh's point by "
+                  "more than " +
+                  ShortDouble(plan.seen_surfaces.front) +
+                  " of its depth and within " + ShortDouble(plan.seen_surfaces.reach) +
+                  " px of parallax (a pole, a trunk, a canopy, a near vehicle the fused mesh "
+                  "eroded or tore), the pixel takes that projector's colour there",
+              !s.ptm      ? vertex_mode
+              : s.no_seen ? "turned off by --no-seen-surfaces"
+              : !s.projector_differs
+                  ? "every projector is the render pose itself"
+                  : "no selected projector has densify's map (stereo/)");
 }
 
 }  // namespace
@@ -177,7 +201,8 @@ nlohmann::json ExplainEffects(const SceneSurvey& s, const EffectsPlan& plan) {
               !s.ptm ? vertex_mode
               : s.no_exposure
                   ? "turned off by --no-exposure"
-                  : "no exposure.tsv, or every selected projector at the common exposure")}};
+                  : "no exposure.tsv, or every selected projector at the common exposure")},
+      {"seen_surfaces", SeenChoice(s, plan, vertex_mode)}};
 }
 
 }  // namespace mvtm

@@ -192,13 +192,14 @@ struct Renderer::Impl {
   // Depth renders; the two passes of a colour render: surface (gbuffer.frag), then per pixel
   // (ptm.frag) into colour + source.
   Target depth_target, surface_target, colour_target;
-  GLuint images = 0, depths = 0, masks = 0, screen_vao = 0;
-  // Projector textures live in layers of three texture arrays (colour, depth, mask) that are
-  // reused across frames: a projector whose key is already in a layer is not uploaded again.
+  GLuint images = 0, depths = 0, masks = 0, seens = 0, screen_vao = 0;
+  // Projector textures live in layers of four texture arrays (colour, depth, mask, seen depth)
+  // that are reused across frames: a projector whose key is already in a layer is not uploaded
+  // again. The seen array is allocated on first use only.
   int layer_w = 0, layer_h = 0, layer_count = 0;
   struct Layer {
     int64_t key = -1;
-    bool depth = false, mask = false;  // whether this layer's depth / mask slices are valid
+    bool depth = false, mask = false, seen = false;  // whether those slices are valid
     uint64_t last_used = 0;
   };
   std::vector<Layer> layers;
@@ -209,8 +210,8 @@ struct Renderer::Impl {
     colour_target.Release();
     surface_target.Release();
     depth_target.Release();
-    GLuint tex[3] = {images, depths, masks};
-    glDeleteTextures(3, tex);
+    GLuint tex[4] = {images, depths, masks, seens};
+    glDeleteTextures(4, tex);
     glDeleteBuffers(1, &vbo);
     glDeleteBuffers(1, &ebo);
     glDeleteVertexArrays(1, &vao);
@@ -342,8 +343,9 @@ struct Renderer::Impl {
     }
   }
 
-  // (Re)allocates the three texture arrays for `count` layers of w×h texels; forgets all layers.
-  void AllocateLayers(int w, int h, int count) {
+  // (Re)allocates the texture arrays for `count` layers of w×h texels (the seen array only with
+  // `seen` or when it exists); forgets all layers.
+  void AllocateLayers(int w, int h, int count, bool seen) {
     RequireGlSize(w, h, "a projector image");
     auto alloc = [&](GLuint& tex, GLenum unit, GLint internal, GLenum format, GLenum type,
                      GLint filter) {
@@ -359,6 +361,7 @@ struct Renderer::Impl {
     alloc(images, GL_TEXTURE0, GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, GL_LINEAR);
     alloc(depths, GL_TEXTURE1, GL_R32F, GL_RED, GL_FLOAT, GL_NEAREST);
     alloc(masks, GL_TEXTURE2, GL_R8, GL_RED, GL_UNSIGNED_BYTE, GL_NEAREST);
+    if (seen || seens) alloc(seens, GL_TEXTURE5, GL_R32F, GL_RED, GL_FLOAT, GL_NEAREST);
     layer_w = w, layer_h = h, layer_count = count;
     layers.assign(static_cast<size_t>(count), Layer());
   }
@@ -386,6 +389,16 @@ struct Renderer::Impl {
                     d.data.data());
   }
 
+  // A projector without a seen map saw nothing (+inf everywhere).
+  void UploadSeen(int layer, const Image* d) {
+    std::vector<float> inf;
+    if (!d) inf.assign(static_cast<size_t>(layer_w) * layer_h, INFINITY);
+    glActiveTexture(GL_TEXTURE5);  // 3 and 4 hold the surface pass's targets while shading
+    glBindTexture(GL_TEXTURE_2D_ARRAY, seens);
+    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, layer_w, layer_h, 1, GL_RED, GL_FLOAT,
+                    d ? d->data.data() : inf.data());
+  }
+
   void UploadMask(int layer, const Image* m) {
     std::vector<uint8_t> buf(static_cast<size_t>(layer_w) * layer_h, 0);
     if (m)
@@ -399,7 +412,7 @@ struct Renderer::Impl {
   // Puts the frame's projectors into layers (reusing those whose key is already resident) and
   // returns the layer of each, in rank order.
   std::vector<int> PlaceProjectors(const std::vector<Projector>& ps, int n, bool need_depth,
-                                   bool need_mask) {
+                                   bool need_mask, bool need_seen) {
     int w = ps[0].image->width, h = ps[0].image->height;
     for (int k = 0; k < n; ++k) {
       const Image* im = ps[k].image;
@@ -407,14 +420,14 @@ struct Renderer::Impl {
         throw Error("projector images differ in size (" + std::to_string(w) + "x" +
                     std::to_string(h) + " and " + std::to_string(im->width) + "x" +
                     std::to_string(im->height) + ")");
-      for (const Image* other : {ps[k].depth, ps[k].mask})
+      for (const Image* other : {ps[k].depth, ps[k].mask, ps[k].seen})
         if (other && (other->width != w || other->height != h))
           throw Error("projector depth maps and masks must match the image size (" +
                       std::to_string(w) + "x" + std::to_string(h) + ", got " +
                       std::to_string(other->width) + "x" + std::to_string(other->height) + ")");
     }
-    if (w != layer_w || h != layer_h || layer_count < 2 * n)
-      AllocateLayers(w, h, std::max(8, 2 * n));
+    if (w != layer_w || h != layer_h || layer_count < 2 * n || (need_seen && !seens))
+      AllocateLayers(w, h, std::max(8, 2 * n), need_seen);
     ++tick;
     std::vector<int> out(static_cast<size_t>(n), -1);
     std::vector<bool> taken(layers.size(), false);
@@ -447,6 +460,10 @@ struct Renderer::Impl {
       if (need_mask && !L.mask) {
         UploadMask(out[k], ps[k].mask);
         L.mask = ps[k].key >= 0;
+      }
+      if (need_seen && !L.seen) {
+        UploadSeen(out[k], ps[k].seen);
+        L.seen = ps[k].key >= 0;
       }
       L.last_used = tick;
     }
@@ -494,6 +511,13 @@ struct Renderer::Impl {
                 float(std::max(plan.weights.feather, 1e-3)));
     glUniform1f(glGetUniformLocation(prog, "u_res_weight"), float(plan.weights.res_weight));
     glUniform1f(glGetUniformLocation(prog, "u_soft"), float(std::max(plan.weights.soft, 1e-6)));
+    glUniform1i(glGetUniformLocation(prog, "u_seens"), 5);
+    glUniform1f(glGetUniformLocation(prog, "u_seen_front"), float(plan.seen_surfaces.front));
+    glUniform1f(glGetUniformLocation(prog, "u_seen_jump"), float(plan.seen_surfaces.jump));
+    glUniform1f(glGetUniformLocation(prog, "u_seen_reach"),
+                float(std::max(plan.seen_surfaces.reach, 1e-3)));
+    glUniform1i(glGetUniformLocation(prog, "u_seen_projectors"),
+                std::clamp(plan.seen_surfaces.projectors, 1, std::max(n, 1)));
   }
 };
 
@@ -738,7 +762,8 @@ Renderer::Frame Renderer::Render(const View& view, const std::vector<Projector>&
   if (plan.ptm || plan.skybox) {
     CheckProjectors(projectors, plan);
     layer_of =
-        m.PlaceProjectors(projectors, plan.projectors, plan.occlusion || plan.skybox, plan.masks);
+        m.PlaceProjectors(projectors, plan.projectors, plan.occlusion || plan.skybox, plan.masks,
+                          plan.ptm && plan.seen);
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D_ARRAY, m.images);
     glActiveTexture(GL_TEXTURE1);

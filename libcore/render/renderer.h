@@ -46,13 +46,16 @@ struct Projector {
   const Image* image = nullptr;  // 1 or 3 (or 4) channels, 8-bit scale, size = camera size
   const Image* depth = nullptr;  // linear depth, any size (nearest lookup); nullptr = none
   const Image* mask = nullptr;   // 8-bit, non-zero = do not use; nullptr = none
-  // Identity of the (image, depth, mask) triple, e.g. the image's index in the workspace; when
+  // Identity of the (image, depth, mask, seen) set, e.g. the image's index in the workspace; when
   // every projector of a frame has a key ≥ 0 and the keys equal the previous frame's, the
   // textures already on the GPU are reused instead of uploaded again.
   int64_t key = -1;
   // The image's exposure: with plan.exposure its samples are brought to the common frame,
   // (I − offset) / gain.
   CameraExposure exposure{};
+  // What the photo saw (densify's map): linear depth, size = image size; nullptr = none (with
+  // plan.seen: nothing seen in front of the mesh).
+  const Image* seen = nullptr;
 };
 
 struct RenderStats {

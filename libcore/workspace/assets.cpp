@@ -28,8 +28,11 @@ Image ReadSourceImage(const Workspace& ws, const std::string& name, const Camera
   return img;
 }
 
-Image ReadDepthAtCamera(const Workspace& ws, const std::string& name, const Camera& cam) {
-  const fs::path p = ws.DepthPath(name);
+namespace {
+
+// A float map at `p` (a scaled copy of the camera's image: round(W·s) × round(H·s)) at the
+// camera's size, nearest neighbour; empty when there is no file. `fix` says how to remake it.
+Image ReadMapAtCamera(const fs::path& p, const Camera& cam, const std::string& fix) {
   if (!fs::exists(p)) return Image();
   Image d = ReadFloatMap(p.string());
   // bakedepth --scale S writes round(W*S) x round(H*S): the same aspect within a pixel.
@@ -38,8 +41,18 @@ Image ReadDepthAtCamera(const Workspace& ws, const std::string& name, const Came
     throw Error(p.string(), 0,
                 "depth map is " + std::to_string(d.width) + "x" + std::to_string(d.height) +
                     ", not the camera's " + std::to_string(cam.width) + "x" +
-                    std::to_string(cam.height) + " at any scale (rebake with bakedepth)");
+                    std::to_string(cam.height) + " at any scale (" + fix + ")");
   return ResizeNearest(d, int(cam.width), int(cam.height));
+}
+
+}  // namespace
+
+Image ReadDepthAtCamera(const Workspace& ws, const std::string& name, const Camera& cam) {
+  return ReadMapAtCamera(ws.DepthPath(name), cam, "rebake with bakedepth");
+}
+
+Image ReadSeenDepthAtCamera(const Workspace& ws, const std::string& name, const Camera& cam) {
+  return ReadMapAtCamera(ws.StereoDepthPath(name), cam, "rerun densify");
 }
 
 Image ReadMaskAtCamera(const Workspace& ws, const std::string& name, const Camera& cam) {

@@ -56,9 +56,13 @@ Image ProjectorSources::ReadMaskFile(size_t k) const {
   return ReadMaskAtCamera(ws_, images_[k]->name, rec_.cameras.at(images_[k]->camera_id));
 }
 
+Image ProjectorSources::ReadSeenFile(size_t k) const {
+  return ReadSeenDepthAtCamera(ws_, images_[k]->name, rec_.cameras.at(images_[k]->camera_id));
+}
+
 void ProjectorSources::TakePrefetched() {
   if (!prefetch_.valid()) return;
-  std::array<Batch, 3> got = prefetch_.get();
+  std::array<Batch, 4> got = prefetch_.get();
   for (size_t i = 0; i < got.size(); ++i) prefetched_[i].merge(got[i]);
 }
 
@@ -102,9 +106,15 @@ const Image* ProjectorSources::MaskOf(size_t k) {
   return m.empty() ? nullptr : &m;
 }
 
-void ProjectorSources::Prefetch(const std::vector<size_t>& ks, bool depth, bool mask) {
+const Image* ProjectorSources::SeenOf(size_t k) {
+  const Image& m = Get(seen_, prefetched_[3], k, &ProjectorSources::ReadSeenFile);
+  return m.empty() ? nullptr : &m;
+}
+
+void ProjectorSources::Prefetch(const std::vector<size_t>& ks, bool depth, bool mask,
+                                bool seen) {
   TakePrefetched();
-  std::array<std::vector<size_t>, 3> todo;
+  std::array<std::vector<size_t>, 4> todo;
   auto want = [&](size_t i, const Cache& cache, size_t k) {
     if (!cache.count(k) && !prefetched_[i].count(k)) todo[i].push_back(k);
   };
@@ -112,13 +122,14 @@ void ProjectorSources::Prefetch(const std::vector<size_t>& ks, bool depth, bool 
     want(0, image_, k);
     if (depth) want(1, depth_, k);
     if (mask) want(2, mask_, k);
+    if (seen) want(3, seen_, k);
   }
-  if (todo[0].empty() && todo[1].empty() && todo[2].empty()) return;
+  if (std::all_of(todo.begin(), todo.end(), [](const auto& t) { return t.empty(); })) return;
   prefetch_ = std::async(std::launch::async, [this, todo] {
-    const std::array<Image (ProjectorSources::*)(size_t) const, 3> read = {
+    const std::array<Image (ProjectorSources::*)(size_t) const, 4> read = {
         &ProjectorSources::ReadColour, &ProjectorSources::ReadDepthFile,
-        &ProjectorSources::ReadMaskFile};
-    std::array<Batch, 3> out;
+        &ProjectorSources::ReadMaskFile, &ProjectorSources::ReadSeenFile};
+    std::array<Batch, 4> out;
     for (size_t i = 0; i < todo.size(); ++i)
       for (size_t k : todo[i]) try {
           out[i][k].image = (this->*read[i])(k);
@@ -135,7 +146,7 @@ ProjectorSources::~ProjectorSources() {
 
 // Drops the least recently used items of each cache beyond the capacity.
 void ProjectorSources::Trim() {
-  for (Cache* cache : {&image_, &depth_, &mask_}) {
+  for (Cache* cache : {&image_, &depth_, &mask_, &seen_}) {
     if (cache->size() <= capacity_) continue;
     std::vector<uint64_t> used;
     for (const auto& [k, e] : *cache) used.push_back(e.used);
@@ -164,6 +175,7 @@ std::vector<Projector> GatherProjectors(ProjectorSources& sources,
                 .count();
     }
     if (plan.masks) p.mask = sources.MaskOf(k);
+    if (plan.seen) p.seen = sources.SeenOf(k);
     if (plan.exposure) sources.ExposureOf(k, p.exposure);
     ps.push_back(p);
   }
@@ -189,6 +201,13 @@ std::string FirstMaskedImage(const Workspace& ws, const std::vector<const ImageR
     const fs::path mp = ws.MaskPath(images[i]->name);
     if (fs::exists(mp) && CountSet(ReadMask(mp.string())) > 0) return mp.filename().string();
   }
+  return "";
+}
+
+std::string FirstSeenImage(const Workspace& ws, const std::vector<const ImageRecord*>& images,
+                           const std::set<size_t>& used) {
+  for (size_t i : used)
+    if (fs::exists(ws.StereoDepthPath(images[i]->name))) return images[i]->name;
   return "";
 }
 

@@ -47,16 +47,19 @@ class ProjectorSources {
   const Image& ImageOf(size_t k);
   const Image& DepthOf(size_t k);
   const Image* MaskOf(size_t k);  // nullptr when the image has no mask file
+  // densify's map of what the photo saw (stereo/NAME.exr) at the image's size; nullptr when the
+  // workspace has none for the image.
+  const Image* SeenOf(size_t k);
   // The image's exposure from WS/exposure.tsv (gain 1, offset 0 when absent); true when it is
   // not the identity.
   bool ExposureOf(size_t k, CameraExposure& exposure);
   View ViewOf(size_t k) const;
   void Trim();
   // Starts reading the files of the images `ks` that are not cached (colour; with `depth` the
-  // baked depth map, with `mask` the mask) on a second thread; ImageOf, DepthOf and MaskOf take
-  // them from there (an error reading one is thrown by the call that asks for it). Waits for
-  // the previous batch first.
-  void Prefetch(const std::vector<size_t>& ks, bool depth, bool mask);
+  // baked depth map, with `mask` the mask, with `seen` densify's map) on a second thread;
+  // ImageOf, DepthOf, MaskOf and SeenOf take them from there (an error reading one is thrown by
+  // the call that asks for it). Waits for the previous batch first.
+  void Prefetch(const std::vector<size_t>& ks, bool depth, bool mask, bool seen = false);
   ~ProjectorSources();
 
  private:
@@ -76,6 +79,7 @@ class ProjectorSources {
   Image ReadColour(size_t k) const;
   Image ReadDepthFile(size_t k) const;  // empty when there is no baked depth map
   Image ReadMaskFile(size_t k) const;   // empty when there is no mask file
+  Image ReadSeenFile(size_t k) const;   // empty when there is no densify map
   // The cached item k, read by `read` unless cached or prefetched.
   const Image& Get(Cache& cache, Batch& prefetched, size_t k,
                    Image (ProjectorSources::*read)(size_t) const);
@@ -88,15 +92,15 @@ class ProjectorSources {
   bool prefer_textures_;
   size_t capacity_;
   uint64_t tick_ = 0;
-  Cache image_, depth_, mask_;
-  std::future<std::array<Batch, 3>> prefetch_;  // colour, depth, mask
-  std::array<Batch, 3> prefetched_;
+  Cache image_, depth_, mask_, seen_;
+  std::future<std::array<Batch, 4>> prefetch_;  // colour, depth, mask, seen
+  std::array<Batch, 4> prefetched_;
   std::map<std::string, ExposureRow> exposure_;  // exposure.tsv, read on first use
   bool exposure_read_ = false;
 };
 
 // The projectors of one frame: the images `indices` (best first) with what `plan` needs (their
-// depth maps for occlusion or the skybox, masks, exposures). The references point into `sources`
+// depth maps for occlusion or the skybox, masks, exposures, densify's maps for seen surfaces). The references point into `sources`
 // until its next Trim(). `depth_ms` (optional) accumulates the time spent gathering depth maps.
 std::vector<Projector> GatherProjectors(ProjectorSources& sources,
                                         const std::vector<size_t>& indices, const EffectsPlan& plan,
@@ -112,6 +116,9 @@ CameraExposure ExposureNear(const std::vector<Projector>& projectors,
 std::string FirstMaskedImage(const Workspace& ws, const std::vector<const ImageRecord*>& images,
                              const std::set<size_t>& used);
 // The name of the first of `images[used]` whose exposure (exposure.tsv) changes its samples.
+// The name of the first of `images[used]` with a densify map (stereo/NAME.exr; "" when none).
+std::string FirstSeenImage(const Workspace& ws, const std::vector<const ImageRecord*>& images,
+                           const std::set<size_t>& used);
 std::string FirstExposedImage(const Workspace& ws, const std::vector<const ImageRecord*>& images,
                               const std::set<size_t>& used);
 

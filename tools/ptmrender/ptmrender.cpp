@@ -36,6 +36,28 @@
 
 namespace mvtm {
 
+namespace {
+
+// The seen surfaces' switch and knobs (SeenSurfaces).
+void DeclareSeenOptions(OptionTable& t, PtmRenderOptions& o) {
+  t.Flag("--no-seen-surfaces", &o.no_seen,
+         "Ignore stereo/ (densify's maps): never take what a projector's photo saw in front of "
+         "the mesh");
+  t.Real("--seen-front", &o.seen.front,
+         "Seen surfaces: a projector's seen surface takes a pixel when nearer than the mesh's "
+         "depth*(1-F)")
+      .Range(0, 1, false, true);
+  t.Real("--seen-reach", &o.seen.reach,
+         "Seen surfaces: pixels of parallax searched in front of the mesh's point (a sample "
+         "every 2): more reach nearer surfaces and cost more")
+      .Range(0, 4096, true);
+  t.Integer("--seen-projectors", &o.seen.projectors,
+        "Seen surfaces: the first N projectors searched (at most --projectors)")
+      .Range(1, 64);
+}
+
+}  // namespace
+
 OptionTable DeclareOptions(PtmRenderOptions& o) {
   OptionTable t("ptmrender");
   t.Positional("WS", &o.workspace,
@@ -87,6 +109,7 @@ OptionTable DeclareOptions(PtmRenderOptions& o) {
       .Range(0, 1, false, true);
   t.Flag("--no-fill", &o.no_fill,
          "Constant background where nothing is seen instead of filling from the surroundings");
+  DeclareSeenOptions(t, o);
   t.Choice("--render-exposure", &o.render_exposure, kRenderExposures,
            "With exposure.tsv: record the render at its nearest projectors' exposure, or at the "
            "workspace's common one");
@@ -228,6 +251,8 @@ SceneSurvey StartSurvey(const PtmRenderOptions& o, const Workspace& ws, const Sc
   s.no_exposure = o.no_exposure;
   s.no_blend = o.no_blend;
   s.no_fill = o.no_fill;
+  s.no_seen = o.no_seen;
+  s.seen_surfaces = o.seen;
   s.sky_distance = o.sky_distance;
   if (s.ptm && !o.no_skybox) s.scene_far = SceneFarEnd(scene.rec);
   s.blend_weights = o.blend;
@@ -235,6 +260,7 @@ SceneSurvey StartSurvey(const PtmRenderOptions& o, const Workspace& ws, const Sc
   s.several_admissible = picks.several;
   if (s.ptm && !o.no_masks) s.mask_example = FirstMaskedImage(ws, scene.images, picks.used);
   if (s.ptm && !o.no_exposure) s.exposure_example = FirstExposedImage(ws, scene.images, picks.used);
+  if (s.ptm && !o.no_seen) s.seen_example = FirstSeenImage(ws, scene.images, picks.used);
   return s;
 }
 
@@ -264,8 +290,8 @@ bool GreySources(const Workspace& ws, const Scene& scene, const std::set<size_t>
   return grey;
 }
 
-// The files frame i is made from beyond the run's inputs: its projectors' images, masks and depth
-// maps (absent ones count: a mask that appears makes the frame stale).
+// The files frame i is made from beyond the run's inputs: its projectors' images, masks, depth
+// maps and densify's maps (absent ones count: a mask that appears makes the frame stale).
 std::vector<fs::path> FrameInputs(const PtmRenderOptions& o, const Workspace& ws,
                                   const Scene& scene, const ProjectorPicks& picks, size_t i,
                                   const std::vector<fs::path>& extra) {
@@ -275,6 +301,7 @@ std::vector<fs::path> FrameInputs(const PtmRenderOptions& o, const Workspace& ws
     in.push_back(ws.SourceImagePath(name));
     if (!o.no_masks) in.push_back(ws.MaskPath(name));
     if (!o.no_occlusion || !o.no_skybox) in.push_back(ws.DepthPath(name));
+    if (o.mode == PtmMode::kPtm && !o.no_seen) in.push_back(ws.StereoDepthPath(name));
   }
   return in;
 }
@@ -360,7 +387,7 @@ void RenderFrames(const FrameJob& job, Renderer& renderer, const std::vector<siz
       if (n + 1 < todo.size()) {  // the next frame's files are read while this one renders
         std::vector<size_t> next;
         for (const auto& c : job.picks.per_pose[todo[n + 1]]) next.push_back(c.index);
-        sources.Prefetch(next, plan.occlusion || plan.skybox, plan.masks);
+        sources.Prefetch(next, plan.occlusion || plan.skybox, plan.masks, plan.seen);
       }
       auto t1 = Clock::now();
       RenderStats stats;

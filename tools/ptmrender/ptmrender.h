@@ -41,6 +41,8 @@ struct PtmRenderOptions : WorkOptions {
   bool no_fill = false;      // constant background where nothing is seen, not push-pull
   double sky_distance = -1;  // skybox distance, model units (< 0: the scene's far end, 0: infinity)
   BlendWeights blend;        // --blend-power, --feather, --res-weight, --soft
+  bool no_seen = false;      // never take what the projectors saw in front of the mesh
+  SeenSurfaces seen;         // --seen-front, --seen-reach, --seen-projectors
   RenderExposure render_exposure = RenderExposure::kNearest;
   std::string size;         // WxH render size (default: the camera's)
   bool explain = false;     // print the effects plan as JSON and render nothing
