@@ -113,22 +113,20 @@ nlohmann::json Choice(bool on, const std::string& why_on, const std::string& why
 
 nlohmann::json SeenChoice(const SceneSurvey& s, const EffectsPlan& plan,
                           const std::string& vertex_mode) {
-  return
-      Choice(plan.seen,
-              "selected projector " + s.seen_example +
-                  " has densify's map of what its photo saw (stereo/): where the first " +
-                  std::to_string(plan.seen_surfaces.projectors) +
-                  " projector(s) saw a surface on a pixel's ray nearer than the mesh's point by "
-                  "more than " +
-                  ShortDouble(plan.seen_surfaces.front) +
-                  " of its depth and within " + ShortDouble(plan.seen_surfaces.reach) +
-                  " px of parallax (a pole, a trunk, a canopy, a near vehicle the fused mesh "
-                  "eroded or tore), the pixel takes that projector's colour there",
-              !s.ptm      ? vertex_mode
-              : s.no_seen ? "turned off by --no-seen-surfaces"
-              : !s.projector_differs
-                  ? "every projector is the render pose itself"
-                  : "no selected projector has densify's map (stereo/)");
+  return Choice(plan.seen,
+                "selected projector " + s.seen_example +
+                    " has densify's map of what its photo saw (stereo/): where the first " +
+                    std::to_string(plan.seen_surfaces.projectors) +
+                    " projector(s) saw a surface on a pixel's ray nearer than the mesh's point by "
+                    "more than " +
+                    ShortDouble(plan.seen_surfaces.front) + " of its depth and within " +
+                    ShortDouble(plan.seen_surfaces.reach) +
+                    " px of parallax (a pole, a trunk, a canopy, a near vehicle the fused mesh "
+                    "eroded or tore), the pixel takes that projector's colour there",
+                !s.ptm                 ? vertex_mode
+                : s.no_seen            ? "turned off by --no-seen-surfaces"
+                : !s.projector_differs ? "every projector is the render pose itself"
+                                       : "no selected projector has densify's map (stereo/)");
 }
 
 }  // namespace

@@ -761,9 +761,8 @@ Renderer::Frame Renderer::Render(const View& view, const std::vector<Projector>&
   std::vector<int> layer_of;
   if (plan.ptm || plan.skybox) {
     CheckProjectors(projectors, plan);
-    layer_of =
-        m.PlaceProjectors(projectors, plan.projectors, plan.occlusion || plan.skybox, plan.masks,
-                          plan.ptm && plan.seen);
+    layer_of = m.PlaceProjectors(projectors, plan.projectors, plan.occlusion || plan.skybox,
+                                 plan.masks, plan.ptm && plan.seen);
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D_ARRAY, m.images);
     glActiveTexture(GL_TEXTURE1);

@@ -111,8 +111,7 @@ const Image* ProjectorSources::SeenOf(size_t k) {
   return m.empty() ? nullptr : &m;
 }
 
-void ProjectorSources::Prefetch(const std::vector<size_t>& ks, bool depth, bool mask,
-                                bool seen) {
+void ProjectorSources::Prefetch(const std::vector<size_t>& ks, bool depth, bool mask, bool seen) {
   TakePrefetched();
   std::array<std::vector<size_t>, 4> todo;
   auto want = [&](size_t i, const Cache& cache, size_t k) {

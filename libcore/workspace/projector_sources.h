@@ -100,8 +100,9 @@ class ProjectorSources {
 };
 
 // The projectors of one frame: the images `indices` (best first) with what `plan` needs (their
-// depth maps for occlusion or the skybox, masks, exposures, densify's maps for seen surfaces). The references point into `sources`
-// until its next Trim(). `depth_ms` (optional) accumulates the time spent gathering depth maps.
+// depth maps for occlusion or the skybox, masks, exposures, densify's maps for seen surfaces). The
+// references point into `sources` until its next Trim(). `depth_ms` (optional) accumulates the time
+// spent gathering depth maps.
 std::vector<Projector> GatherProjectors(ProjectorSources& sources,
                                         const std::vector<size_t>& indices, const EffectsPlan& plan,
                                         double* depth_ms = nullptr);

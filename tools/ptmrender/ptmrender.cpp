@@ -52,7 +52,7 @@ void DeclareSeenOptions(OptionTable& t, PtmRenderOptions& o) {
          "every 2): more reach nearer surfaces and cost more")
       .Range(0, 4096, true);
   t.Integer("--seen-projectors", &o.seen.projectors,
-        "Seen surfaces: the first N projectors searched (at most --projectors)")
+            "Seen surfaces: the first N projectors searched (at most --projectors)")
       .Range(1, 64);
 }
 

@@ -24,6 +24,7 @@ SceneSurvey Everything() {
   s.frames_with_holes = 1;
   s.hole_example = "A_0002.png";
   s.min_coverage = 0.25;
+  s.seen_example = "A_0003.png";
   return s;
 }
 
@@ -37,9 +38,10 @@ TEST(EffectsPlan, EverythingTheSceneCallsForIsOn) {
   EXPECT_TRUE(p.skybox);
   EXPECT_TRUE(p.blend);
   EXPECT_TRUE(p.fill);
+  EXPECT_TRUE(p.seen);
   EXPECT_EQ(p.Defines(),
             (std::vector<std::string>{"MVTM_MAX_PROJECTORS 3", "MVTM_PTM", "MVTM_OCCLUSION",
-                                      "MVTM_MASKS", "MVTM_SKYBOX", "MVTM_BLEND"}));
+                                      "MVTM_MASKS", "MVTM_SKYBOX", "MVTM_BLEND", "MVTM_SEEN"}));
   const auto j = ExplainEffects(s, p);
   EXPECT_EQ(j["fill"]["reason"],
             "1 of 4 frames see no surface somewhere: where no projector sees sky there either, the "
@@ -49,6 +51,12 @@ TEST(EffectsPlan, EverythingTheSceneCallsForIsOn) {
   EXPECT_EQ(j["skybox"]["reason"],
             "1 of 4 frames see no surface somewhere (e.g. A_0002.png); at infinity (no sparse "
             "points give the scene's far end)");
+  EXPECT_EQ(j["seen_surfaces"]["reason"],
+            "selected projector A_0003.png has densify's map of what its photo saw (stereo/): "
+            "where the first 1 projector(s) saw a surface on a pixel's ray nearer than the mesh's "
+            "point by more than 0.05 of its depth and within 32 px of parallax (a pole, a trunk, "
+            "a canopy, a near vehicle the fused mesh eroded or tore), the pixel takes that "
+            "projector's colour there");
   EXPECT_EQ(j["several_projectors"]["reason"],
             "up to 3 projectors per pixel, nearest first, then vertex colours; the first projector "
             "covers as "
@@ -79,7 +87,7 @@ TEST(EffectsPlan, NothingTheSceneDoesNotCallFor) {
   SceneSurvey s;  // one projector, the pose itself, no masks, no holes
   const EffectsPlan p = PlanEffects(s);
   EXPECT_EQ(p.projectors, 1);
-  EXPECT_FALSE(p.occlusion || p.masks || p.skybox || p.blend || p.fill);
+  EXPECT_FALSE(p.occlusion || p.masks || p.skybox || p.blend || p.fill || p.seen);
   EXPECT_EQ(p.Defines(), (std::vector<std::string>{"MVTM_MAX_PROJECTORS 1", "MVTM_PTM"}));
   const auto j = ExplainEffects(s, p);
   EXPECT_EQ(j["occlusion"]["reason"], "every projector is the render pose itself");
@@ -88,16 +96,23 @@ TEST(EffectsPlan, NothingTheSceneDoesNotCallFor) {
   EXPECT_EQ(j["masks"]["reason"], "no selected projector has a non-empty mask");
   EXPECT_EQ(j["skybox"]["reason"], "every pixel of every frame sees the mesh");
   EXPECT_EQ(j["several_projectors"]["reason"], "no frame has more than one admissible projector");
+  EXPECT_EQ(j["seen_surfaces"]["reason"], "every projector is the render pose itself");
+  SceneSurvey other = s;  // projectors elsewhere, none with densify's map
+  other.projector_differs = true;
+  EXPECT_FALSE(PlanEffects(other).seen);
+  EXPECT_EQ(ExplainEffects(other, PlanEffects(other))["seen_surfaces"]["reason"],
+            "no selected projector has densify's map (stereo/)");
   EXPECT_TRUE(j["clip_test"]["on"]);
   EXPECT_TRUE(j["reverse_projection_rejection"]["on"]);
 }
 
 TEST(EffectsPlan, UserSwitchesWinAndSayWhy) {
   SceneSurvey s = Everything();
-  s.no_occlusion = s.no_masks = s.no_skybox = s.no_fill = true;
+  s.no_occlusion = s.no_masks = s.no_skybox = s.no_fill = s.no_seen = true;
   s.projectors_requested = 1;
   const EffectsPlan p = PlanEffects(s);
-  EXPECT_FALSE(p.occlusion || p.masks || p.skybox || p.fill);
+  EXPECT_FALSE(p.occlusion || p.masks || p.skybox || p.fill || p.seen);
+  EXPECT_EQ(ExplainEffects(s, p)["seen_surfaces"]["reason"], "turned off by --no-seen-surfaces");
   EXPECT_EQ(p.projectors, 1);
   const auto j = ExplainEffects(s, p);
   EXPECT_EQ(j["occlusion"]["reason"], "turned off by --no-occlusion");
@@ -120,11 +135,12 @@ TEST(EffectsPlan, VertexModeTurnsEveryProjectiveEffectOff) {
   SceneSurvey s = Everything();
   s.ptm = false;
   const EffectsPlan p = PlanEffects(s);
-  EXPECT_FALSE(p.ptm || p.occlusion || p.masks || p.skybox || p.blend || p.fill);
+  EXPECT_FALSE(p.ptm || p.occlusion || p.masks || p.skybox || p.blend || p.fill || p.seen);
   EXPECT_EQ(p.Defines(), (std::vector<std::string>{"MVTM_MAX_PROJECTORS 1"}));
   const auto j = ExplainEffects(s, p);
-  for (const char* e : {"reverse_projection_rejection", "clip_test", "occlusion",
-                        "several_projectors", "blend", "masks", "skybox", "fill"}) {
+  for (const char* e :
+       {"reverse_projection_rejection", "clip_test", "occlusion", "several_projectors", "blend",
+        "masks", "skybox", "fill", "seen_surfaces"}) {
     EXPECT_FALSE(j[e]["on"]) << e;
     EXPECT_EQ(j[e]["reason"], "vertex-colour mode") << e;
   }

@@ -537,6 +537,74 @@ TEST_F(RenderTest, LevelOfDetailKeepsTheSurfaceWithoutCracks) {
   EXPECT_THROW(r.SetDetail(5, 0), Error);
 }
 
+TEST_F(RenderTest, SeenSurfacesDrawWhatTheMeshLost) {
+  // The world: a wall at z = 10 and a box face at z = 5, |x|, |y| < 1, in front of it; the mesh
+  // has only the wall (fusion lost the box). The projector at the origin photographed both: its
+  // image is red (250, 0, 0) where it saw the box (|u − 32|, |v − 24| < 10 px), blue (0, 0, 200)
+  // on the wall, and its seen map (densify's) holds 5 and 10 there. A camera 1 m to the right:
+  // by hand, the ray of pixel (x, y), d = ((x + ½ − 32)/50, (y + ½ − 24)/50, 1), meets the box
+  // when |1 + 5·dx| < 1 and |5·dy| < 1: red with seen surfaces; without them the wall takes
+  // the projector's colour where its point (1 + 10·dx, 10·dy, 10) projects (blue for most).
+  // A ray that misses the box but whose wall point the projector saw only as the box (its
+  // shadow) passes behind the box across an edge of the seen map (5 against 10): no seen
+  // surface, the mesh's colour as without. Wall pixels the box does not touch keep the wall's
+  // colour either way. The same scaled by 0.2 at UTM coordinates; and a projector without a
+  // seen map changes no pixel.
+  for (const auto& [k, o] : {std::pair{1.0, Eigen::Vector3d(0, 0, 0)},
+                             std::pair{0.2, Eigen::Vector3d(451000.25, 5410000.75, 120.5)}}) {
+    Renderer r(Plane(50 * k, 10 * k, o, 8, {0, 0, 0}));
+    Image img(64, 48, 3, 8), seen(64, 48, 1, 32);
+    for (int y = 0; y < 48; ++y)
+      for (int x = 0; x < 64; ++x) {
+        const bool box = std::abs(x + 0.5 - 32) < 10 && std::abs(y + 0.5 - 24) < 10;
+        img.at(x, y, 0) = box ? 250.f : 0.f;
+        img.at(x, y, 2) = box ? 0.f : 200.f;
+        seen.at(x, y) = float((box ? 5 : 10) * k);
+      }
+    View proj{Cam(), LookingDownZ(o)};
+    Image pd = r.RenderDepth(proj);
+    View side{Cam(), LookingDownZ(o + Eigen::Vector3d(1 * k, 0, 0))};
+    EffectsPlan plan;
+    plan.occlusion = true;
+    plan.seen = true;
+    EffectsPlan without = plan;
+    without.seen = false;
+    Projector p{proj, &img, &pd, nullptr};
+    p.seen = &seen;
+    const Renderer::Frame a = r.Render(side, {p}, plan);
+    const Renderer::Frame b = r.Render(side, {p}, without);
+    p.seen = nullptr;
+    EXPECT_EQ(r.Render(side, {p}, plan).colour.data, b.colour.data);
+    size_t box = 0, wrong_without = 0, wall = 0;
+    for (int y = 0; y < 48; ++y)
+      for (int x = 0; x < 64; ++x) {
+        const double dx = (x + 0.5 - 32) / 50, dy = (y + 0.5 - 24) / 50;
+        const double bx = std::abs(1 + 5 * dx), by = std::abs(5 * dy);
+        // the wall point's place in the projector image, in box half-widths (10 px)
+        const double wx = std::abs(50 * (1 + 10 * dx) / 10) / 10, wy = std::abs(50 * dy) / 10;
+        if (wx > 3.1 || wy > 2.3) continue;  // the projector did not see the wall point
+        if (bx < 0.9 && by < 0.9) {
+          ++box;
+          EXPECT_EQ(a.colour.at(x, y, 0), 250.f) << k << " " << x << "," << y;
+          EXPECT_EQ(a.colour.at(x, y, 2), 0.f) << k << " " << x << "," << y;
+          if (wx > 1.1 || wy > 1.1) {  // without: the wall's blue where the projector saw it
+            ++wrong_without;
+            EXPECT_EQ(b.colour.at(x, y, 2), 200.f) << k << " " << x << "," << y;
+          }
+        } else if ((bx > 1.1 || by > 1.1) && (wx > 1.1 || wy > 1.1)) {
+          ++wall;
+          EXPECT_EQ(a.colour.at(x, y, 2), 200.f) << k << " " << x << "," << y;
+          EXPECT_EQ(a.colour.at(x, y, 0), 0.f) << k << " " << x << "," << y;
+        } else if ((bx > 1.1 || by > 1.1) && wx < 0.9 && wy < 0.9) {
+          EXPECT_EQ(a.colour.at(x, y, 0), b.colour.at(x, y, 0)) << k << " " << x << "," << y;
+        }
+      }
+    EXPECT_GT(box, 150u);
+    EXPECT_GT(wrong_without, 50u);
+    EXPECT_GT(wall, 1000u);
+  }
+}
+
 TEST_F(RenderTest, BadInputsAreClearErrors) {
   EXPECT_THROW({ Renderer r{Mesh()}; }, Error);
   Renderer r(Plane(5, 10));
