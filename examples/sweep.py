@@ -20,7 +20,8 @@ tool and OUT/index.html, the page to read before choosing settings. Work folders
   bakedepth  --scale: share of the truth's surface pixels whose looked-up depth is within 1 %,
              against bakedepth's own milliseconds per map (render + write)
   ptmrender  --projectors, --bias, baked depth scale or a depth pre-pass, effects off, blending
-             weights (--blend-power, --feather, --res-weight, --soft), --sky-distance: SSIM
+             weights (--blend-power, --feather, --res-weight, --soft), --sky-distance, seen
+             surfaces on densify's maps (--seen-reach, --seen-projectors, --seen-front): SSIM
              against the ray-traced off-path truth, against ptmrender's own ms per frame
   densify    (examples/sweep_densify.py) depth within 2 % against densify's ms per image
 
@@ -408,8 +409,17 @@ def sweep_ptmrender(c):
         settings += [("blend", f"soft occlusion {x}", ["--soft", x], 1) for x in (0, 0.05)]
         settings += [("sky", f"sky distance {d}", ["--sky-distance", d], 1)
                      for d in (0, 20, 200)]
+        # Seen surfaces need densify's maps: made once before these rows (the rows above have
+        # none, as the fixture's workspace has none).
+        settings += [("seen", "seen surfaces (densify's maps)", [], 1),
+                     ("seen", "seen surfaces, none", ["--no-seen-surfaces"], 1)]
+        settings += [("seen", f"seen reach {r} px", ["--seen-reach", r], 1) for r in (8, 96)]
+        settings += [("seen", "seen projectors 2", ["--seen-projectors", 2], 1),
+                     ("seen", "seen front 0.02", ["--seen-front", 0.02], 1)]
     rows, baked = [], "unset"
     for group, name, extra, scale in settings:
+        if group == "seen" and not os.path.isdir(os.path.join(ws, "stereo")):
+            c.tools.run("densify", "--quiet", ws)
         if scale != baked:
             bake(scale)
             baked = scale
@@ -432,7 +442,10 @@ def sweep_ptmrender(c):
         "weights (<code>--blend-power</code>, <code>--feather</code>, <code>--res-weight</code>, "
         "<code>--soft</code>), the skybox's distance (<code>--sky-distance</code>: 0 at "
         "infinity; by default the scene's far end, the 98th percentile of the sparse points' "
-        "distances), and vertex colours only (<code>--mode vertex</code>) as the "
+        "distances), the seen surfaces on densify's maps (group &ldquo;seen&rdquo;, after "
+        "<code>densify</code>: <code>--seen-reach</code>, <code>--seen-projectors</code>, "
+        "<code>--seen-front</code>, <code>--no-seen-surfaces</code>; on this true mesh they "
+        "can only lose what wrong depths in the maps cost), and vertex colours only (<code>--mode vertex</code>) as the "
         "baseline. Each knob is varied alone; masks: the fixture's truth masks. Poses: the "
         "fixture's off-path truth poses (1.5 m lane changes and 15&deg; turns of drive A), "
         "projected from the recorded photographs of both drives. <b>Accuracy:</b> mean SSIM "
