@@ -79,6 +79,7 @@ static void PipelineBench(bool quick, fs::path ws) {
     return br.render_ms / double(br.written);
   };
   const double depth_before = bake();
+  fs::remove_all(ws / "stereo");  // a run killed between the seen-surface frames left them
 
   PtmRenderOptions po;
   po.workspace = ws.string();
@@ -92,6 +93,15 @@ static void PipelineBench(bool quick, fs::path ws) {
   first.no_blend = first.no_fill = true;
   const PtmRenderReport r0 = RunPtmRender(first, sink);
   fs::remove_all(po.outdir);
+  // With seen surfaces: densify's maps stood in for by the mesh's own depth (copies of the baked
+  // maps), so no ray finds a surface in front of the mesh and every sample is read: their worst
+  // case (a hit ends a ray's march early).
+  fs::create_directories(ws / "stereo");
+  for (const auto& e : fs::directory_iterator(ws / "depth"))
+    fs::copy_file(e.path(), ws / "stereo" / e.path().filename());
+  const PtmRenderReport rs = RunPtmRender(po, sink);
+  fs::remove_all(po.outdir);
+  fs::remove_all(ws / "stereo");
   const double depth_after = bake(), depth_ms = (depth_before + depth_after) / 2;
   const double n = double(r.rendered), frame_ms = r.frames_ms / n;
   const double unwritten_ms = (r.frames_ms - r.write_ms) / n;
@@ -120,6 +130,16 @@ static void PipelineBench(bool quick, fs::path ws) {
       "ptmrender",
       "blending + fill, whole frame, " + std::to_string(r.rendered) + " frames of mkroad --full",
       1000 / frame_ms, "fps", "first projector, no fill (--no-blend --no-fill)", 1000 / first_ms);
+  const double seen_ms = rs.frames_ms / double(rs.rendered);
+  std::printf(
+      "  ptmrender with seen surfaces    %8.2f ms  %6.1f fps  (%.2fx the rate without; "
+      "texturing %.2f against %.2f ms per frame)\n",
+      seen_ms, 1000 / seen_ms, frame_ms / seen_ms, rs.shade_ms / double(rs.rendered),
+      r.shade_ms / n);
+  mvtm::bench::Report("ptmrender",
+                      "seen surfaces (worst case: every sample read), whole frame, " +
+                          std::to_string(rs.rendered) + " frames of mkroad --full",
+                      1000 / seen_ms, "fps", "without seen surfaces (no stereo/)", 1000 / frame_ms);
   const double other = r.frames_ms - r.load_ms - r.survey_ms - r.render_ms - r.write_ms;
   std::printf(
       "  ptmrender per frame: load %.2f (depth maps %.2f), survey %.2f, render %.2f = "

@@ -91,6 +91,8 @@ void DeclareRenderOptions(OptionTable& t, SimulateOptions& o) {
   t.Flag("--no-exposure", &o.no_exposure, "Ignore exposure.tsv");
   t.Flag("--no-blend", &o.no_blend, "The first projector that sees a point, not a blend");
   t.Flag("--no-fill", &o.no_fill, "Constant background where nothing is seen");
+  t.Flag("--no-seen-surfaces", &o.no_seen,
+         "Ignore stereo/: never take what a projector's photo saw in front of the mesh");
 }
 
 }  // namespace
@@ -554,6 +556,7 @@ void LiveView::Plan(const Rigid3d& start_c2w, const std::vector<Rigid3d>& record
   s.no_exposure = o_.no_exposure;
   s.no_blend = o_.no_blend;
   s.no_fill = o_.no_fill;
+  s.no_seen = o_.no_seen;
   s.sky_distance = o_.sky_distance;
   s.scene_far = scene_far_;
   s.projector_differs = true;  // a live car is never exactly at a recorded pose
@@ -562,6 +565,7 @@ void LiveView::Plan(const Rigid3d& start_c2w, const std::vector<Rigid3d>& record
   for (size_t i = 0; i < images_.size(); ++i) all.insert(i);
   if (!o_.no_masks) s.mask_example = FirstMaskedImage(ws_, images_, all);
   if (!o_.no_exposure) s.exposure_example = FirstExposedImage(ws_, images_, all);
+  if (!o_.no_seen) s.seen_example = FirstSeenImage(ws_, images_, all);
   std::vector<std::pair<Rigid3d, std::string>> views = {{start_c2w.Inverse(), "the start view"}};
   const size_t n = recorded_w2c.size(), step = std::max<size_t>(1, n / 8);
   for (size_t i = 0; i < n; i += step)
@@ -618,7 +622,7 @@ std::vector<Image> LiveView::Render(const Rigid3d& c2w, const Quality& q, double
   Rigid3d ahead = c2w;
   ahead.t += c2w.R().col(2) * ahead_m;
   sources_.Prefetch(Pick(ahead.Inverse(), q.projectors()), plan_.occlusion || plan_.skybox,
-                    plan_.masks);
+                    plan_.masks, plan_.seen);
   return frames;
 }
 

@@ -85,6 +85,7 @@ struct SimulateOptions {
   double bias = 0.005;
   bool no_occlusion = false, no_skybox = false, no_masks = false, no_exposure = false;
   bool no_blend = false, no_fill = false;
+  bool no_seen = false;      // never take what the projectors saw in front of the mesh (stereo/)
   double sky_distance = -1;  // skybox distance, model units (< 0: the scene's far end, 0: infinity)
   std::string record;        // OUT folder
   bool record_frames = false;
