@@ -194,9 +194,12 @@ uniform int u_seen_projectors;   // the first projectors searched
 // a = u_proj_t[k] (the render centre) and b = R_k r, so its image moves along a line:
 // |uv(w) − uv(w_end)| = |g| (w − w_end) / ((b.z + w·a.z)(b.z + w_end·a.z)), g = f ⊙ (a.xy b.z −
 // b.xy a.z). The march covers u_seen_reach pixels of that line from the end (less when the ray
-// nears the projector's plane first), evenly in w, nearest first; the first sample where the
-// ray has passed behind the seen surface (the sample before it in front, no edge between them)
-// is the hit, refined linearly. True with the hit's inverse depth and colour, unless masked.
+// nears the projector's plane first), evenly in that offset p (w(p) = w_end + p e² / (g − p e
+// a.z)), nearest first; where the ray's image hardly moves (near the epipole: less than 2 px),
+// evenly in w instead. The first sample where the ray has passed behind the seen surface (the
+// sample before it in front, no edge between them) is the hit, refined linearly in 1/w (the
+// projector depth b.z/w + a.z is linear in it). True with the hit's inverse depth and colour,
+// unless masked.
 bool SeenInto(int k, vec3 r, float w_end, out float w_hit, out vec3 c) {
   vec3 a = u_proj_t[k], b = u_proj_R[k] * r;
   float e = b.z + w_end * a.z;
@@ -209,12 +212,15 @@ bool SeenInto(int k, vec3 r, float w_end, out float w_hit, out vec3 c) {
   float w_near = den > 0.0 ? (len * e * b.z + g * w_end) / den : 1e30;
   if (a.z < 0.0) w_near = min(w_near, w_end + 0.9 * (-b.z / a.z - w_end));  // the plane
   w_near = min(w_near, w_end + 100.0 / max(length(a), 1e-20));  // 1 % of the baseline away
-  w_end = max(w_end, 1e-6 * w_near);                              // the sky: not at infinity
+  if (w_end <= 0.0) w_end = 1e-6 * w_near;  // the sky at infinity: at a far end instead
   if (!(w_near > w_end)) return false;
+  float p_near = g * (w_near - w_end) / ((b.z + w_near * a.z) * e);
+  bool by_offset = p_near >= 2.0;
   float w_prev = 0.0, xz_prev = 0.0, d_prev = 0.0;
   bool before = false;  // the previous sample was in front of a seen surface
   for (int i = 0; i <= steps; ++i) {
-    float w = mix(w_near, w_end, float(i) / float(steps));
+    float s = float(i) / float(steps), p = p_near * (1.0 - s);
+    float w = by_offset ? w_end + p * e * e / (g - p * e * a.z) : mix(w_near, w_end, s);
     vec3 x = b + w * a;
     vec2 uv = f * (x.xy / x.z) + u_proj_K[k].zw;
     if (!(x.z > 0.0) || any(lessThan(uv, vec2(0.0))) || any(greaterThanEqual(uv, u_proj_size))) {
@@ -229,7 +235,7 @@ bool SeenInto(int k, vec3 r, float w_end, out float w_hit, out vec3 c) {
     if (xz >= d) {
       if (!before || abs(d - d_prev) > u_seen_jump * d) return false;  // edge: none here
       float t = (d_prev - xz_prev) / ((xz - xz_prev) - (d - d_prev));
-      w_hit = mix(w_prev, w, clamp(t, 0.0, 1.0));
+      w_hit = 1.0 / mix(1.0 / w_prev, 1.0 / w, clamp(t, 0.0, 1.0));
       x = b + w_hit * a;
       uv = clamp(f * (x.xy / x.z) + u_proj_K[k].zw, vec2(0.0), u_proj_size - 1e-3);
 #ifdef MVTM_MASKS

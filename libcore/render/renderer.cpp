@@ -99,6 +99,15 @@ Image ReadLinearDepth(int w, int h) {
 
 }  // namespace
 
+namespace {
+
+// The projectors the seen surfaces search (plan.projectors is already capped by the frame's).
+int SeenCount(const EffectsPlan& plan) {
+  return std::clamp(plan.seen_surfaces.projectors, 1, std::max(plan.projectors, 1));
+}
+
+}  // namespace
+
 struct Renderer::Impl {
   GLuint vao = 0, vbo = 0, ebo = 0;
   std::vector<Chunk> chunks;
@@ -410,9 +419,10 @@ struct Renderer::Impl {
   }
 
   // Puts the frame's projectors into layers (reusing those whose key is already resident) and
-  // returns the layer of each, in rank order.
+  // returns the layer of each, in rank order. Seen maps: only the first `seen` projectors' (the
+  // ones the shader searches; one without a map gets +inf).
   std::vector<int> PlaceProjectors(const std::vector<Projector>& ps, int n, bool need_depth,
-                                   bool need_mask, bool need_seen) {
+                                   bool need_mask, int seen) {
     int w = ps[0].image->width, h = ps[0].image->height;
     for (int k = 0; k < n; ++k) {
       const Image* im = ps[k].image;
@@ -426,8 +436,8 @@ struct Renderer::Impl {
                       std::to_string(w) + "x" + std::to_string(h) + ", got " +
                       std::to_string(other->width) + "x" + std::to_string(other->height) + ")");
     }
-    if (w != layer_w || h != layer_h || layer_count < 2 * n || (need_seen && !seens))
-      AllocateLayers(w, h, std::max(8, 2 * n), need_seen);
+    if (w != layer_w || h != layer_h || layer_count < 2 * n || (seen > 0 && !seens))
+      AllocateLayers(w, h, std::max(8, 2 * n), seen > 0);
     ++tick;
     std::vector<int> out(static_cast<size_t>(n), -1);
     std::vector<bool> taken(layers.size(), false);
@@ -461,7 +471,7 @@ struct Renderer::Impl {
         UploadMask(out[k], ps[k].mask);
         L.mask = ps[k].key >= 0;
       }
-      if (need_seen && !L.seen) {
+      if (k < seen && !L.seen) {
         UploadSeen(out[k], ps[k].seen);
         L.seen = ps[k].key >= 0;
       }
@@ -516,8 +526,7 @@ struct Renderer::Impl {
     glUniform1f(glGetUniformLocation(prog, "u_seen_jump"), float(plan.seen_surfaces.jump));
     glUniform1f(glGetUniformLocation(prog, "u_seen_reach"),
                 float(std::max(plan.seen_surfaces.reach, 1e-3)));
-    glUniform1i(glGetUniformLocation(prog, "u_seen_projectors"),
-                std::clamp(plan.seen_surfaces.projectors, 1, std::max(n, 1)));
+    glUniform1i(glGetUniformLocation(prog, "u_seen_projectors"), SeenCount(plan));
   }
 };
 
@@ -762,13 +771,17 @@ Renderer::Frame Renderer::Render(const View& view, const std::vector<Projector>&
   if (plan.ptm || plan.skybox) {
     CheckProjectors(projectors, plan);
     layer_of = m.PlaceProjectors(projectors, plan.projectors, plan.occlusion || plan.skybox,
-                                 plan.masks, plan.ptm && plan.seen);
+                                 plan.masks, plan.ptm && plan.seen ? SeenCount(plan) : 0);
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D_ARRAY, m.images);
     glActiveTexture(GL_TEXTURE1);
     glBindTexture(GL_TEXTURE_2D_ARRAY, m.depths);
     glActiveTexture(GL_TEXTURE2);
     glBindTexture(GL_TEXTURE_2D_ARRAY, m.masks);
+    if (m.seens) {
+      glActiveTexture(GL_TEXTURE5);
+      glBindTexture(GL_TEXTURE_2D_ARRAY, m.seens);
+    }
   }
   // Two passes: the surface each pixel sees, then texturing once per pixel (a fragment hidden by
   // a nearer one costs no texturing, and a software rasteriser shades tiny triangles wastefully).

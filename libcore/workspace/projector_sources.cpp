@@ -174,7 +174,8 @@ std::vector<Projector> GatherProjectors(ProjectorSources& sources,
                 .count();
     }
     if (plan.masks) p.mask = sources.MaskOf(k);
-    if (plan.seen) p.seen = sources.SeenOf(k);
+    if (plan.seen && static_cast<int>(ps.size()) < plan.seen_surfaces.projectors)
+      p.seen = sources.SeenOf(k);  // only the projectors searched
     if (plan.exposure) sources.ExposureOf(k, p.exposure);
     ps.push_back(p);
   }

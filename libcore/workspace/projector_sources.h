@@ -116,10 +116,10 @@ CameraExposure ExposureNear(const std::vector<Projector>& projectors,
 // that plans the masks effect.
 std::string FirstMaskedImage(const Workspace& ws, const std::vector<const ImageRecord*>& images,
                              const std::set<size_t>& used);
-// The name of the first of `images[used]` whose exposure (exposure.tsv) changes its samples.
 // The name of the first of `images[used]` with a densify map (stereo/NAME.exr; "" when none).
 std::string FirstSeenImage(const Workspace& ws, const std::vector<const ImageRecord*>& images,
                            const std::set<size_t>& used);
+// The name of the first of `images[used]` whose exposure (exposure.tsv) changes its samples.
 std::string FirstExposedImage(const Workspace& ws, const std::vector<const ImageRecord*>& images,
                               const std::set<size_t>& used);
 

@@ -296,12 +296,13 @@ std::vector<fs::path> FrameInputs(const PtmRenderOptions& o, const Workspace& ws
                                   const Scene& scene, const ProjectorPicks& picks, size_t i,
                                   const std::vector<fs::path>& extra) {
   std::vector<fs::path> in = extra;
-  for (const auto& c : picks.per_pose[i]) {
-    const std::string& name = scene.images[c.index]->name;
+  for (size_t j = 0; j < picks.per_pose[i].size(); ++j) {
+    const std::string& name = scene.images[picks.per_pose[i][j].index]->name;
     in.push_back(ws.SourceImagePath(name));
     if (!o.no_masks) in.push_back(ws.MaskPath(name));
     if (!o.no_occlusion || !o.no_skybox) in.push_back(ws.DepthPath(name));
-    if (o.mode == PtmMode::kPtm && !o.no_seen) in.push_back(ws.StereoDepthPath(name));
+    if (o.mode == PtmMode::kPtm && !o.no_seen && j < size_t(o.seen.projectors))
+      in.push_back(ws.StereoDepthPath(name));  // the projectors the seen surfaces search
   }
   return in;
 }

@@ -573,6 +573,17 @@ TEST_F(RenderTest, SeenSurfacesDrawWhatTheMeshLost) {
     p.seen = &seen;
     const Renderer::Frame a = r.Render(side, {p}, plan);
     const Renderer::Frame b = r.Render(side, {p}, without);
+    // The layer cache: a projector placed first beyond the searched ranks (without its map, as
+    // GatherProjectors gives it there) and then first must be searched with its map.
+    Projector q = p, p2 = p;
+    q.key = 7;
+    p2.key = 3;
+    p2.seen = nullptr;
+    EffectsPlan two = plan;
+    two.projectors = 2;
+    r.Render(side, {q, p2}, two);
+    p2.seen = &seen;
+    EXPECT_EQ(r.Render(side, {p2}, plan).colour.data, a.colour.data);
     p.seen = nullptr;
     EXPECT_EQ(r.Render(side, {p}, plan).colour.data, b.colour.data);
     size_t box = 0, wrong_without = 0, wall = 0;
