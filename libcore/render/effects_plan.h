@@ -40,8 +40,8 @@ struct BlendWeights {
 // The search reaches `reach` pixels of parallax in front of the mesh's point (a sample every 2):
 // far enough for the silhouettes the fused mesh eroded or tore, not so far that a wrong depth
 // near the camera in one photo's map takes pixels (measured: 32 px the best on KITTI 06 and
-// mkroad, within 0.001 of 8 px on KITTI 01; 192 px and more lose on all three). The user's
-// knobs (ptmrender --seen-front, --seen-reach, --seen-projectors).
+// mkroad, within 0.001 of 8 px on KITTI 01; longer reaches cost time and gain nothing). The
+// user's knobs (ptmrender --seen-front, --seen-reach, --seen-projectors).
 struct SeenSurfaces {
   double front = 0.05;  // relative: a seen surface counts when nearer than depth·(1 − front)
   double reach = 32;    // pixels of parallax searched in front of the mesh's point, > 0
