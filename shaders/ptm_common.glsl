@@ -221,13 +221,13 @@ bool SeenInto(int k, vec3 r, float w_end, out float w_hit, out vec3 c) {
   for (int i = 0; i <= steps; ++i) {
     float s = float(i) / float(steps), p = p_near * (1.0 - s);
     float w = by_offset ? w_end + p * e * e / (g - p * e * a.z) : mix(w_near, w_end, s);
-    vec3 x = b + w * a;
-    vec2 uv = f * (x.xy / x.z) + u_proj_K[k].zw;
-    if (!(x.z > 0.0) || any(lessThan(uv, vec2(0.0))) || any(greaterThanEqual(uv, u_proj_size))) {
+    vec2 uv;
+    float z;  // the projector depth times w
+    if (!ProjectInto(k, r, w, uv, z)) {
       before = false;
       continue;
     }
-    float xz = x.z / w, d = texelFetch(u_seens, Texel(k, uv), 0).r;
+    float xz = z / w, d = texelFetch(u_seens, Texel(k, uv), 0).r;
     if (isinf(d) || !(d > 0.0) || d > 1e30) {
       before = false;
       continue;
@@ -236,7 +236,7 @@ bool SeenInto(int k, vec3 r, float w_end, out float w_hit, out vec3 c) {
       if (!before || abs(d - d_prev) > u_seen_jump * d) return false;  // edge: none here
       float t = (d_prev - xz_prev) / ((xz - xz_prev) - (d - d_prev));
       w_hit = 1.0 / mix(1.0 / w_prev, 1.0 / w, clamp(t, 0.0, 1.0));
-      x = b + w_hit * a;
+      vec3 x = b + w_hit * a;
       uv = clamp(f * (x.xy / x.z) + u_proj_K[k].zw, vec2(0.0), u_proj_size - 1e-3);
 #ifdef MVTM_MASKS
       if (texelFetch(u_masks, Texel(k, uv), 0).r > 0.5) return false;  // a vehicle in front

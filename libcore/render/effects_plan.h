@@ -12,6 +12,7 @@
 // Thread safety: plain values and pure functions, except SurveyView, which renders (GL thread).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <nlohmann/json.hpp>
@@ -75,6 +76,11 @@ struct EffectsPlan {
 
   // The shader's #define switches for this plan.
   std::vector<std::string> Defines() const;
+  // How many projectors, first in rank order, the seen surfaces search (0 without them): the
+  // ones whose densify maps are read and uploaded.
+  int SeenProjectors() const {
+    return ptm && seen ? std::clamp(seen_surfaces.projectors, 1, std::max(projectors, 1)) : 0;
+  }
 };
 
 // What the inputs of a job say, and what the user asked for.

@@ -99,15 +99,6 @@ Image ReadLinearDepth(int w, int h) {
 
 }  // namespace
 
-namespace {
-
-// The projectors the seen surfaces search (plan.projectors is already capped by the frame's).
-int SeenCount(const EffectsPlan& plan) {
-  return std::clamp(plan.seen_surfaces.projectors, 1, std::max(plan.projectors, 1));
-}
-
-}  // namespace
-
 struct Renderer::Impl {
   GLuint vao = 0, vbo = 0, ebo = 0;
   std::vector<Chunk> chunks;
@@ -526,7 +517,7 @@ struct Renderer::Impl {
     glUniform1f(glGetUniformLocation(prog, "u_seen_jump"), float(plan.seen_surfaces.jump));
     glUniform1f(glGetUniformLocation(prog, "u_seen_reach"),
                 float(std::max(plan.seen_surfaces.reach, 1e-3)));
-    glUniform1i(glGetUniformLocation(prog, "u_seen_projectors"), SeenCount(plan));
+    glUniform1i(glGetUniformLocation(prog, "u_seen_projectors"), plan.SeenProjectors());
   }
 };
 
@@ -771,7 +762,7 @@ Renderer::Frame Renderer::Render(const View& view, const std::vector<Projector>&
   if (plan.ptm || plan.skybox) {
     CheckProjectors(projectors, plan);
     layer_of = m.PlaceProjectors(projectors, plan.projectors, plan.occlusion || plan.skybox,
-                                 plan.masks, plan.ptm && plan.seen ? SeenCount(plan) : 0);
+                                 plan.masks, plan.SeenProjectors());
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D_ARRAY, m.images);
     glActiveTexture(GL_TEXTURE1);

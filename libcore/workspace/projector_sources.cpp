@@ -111,17 +111,18 @@ const Image* ProjectorSources::SeenOf(size_t k) {
   return m.empty() ? nullptr : &m;
 }
 
-void ProjectorSources::Prefetch(const std::vector<size_t>& ks, bool depth, bool mask, bool seen) {
+void ProjectorSources::Prefetch(const std::vector<size_t>& ks, bool depth, bool mask, int seen) {
   TakePrefetched();
   std::array<std::vector<size_t>, 4> todo;
   auto want = [&](size_t i, const Cache& cache, size_t k) {
     if (!cache.count(k) && !prefetched_[i].count(k)) todo[i].push_back(k);
   };
-  for (size_t k : ks) {
+  for (size_t j = 0; j < ks.size(); ++j) {
+    const size_t k = ks[j];
     want(0, image_, k);
     if (depth) want(1, depth_, k);
     if (mask) want(2, mask_, k);
-    if (seen) want(3, seen_, k);
+    if (static_cast<int>(j) < seen) want(3, seen_, k);
   }
   if (std::all_of(todo.begin(), todo.end(), [](const auto& t) { return t.empty(); })) return;
   prefetch_ = std::async(std::launch::async, [this, todo] {
@@ -174,7 +175,7 @@ std::vector<Projector> GatherProjectors(ProjectorSources& sources,
                 .count();
     }
     if (plan.masks) p.mask = sources.MaskOf(k);
-    if (plan.seen && static_cast<int>(ps.size()) < plan.seen_surfaces.projectors)
+    if (static_cast<int>(ps.size()) < plan.SeenProjectors())
       p.seen = sources.SeenOf(k);  // only the projectors searched
     if (plan.exposure) sources.ExposureOf(k, p.exposure);
     ps.push_back(p);

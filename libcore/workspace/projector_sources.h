@@ -56,10 +56,10 @@ class ProjectorSources {
   View ViewOf(size_t k) const;
   void Trim();
   // Starts reading the files of the images `ks` that are not cached (colour; with `depth` the
-  // baked depth map, with `mask` the mask, with `seen` densify's map) on a second thread;
+  // baked depth map, with `mask` the mask, for the first `seen` densify's map) on a second thread;
   // ImageOf, DepthOf, MaskOf and SeenOf take them from there (an error reading one is thrown by
   // the call that asks for it). Waits for the previous batch first.
-  void Prefetch(const std::vector<size_t>& ks, bool depth, bool mask, bool seen = false);
+  void Prefetch(const std::vector<size_t>& ks, bool depth, bool mask, int seen = 0);
   ~ProjectorSources();
 
  private:

@@ -388,7 +388,7 @@ void RenderFrames(const FrameJob& job, Renderer& renderer, const std::vector<siz
       if (n + 1 < todo.size()) {  // the next frame's files are read while this one renders
         std::vector<size_t> next;
         for (const auto& c : job.picks.per_pose[todo[n + 1]]) next.push_back(c.index);
-        sources.Prefetch(next, plan.occlusion || plan.skybox, plan.masks, plan.seen);
+        sources.Prefetch(next, plan.occlusion || plan.skybox, plan.masks, plan.SeenProjectors());
       }
       auto t1 = Clock::now();
       RenderStats stats;

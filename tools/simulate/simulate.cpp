@@ -622,7 +622,7 @@ std::vector<Image> LiveView::Render(const Rigid3d& c2w, const Quality& q, double
   Rigid3d ahead = c2w;
   ahead.t += c2w.R().col(2) * ahead_m;
   sources_.Prefetch(Pick(ahead.Inverse(), q.projectors()), plan_.occlusion || plan_.skybox,
-                    plan_.masks, plan_.seen);
+                    plan_.masks, plan_.SeenProjectors());
   return frames;
 }
 
