@@ -21,7 +21,8 @@ tool and OUT/index.html, the page to read before choosing settings. Work folders
              against bakedepth's own milliseconds per map (render + write)
   ptmrender  --projectors, --bias, baked depth scale or a depth pre-pass, effects off, blending
              weights (--blend-power, --feather, --res-weight, --soft), --sky-distance, seen
-             surfaces on densify's maps (--seen-reach, --seen-projectors, --seen-front): SSIM
+             surfaces on densify's maps (--seen-reach, --seen-projectors, --seen-front,
+             --seen-ground-conf): SSIM
              against the ray-traced off-path truth, against ptmrender's own ms per frame
   densify    (examples/sweep_densify.py) depth within 2 % against densify's ms per image
 
@@ -415,7 +416,9 @@ def sweep_ptmrender(c):
                      ("seen", "seen surfaces, none", ["--no-seen-surfaces"], 1)]
         settings += [("seen", f"seen reach {r} px", ["--seen-reach", r], 1) for r in (8, 96)]
         settings += [("seen", "seen projectors 2", ["--seen-projectors", 2], 1),
-                     ("seen", "seen front 0.02", ["--seen-front", 0.02], 1)]
+                     ("seen", "seen front 0.02", ["--seen-front", 0.02], 1),
+                     ("seen", "seen ground confidence 0", ["--seen-ground-conf", 0], 1),
+                     ("seen", "seen ground confidence 1", ["--seen-ground-conf", 1], 1)]
     rows, baked = [], "unset"
     for group, name, extra, scale in settings:
         if group == "seen" and not os.path.isdir(os.path.join(ws, "stereo")):
@@ -444,7 +447,8 @@ def sweep_ptmrender(c):
         "infinity; by default the scene's far end, the 98th percentile of the sparse points' "
         "distances), the seen surfaces on densify's maps (group &ldquo;seen&rdquo;, after "
         "<code>densify</code>: <code>--seen-reach</code>, <code>--seen-projectors</code>, "
-        "<code>--seen-front</code>, <code>--no-seen-surfaces</code>; on this true mesh they "
+        "<code>--seen-front</code>, <code>--seen-ground-conf</code>, "
+        "<code>--no-seen-surfaces</code>; on this true mesh they "
         "can only lose what wrong depths in the maps cost), and vertex colours only (<code>--mode vertex</code>) as the "
         "baseline. Each knob is varied alone; masks: the fixture's truth masks. Poses: the "
         "fixture's off-path truth poses (1.5 m lane changes and 15&deg; turns of drive A), "

@@ -25,6 +25,32 @@ uniform float u_sky_distance;       // model units from the camera; 0 = at infin
 uniform vec2 u_render_exposure;     // gain, offset/255: the render camera's exposure
 #endif
 
+#ifdef MVTM_SEEN
+// The camera-relative point of the surface at pixel q (gl_FragCoord's rows: 0 at the bottom).
+vec3 SurfacePoint(ivec2 q) {
+  float z = texelFetch(u_depth, q, 0).r;
+  vec2 pix = vec2(float(q.x) + 0.5, u_size.y - float(q.y) - 0.5);
+  return u_Rt * vec3((pix - u_K.zw) / u_K.xy * z, z);
+}
+
+// True when the surface at pixel p (point c) faces the render camera's up within 37 degrees:
+// the ground. Its normal from the neighbours nearer to c on each axis (a depth edge does not
+// tilt it); false where that is undefined (a pixel with no surface beside it).
+bool OnGround(ivec2 p, vec3 c) {
+  ivec2 lim = ivec2(u_size) - 1;
+  vec3 l = SurfacePoint(clamp(p - ivec2(1, 0), ivec2(0), lim));
+  vec3 r = SurfacePoint(clamp(p + ivec2(1, 0), ivec2(0), lim));
+  vec3 d = SurfacePoint(clamp(p - ivec2(0, 1), ivec2(0), lim));
+  vec3 u = SurfacePoint(clamp(p + ivec2(0, 1), ivec2(0), lim));
+  vec3 dx = length(r - c) < length(c - l) ? r - c : c - l;
+  vec3 dy = length(u - c) < length(c - d) ? u - c : c - d;
+  vec3 n = cross(dx, dy);
+  float ln = length(n);
+  if (!(ln > 0.0) || isinf(ln)) return false;
+  return abs(dot(n / ln, u_Rt * vec3(0.0, -1.0, 0.0))) > 0.8;
+}
+#endif
+
 // A projector's radiance L (common exposure) as the render camera records it.
 vec3 Expose(vec3 c) {
 #ifdef MVTM_EXPOSURE
@@ -55,7 +81,7 @@ void main() {
       o_source = uint(k);
     }
 #ifdef MVTM_SEEN
-    if (SeenSurface(rel / z, 1.0 / (z * (1.0 - u_seen_front)), k, c)) {
+    if (SeenSurface(rel / z, 1.0 / (z * (1.0 - u_seen_front)), OnGround(p, rel), k, c)) {
       o_colour = vec4(Expose(c), 1.0);
       o_source = uint(k);
     }
@@ -76,7 +102,7 @@ void main() {
 #else
   float w_sky = 0.0;
 #endif
-  if (SeenSurface(dir, w_sky, k, c)) {
+  if (SeenSurface(dir, w_sky, false, k, c)) {
     o_colour = vec4(Expose(c), 1.0);
     o_source = uint(k);
     return;

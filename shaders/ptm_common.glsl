@@ -181,12 +181,14 @@ bool BlendProjectors(vec3 rel, out int best, out vec3 c) {
 #endif
 
 #ifdef MVTM_SEEN
-uniform sampler2DArray u_seens;  // R32F: what each projector's photo saw (densify), +inf = none
+uniform sampler2DArray u_seens;  // RG32F: depth of what each projector's photo saw (densify),
+                                 // +inf = none; its confidence 0..1
 uniform float u_seen_front;      // relative: counts when nearer than the mesh's depth·(1 − this)
 uniform float u_seen_jump;       // relative depth step between successive samples: an edge
 uniform float u_seen_reach;      // pixels of parallax searched in front of the end, a sample
                                  // every 2
 uniform int u_seen_projectors;   // the first projectors searched
+uniform float u_seen_ground_conf;  // on the ground, seen depths of less confidence are none
 
 // The render ray r (camera-relative: the point at render depth 1/w is r / w) from inverse depth
 // w_end (its end: the mesh's point moved u_seen_front towards the camera, or the sky) towards
@@ -199,8 +201,9 @@ uniform int u_seen_projectors;   // the first projectors searched
 // evenly in w instead. The first sample where the ray has passed behind the seen surface (the
 // sample before it in front, no edge between them) is the hit, refined linearly in 1/w (the
 // projector depth b.z/w + a.z is linear in it). True with the hit's inverse depth and colour,
-// unless masked.
-bool SeenInto(int k, vec3 r, float w_end, out float w_hit, out vec3 c) {
+// unless masked. On the `ground` only seen depths of confidence ≥ u_seen_ground_conf count: a
+// wrong depth there (a repetitive road marking matched a period off) would tear the road.
+bool SeenInto(int k, vec3 r, float w_end, bool ground, out float w_hit, out vec3 c) {
   vec3 a = u_proj_t[k], b = u_proj_R[k] * r;
   float e = b.z + w_end * a.z;
   if (!(e > 0.0)) return false;  // the end is behind the projector
@@ -227,7 +230,8 @@ bool SeenInto(int k, vec3 r, float w_end, out float w_hit, out vec3 c) {
       before = false;
       continue;
     }
-    float xz = z / w, d = texelFetch(u_seens, Texel(k, uv), 0).r;
+    vec2 seen = texelFetch(u_seens, Texel(k, uv), 0).rg;
+    float xz = z / w, d = ground && seen.g < u_seen_ground_conf ? 1.0 / 0.0 : seen.r;
     if (isinf(d) || !(d > 0.0) || d > 1e30) {
       before = false;
       continue;
@@ -253,14 +257,15 @@ bool SeenInto(int k, vec3 r, float w_end, out float w_hit, out vec3 c) {
 }
 
 // The nearest surface the first u_seen_projectors projectors saw on render ray r before inverse
-// depth w_end (SeenInto): true with the projector's rank and its colour there.
-bool SeenSurface(vec3 r, float w_end, out int k, out vec3 c) {
+// depth w_end (SeenInto; `ground`: the ray ends on the ground): true with the projector's rank
+// and its colour there.
+bool SeenSurface(vec3 r, float w_end, bool ground, out int k, out vec3 c) {
   float best = -1.0;
   for (int j = 0; j < MVTM_MAX_PROJECTORS; ++j) {
     if (j >= u_num_projectors || j >= u_seen_projectors) break;
     float w;
     vec3 cj;
-    if (SeenInto(j, r, w_end, w, cj) && w > best) {
+    if (SeenInto(j, r, w_end, ground, w, cj) && w > best) {
       best = w;
       k = j;
       c = cj;

@@ -122,7 +122,10 @@ nlohmann::json SeenChoice(const SceneSurvey& s, const EffectsPlan& plan,
                     ShortDouble(plan.seen_surfaces.front) + " of its depth and within " +
                     ShortDouble(plan.seen_surfaces.reach) +
                     " px of parallax (a pole, a trunk, a canopy, a near vehicle the fused mesh "
-                    "eroded or tore), the pixel takes that projector's colour there",
+                    "eroded or tore), the pixel takes that projector's colour there; on the "
+                    "ground only depths of confidence >= " +
+                    ShortDouble(plan.seen_surfaces.ground_confidence) +
+                    " (a road marking matched a period off would tear)",
                 !s.ptm                 ? vertex_mode
                 : s.no_seen            ? "turned off by --no-seen-surfaces"
                 : !s.projector_differs ? "every projector is the render pose itself"

@@ -48,6 +48,10 @@ struct SeenSurfaces {
   double reach = 32;    // pixels of parallax searched in front of the mesh's point, > 0
   int projectors = 1;   // the first projectors, in rank order, searched
   double jump = 0.1;    // relative depth step between successive samples that is an edge
+  // On the ground (a pixel whose mesh normal is within 37 degrees of the render camera's up)
+  // only densify's pixels of at least this confidence count: a repetitive road marking's wrong
+  // depths would otherwise tear it (measured on KITTI 01: 0.6 mends the chevrons of frame 20).
+  double ground_confidence = 0.6;
 };
 
 // The effects a frame is rendered with (one shader variant per distinct plan).

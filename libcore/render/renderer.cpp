@@ -361,7 +361,7 @@ struct Renderer::Impl {
     alloc(images, GL_TEXTURE0, GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, GL_LINEAR);
     alloc(depths, GL_TEXTURE1, GL_R32F, GL_RED, GL_FLOAT, GL_NEAREST);
     alloc(masks, GL_TEXTURE2, GL_R8, GL_RED, GL_UNSIGNED_BYTE, GL_NEAREST);
-    if (seen || seens) alloc(seens, GL_TEXTURE5, GL_R32F, GL_RED, GL_FLOAT, GL_NEAREST);
+    if (seen || seens) alloc(seens, GL_TEXTURE5, GL_RG32F, GL_RG, GL_FLOAT, GL_NEAREST);
     layer_w = w, layer_h = h, layer_count = count;
     layers.assign(static_cast<size_t>(count), Layer());
   }
@@ -389,14 +389,18 @@ struct Renderer::Impl {
                     d.data.data());
   }
 
-  // A projector without a seen map saw nothing (+inf everywhere).
+  // Depth and confidence; a projector without a seen map saw nothing (+inf everywhere), a map
+  // without a confidence channel is sure (1).
   void UploadSeen(int layer, const Image* d) {
-    std::vector<float> inf;
-    if (!d) inf.assign(static_cast<size_t>(layer_w) * layer_h, INFINITY);
+    std::vector<float> buf(static_cast<size_t>(layer_w) * layer_h * 2, 1.f);
+    for (size_t p = 0; p < buf.size() / 2; ++p) {
+      buf[2 * p] = d ? d->data[p * d->channels] : INFINITY;
+      if (d && d->channels >= 2) buf[2 * p + 1] = d->data[p * d->channels + 1];
+    }
     glActiveTexture(GL_TEXTURE5);  // 3 and 4 hold the surface pass's targets while shading
     glBindTexture(GL_TEXTURE_2D_ARRAY, seens);
-    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, layer_w, layer_h, 1, GL_RED, GL_FLOAT,
-                    d ? d->data.data() : inf.data());
+    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, layer_w, layer_h, 1, GL_RG, GL_FLOAT,
+                    buf.data());
   }
 
   void UploadMask(int layer, const Image* m) {
@@ -518,6 +522,8 @@ struct Renderer::Impl {
     glUniform1f(glGetUniformLocation(prog, "u_seen_reach"),
                 float(std::max(plan.seen_surfaces.reach, 1e-3)));
     glUniform1i(glGetUniformLocation(prog, "u_seen_projectors"), plan.SeenProjectors());
+    glUniform1f(glGetUniformLocation(prog, "u_seen_ground_conf"),
+                float(plan.seen_surfaces.ground_confidence));
   }
 };
 

@@ -53,8 +53,9 @@ struct Projector {
   // The image's exposure: with plan.exposure its samples are brought to the common frame,
   // (I − offset) / gain.
   CameraExposure exposure{};
-  // What the photo saw (densify's map): linear depth, size = image size; nullptr = none (with
-  // plan.seen: nothing seen in front of the mesh).
+  // What the photo saw (densify's map): linear depth, size = image size, and optionally its
+  // confidence 0..1 as a second channel (1 without); nullptr = none (with plan.seen: nothing
+  // seen in front of the mesh).
   const Image* seen = nullptr;
 };
 

@@ -30,11 +30,9 @@ Image ReadSourceImage(const Workspace& ws, const std::string& name, const Camera
 
 namespace {
 
-// A float map at `p` (a scaled copy of the camera's image: round(W·s) × round(H·s)) at the
-// camera's size, nearest neighbour; empty when there is no file. `fix` says how to remake it.
-Image ReadMapAtCamera(const fs::path& p, const Camera& cam, const std::string& fix) {
-  if (!fs::exists(p)) return Image();
-  Image d = ReadFloatMap(p.string());
+// Float map `d`, read from `p` (a scaled copy of the camera's image: round(W·s) × round(H·s)), at
+// the camera's size, nearest neighbour. `fix` says how to remake it.
+Image MapAtCamera(const Image& d, const fs::path& p, const Camera& cam, const std::string& fix) {
   // bakedepth --scale S writes round(W*S) x round(H*S): the same aspect within a pixel.
   const double s = double(d.width) / double(cam.width);
   if (d.width < 1 || std::fabs(double(d.height) - double(cam.height) * s) > 1.0)
@@ -45,6 +43,12 @@ Image ReadMapAtCamera(const fs::path& p, const Camera& cam, const std::string& f
   return ResizeNearest(d, int(cam.width), int(cam.height));
 }
 
+// The float map at `p` at the camera's size (MapAtCamera); empty when there is no file.
+Image ReadMapAtCamera(const fs::path& p, const Camera& cam, const std::string& fix) {
+  if (!fs::exists(p)) return Image();
+  return MapAtCamera(ReadFloatMap(p.string()), p, cam, fix);
+}
+
 }  // namespace
 
 Image ReadDepthAtCamera(const Workspace& ws, const std::string& name, const Camera& cam) {
@@ -52,7 +56,24 @@ Image ReadDepthAtCamera(const Workspace& ws, const std::string& name, const Came
 }
 
 Image ReadSeenDepthAtCamera(const Workspace& ws, const std::string& name, const Camera& cam) {
-  return ReadMapAtCamera(ws.StereoDepthPath(name), cam, "rerun densify");
+  const fs::path p = ws.StereoDepthPath(name), cp = ws.StereoConfidencePath(name);
+  if (!fs::exists(p)) return Image();
+  const Image d = ReadFloatMap(p.string());
+  Image c;
+  if (fs::exists(cp)) {
+    c = ReadFloatMap(cp.string());
+    if (c.width != d.width || c.height != d.height)
+      throw Error(cp.string(), 0,
+                  "confidence map is " + std::to_string(c.width) + "x" + std::to_string(c.height) +
+                      ", its depth map " + std::to_string(d.width) + "x" +
+                      std::to_string(d.height) + " (rerun densify)");
+  }
+  Image both(d.width, d.height, 2, 32);
+  for (size_t i = 0; i < d.pixels(); ++i) {
+    both.data[2 * i] = d.data[i * d.channels];
+    both.data[2 * i + 1] = c.empty() ? 1.f : c.data[i * c.channels];
+  }
+  return MapAtCamera(both, p, cam, "rerun densify");
 }
 
 Image ReadMaskAtCamera(const Workspace& ws, const std::string& name, const Camera& cam) {

@@ -24,7 +24,8 @@ Image ReadSourceImage(const Workspace& ws, const std::string& name, const Camera
 // depth/NAME.exr at the camera's size; empty when not baked.
 Image ReadDepthAtCamera(const Workspace& ws, const std::string& name, const Camera& cam);
 // stereo/NAME.exr (densify's map of what the photo saw) at the camera's size, nearest
-// neighbour; empty when the workspace has none for the image.
+// neighbour, with its confidence (stereo/NAME.conf.exr; 1 without one) as a second channel;
+// empty when the workspace has none for the image.
 Image ReadSeenDepthAtCamera(const Workspace& ws, const std::string& name, const Camera& cam);
 // masks/NAME.png (0 or 255) at the camera's size; empty when the image has no mask.
 Image ReadMaskAtCamera(const Workspace& ws, const std::string& name, const Camera& cam);

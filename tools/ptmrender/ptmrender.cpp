@@ -51,6 +51,10 @@ void DeclareSeenOptions(OptionTable& t, PtmRenderOptions& o) {
          "Seen surfaces: pixels of parallax searched in front of the mesh's point (a sample "
          "every 2): more reach nearer surfaces and cost more")
       .Range(0, 4096, true);
+  t.Real("--seen-ground-conf", &o.seen.ground_confidence,
+         "Seen surfaces: on the ground (mesh normal within 37 degrees of the camera's up) only "
+         "densify's depths of at least this confidence count (0: all, 1: none)")
+      .Range(0, 1);
   t.Integer("--seen-projectors", &o.seen.projectors,
             "Seen surfaces: the first N projectors searched (at most --projectors)")
       .Range(1, 64);
@@ -301,8 +305,10 @@ std::vector<fs::path> FrameInputs(const PtmRenderOptions& o, const Workspace& ws
     in.push_back(ws.SourceImagePath(name));
     if (!o.no_masks) in.push_back(ws.MaskPath(name));
     if (!o.no_occlusion || !o.no_skybox) in.push_back(ws.DepthPath(name));
-    if (o.mode == PtmMode::kPtm && !o.no_seen && j < size_t(o.seen.projectors))
+    if (o.mode == PtmMode::kPtm && !o.no_seen && j < size_t(o.seen.projectors)) {
       in.push_back(ws.StereoDepthPath(name));  // the projectors the seen surfaces search
+      in.push_back(ws.StereoConfidencePath(name));
+    }
   }
   return in;
 }

@@ -56,7 +56,8 @@ TEST(EffectsPlan, EverythingTheSceneCallsForIsOn) {
             "where the first 1 projector(s) saw a surface on a pixel's ray nearer than the mesh's "
             "point by more than 0.05 of its depth and within 32 px of parallax (a pole, a trunk, "
             "a canopy, a near vehicle the fused mesh eroded or tore), the pixel takes that "
-            "projector's colour there");
+            "projector's colour there; on the ground only depths of confidence >= 0.6 (a road "
+            "marking matched a period off would tear)");
   EXPECT_EQ(j["several_projectors"]["reason"],
             "up to 3 projectors per pixel, nearest first, then vertex colours; the first projector "
             "covers as "

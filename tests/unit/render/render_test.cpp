@@ -537,6 +537,14 @@ TEST_F(RenderTest, LevelOfDetailKeepsTheSurfaceWithoutCracks) {
   EXPECT_THROW(r.SetDetail(5, 0), Error);
 }
 
+// Occlusion, and seen surfaces with `seen`.
+EffectsPlan SeenPlan(bool seen) {
+  EffectsPlan plan;
+  plan.occlusion = true;
+  plan.seen = seen;
+  return plan;
+}
+
 TEST_F(RenderTest, SeenSurfacesDrawWhatTheMeshLost) {
   // The world: a wall at z = 10 and a box face at z = 5, |x|, |y| < 1, in front of it; the mesh
   // has only the wall (fusion lost the box). The projector at the origin photographed both: its
@@ -564,11 +572,7 @@ TEST_F(RenderTest, SeenSurfacesDrawWhatTheMeshLost) {
     View proj{Cam(), LookingDownZ(o)};
     Image pd = r.RenderDepth(proj);
     View side{Cam(), LookingDownZ(o + Eigen::Vector3d(1 * k, 0, 0))};
-    EffectsPlan plan;
-    plan.occlusion = true;
-    plan.seen = true;
-    EffectsPlan without = plan;
-    without.seen = false;
+    const EffectsPlan plan = SeenPlan(true), without = SeenPlan(false);
     Projector p{proj, &img, &pd, nullptr};
     p.seen = &seen;
     const Renderer::Frame a = r.Render(side, {p}, plan);
@@ -584,6 +588,12 @@ TEST_F(RenderTest, SeenSurfacesDrawWhatTheMeshLost) {
     r.Render(side, {q, p2}, two);
     p2.seen = &seen;
     EXPECT_EQ(r.Render(side, {p2}, plan).colour.data, a.colour.data);
+    // A wall is not the ground: seen depths of any confidence count on it.
+    Image unsure(64, 48, 2, 32);
+    for (size_t i = 0; i < seen.pixels(); ++i)
+      unsure.data[2 * i] = seen.data[i], unsure.data[2 * i + 1] = 0.1f;
+    p.seen = &unsure;
+    EXPECT_EQ(r.Render(side, {p}, plan).colour.data, a.colour.data);
     p.seen = nullptr;
     EXPECT_EQ(r.Render(side, {p}, plan).colour.data, b.colour.data);
     size_t box = 0, wrong_without = 0, wall = 0;
@@ -613,6 +623,67 @@ TEST_F(RenderTest, SeenSurfacesDrawWhatTheMeshLost) {
     EXPECT_GT(box, 150u);
     EXPECT_GT(wrong_without, 50u);
     EXPECT_GT(wall, 1000u);
+  }
+}
+
+TEST_F(RenderTest, SeenSurfacesOnTheGroundNeedConfidence) {
+  // A flat ground 1.5 below the cameras (y down: the render camera's up is −y), nothing else.
+  // The projector at the origin photographed red in a patch of it 3.7..7.1 ahead (rows 34..43,
+  // |u − 32| < 12) and blue elsewhere; its seen map holds the ground's depth, but 0.75 of it in
+  // the patch: a false surface in front of the road, as a repetitive marking matched a period
+  // off gives. Rendered from 1 m to the right: with the false depths sure (confidence 0.9) some
+  // ground pixels take the patch's red where they showed blue; unsure (0.3, below the default
+  // floor 0.6) the frame is the one without seen surfaces, pixel for pixel; with the floor at 0
+  // the unsure map acts as the sure one. Also scaled by 0.2 at UTM coordinates.
+  for (const auto& [k, o] : {std::pair{1.0, Eigen::Vector3d(0, 0, 0)},
+                             std::pair{0.2, Eigen::Vector3d(451000.25, 5410000.75, 120.5)}}) {
+    Renderer r(Grid(
+        8, 8,
+        [&](int i, int j) -> Eigen::Vector3d {
+          return o + k * Eigen::Vector3d(-20 + 5 * i, 1.5, 1 + 5 * j);
+        },
+        [](int, int) {
+          return std::array<uint8_t, 3>{0, 90, 0};
+        }));
+    View proj{Cam(), LookingDownZ(o)};
+    const Image pd = r.RenderDepth(proj);
+    Image img(64, 48, 3, 8);
+    auto patch = [](int x, int y) { return std::abs(x + 0.5 - 32) < 12 && y >= 34 && y < 44; };
+    for (int y = 0; y < 48; ++y)
+      for (int x = 0; x < 64; ++x) {
+        img.at(x, y, 0) = patch(x, y) ? 250.f : 0.f;
+        img.at(x, y, 2) = patch(x, y) ? 0.f : 200.f;
+      }
+    auto map = [&](float confidence) {
+      Image m(64, 48, 2, 32);
+      for (int y = 0; y < 48; ++y)
+        for (int x = 0; x < 64; ++x) {
+          m.at(x, y, 0) = pd.at(x, y) * (patch(x, y) ? 0.75f : 1.f);
+          m.at(x, y, 1) = confidence;
+        }
+      return m;
+    };
+    const Image sure = map(0.9f), unsure = map(0.3f);
+    View side{Cam(), LookingDownZ(o + Eigen::Vector3d(1 * k, 0, 0))};
+    const EffectsPlan plan = SeenPlan(true), without = SeenPlan(false);
+    Projector p{proj, &img, &pd, nullptr};
+    const Renderer::Frame b = r.Render(side, {p}, without);
+    p.seen = &sure;
+    const Renderer::Frame a = r.Render(side, {p}, plan);
+    // Pixels changed; of those, the patch's full red (all but a few at its bilinear edge).
+    size_t taken = 0, red = 0;
+    for (size_t i = 0; i < a.colour.pixels(); ++i)
+      if (a.colour.data[3 * i] != b.colour.data[3 * i]) {
+        ++taken;
+        red += a.colour.data[3 * i] == 250.f;
+      }
+    EXPECT_GT(red, 20u) << k;
+    EXPECT_GE(red + 5, taken) << k;
+    p.seen = &unsure;
+    EXPECT_EQ(r.Render(side, {p}, plan).colour.data, b.colour.data) << k;
+    EffectsPlan any = plan;
+    any.seen_surfaces.ground_confidence = 0;
+    EXPECT_EQ(r.Render(side, {p}, any).colour.data, a.colour.data) << k;
   }
 }
 
