@@ -626,6 +626,66 @@ TEST_F(RenderTest, SeenSurfacesDrawWhatTheMeshLost) {
   }
 }
 
+TEST_F(RenderTest, SeenSurfacesAheadOfAndBehindTheProjector) {
+  // The scene of SeenSurfacesDrawWhatTheMeshLost (wall z = 10 in the mesh, box face z = 5,
+  // |x|, |y| < 1, only in the projector's photo and seen map; projector at the origin), rendered
+  // from cameras along the drive: 2 ahead of the projector and 3 behind it, off the axis by
+  // (0.3, 0.2) (the ray's image in the projector then runs towards or away from the epipole,
+  // a.z != 0, and passes it near the centre). By hand, pixel (x, y)'s ray from C is
+  // C + t·((x + ½ − 32)/50, (y + ½ − 24)/50, 1): it meets the box when |C.xy + (5 − C.z)·d.xy|
+  // < 1 (red), else the wall at P = C + (10 − C.z)·d, blue where the projector saw that point
+  // (|P.x|, |P.y| < 6.4, 4.8, outside the box's shadow |P.xy| < 2). Then the same with no mesh
+  // where the pixels look (a wall far to the side only): every pixel is sky, marched from the
+  // sky distance 40, and the box's rays are red all the same. Scaled by 0.2 at UTM as well.
+  for (const auto& [k, o] : {std::pair{1.0, Eigen::Vector3d(0, 0, 0)},
+                             std::pair{0.2, Eigen::Vector3d(451000.25, 5410000.75, 120.5)}}) {
+    Image img(64, 48, 3, 8), seen(64, 48, 1, 32);
+    for (int y = 0; y < 48; ++y)
+      for (int x = 0; x < 64; ++x) {
+        const bool box = std::abs(x + 0.5 - 32) < 10 && std::abs(y + 0.5 - 24) < 10;
+        img.at(x, y, 0) = box ? 250.f : 0.f;
+        img.at(x, y, 2) = box ? 0.f : 200.f;
+        seen.at(x, y) = float((box ? 5 : 10) * k);
+      }
+    const View proj{Cam(), LookingDownZ(o)};
+    for (bool sky : {false, true}) {
+      Renderer r(sky ? Plane(2 * k, 10 * k, o + Eigen::Vector3d(200 * k, 0, 0), 2)
+                     : Plane(50 * k, 10 * k, o, 8, {0, 0, 0}));
+      const Image pd = r.RenderDepth(proj);
+      EffectsPlan plan = SeenPlan(true);
+      plan.skybox = sky;
+      plan.sky_distance = 40 * k;
+      Projector p{proj, &img, &pd, nullptr};
+      p.seen = &seen;
+      for (const Eigen::Vector3d& c :
+           {Eigen::Vector3d(0.3, 0.2, 2), Eigen::Vector3d(0.3, 0.2, -3)}) {
+        const Renderer::Frame a = r.Render({Cam(), LookingDownZ(o + k * c)}, {p}, plan);
+        size_t box = 0, wall = 0;
+        for (int y = 0; y < 48; ++y)
+          for (int x = 0; x < 64; ++x) {
+            const Eigen::Vector2d d((x + 0.5 - 32) / 50, (y + 0.5 - 24) / 50);
+            const Eigen::Vector2d b = (c.head<2>() + (5 - c.z()) * d).cwiseAbs();
+            const Eigen::Vector2d w = (c.head<2>() + (10 - c.z()) * d).cwiseAbs();
+            const std::string at = std::to_string(k) + " " + std::to_string(sky) + " " +
+                                   std::to_string(c.z()) + " " + std::to_string(x) + "," +
+                                   std::to_string(y);
+            if (b.maxCoeff() < 0.75) {  // 2.5 px inside the box in the projector: a sample
+              ++box;                    // every 2 px may step over a crossing nearer its edge
+              EXPECT_EQ(a.colour.at(x, y, 0), 250.f) << at;
+              EXPECT_EQ(a.colour.at(x, y, 2), 0.f) << at;
+            } else if (b.minCoeff() > 1.1 && w.x() < 6 && w.y() < 4.4 && w.maxCoeff() > 2.2) {
+              ++wall;
+              EXPECT_EQ(a.colour.at(x, y, 2), 200.f) << at;
+              EXPECT_EQ(a.colour.at(x, y, 0), 0.f) << at;
+            }
+          }
+        EXPECT_GT(box, 60u) << k << " " << c.z();
+        EXPECT_GT(wall, 300u) << k << " " << c.z();
+      }
+    }
+  }
+}
+
 TEST_F(RenderTest, SeenSurfacesOnTheGroundNeedConfidence) {
   // A flat ground 1.5 below the cameras (y down: the render camera's up is −y), nothing else.
   // The projector at the origin photographed red in a patch of it 3.7..7.1 ahead (rows 34..43,
