@@ -537,6 +537,21 @@ TEST_F(RenderTest, LevelOfDetailKeepsTheSurfaceWithoutCracks) {
   EXPECT_THROW(r.SetDetail(5, 0), Error);
 }
 
+// The projector's photo of SeenSurfacesDrawWhatTheMeshLost's scene at scale k: red (250, 0, 0)
+// where it saw the box (|u − 32|, |v − 24| < 10 px), blue (0, 0, 200) on the wall; its seen map
+// 5k and 10k there.
+void BoxPhoto(double k, Image& img, Image& seen) {
+  img = Image(64, 48, 3, 8);
+  seen = Image(64, 48, 1, 32);
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 64; ++x) {
+      const bool box = std::abs(x + 0.5 - 32) < 10 && std::abs(y + 0.5 - 24) < 10;
+      img.at(x, y, 0) = box ? 250.f : 0.f;
+      img.at(x, y, 2) = box ? 0.f : 200.f;
+      seen.at(x, y) = float((box ? 5 : 10) * k);
+    }
+}
+
 // Occlusion, and seen surfaces with `seen`.
 EffectsPlan SeenPlan(bool seen) {
   EffectsPlan plan;
@@ -561,14 +576,8 @@ TEST_F(RenderTest, SeenSurfacesDrawWhatTheMeshLost) {
   for (const auto& [k, o] : {std::pair{1.0, Eigen::Vector3d(0, 0, 0)},
                              std::pair{0.2, Eigen::Vector3d(451000.25, 5410000.75, 120.5)}}) {
     Renderer r(Plane(50 * k, 10 * k, o, 8, {0, 0, 0}));
-    Image img(64, 48, 3, 8), seen(64, 48, 1, 32);
-    for (int y = 0; y < 48; ++y)
-      for (int x = 0; x < 64; ++x) {
-        const bool box = std::abs(x + 0.5 - 32) < 10 && std::abs(y + 0.5 - 24) < 10;
-        img.at(x, y, 0) = box ? 250.f : 0.f;
-        img.at(x, y, 2) = box ? 0.f : 200.f;
-        seen.at(x, y) = float((box ? 5 : 10) * k);
-      }
+    Image img, seen;
+    BoxPhoto(k, img, seen);
     View proj{Cam(), LookingDownZ(o)};
     Image pd = r.RenderDepth(proj);
     View side{Cam(), LookingDownZ(o + Eigen::Vector3d(1 * k, 0, 0))};
@@ -639,14 +648,8 @@ TEST_F(RenderTest, SeenSurfacesAheadOfAndBehindTheProjector) {
   // sky distance 40, and the box's rays are red all the same. Scaled by 0.2 at UTM as well.
   for (const auto& [k, o] : {std::pair{1.0, Eigen::Vector3d(0, 0, 0)},
                              std::pair{0.2, Eigen::Vector3d(451000.25, 5410000.75, 120.5)}}) {
-    Image img(64, 48, 3, 8), seen(64, 48, 1, 32);
-    for (int y = 0; y < 48; ++y)
-      for (int x = 0; x < 64; ++x) {
-        const bool box = std::abs(x + 0.5 - 32) < 10 && std::abs(y + 0.5 - 24) < 10;
-        img.at(x, y, 0) = box ? 250.f : 0.f;
-        img.at(x, y, 2) = box ? 0.f : 200.f;
-        seen.at(x, y) = float((box ? 5 : 10) * k);
-      }
+    Image img, seen;
+    BoxPhoto(k, img, seen);
     const View proj{Cam(), LookingDownZ(o)};
     for (bool sky : {false, true}) {
       Renderer r(sky ? Plane(2 * k, 10 * k, o + Eigen::Vector3d(200 * k, 0, 0), 2)
