@@ -26,28 +26,44 @@ uniform vec2 u_render_exposure;     // gain, offset/255: the render camera's exp
 #endif
 
 #ifdef MVTM_SEEN
-// The camera-relative point of the surface at pixel q (gl_FragCoord's rows: 0 at the bottom).
-vec3 SurfacePoint(ivec2 q) {
+// The camera-relative point x of the surface at pixel q (gl_FragCoord's rows: 0 at the bottom);
+// false when q sees no surface.
+bool SurfacePoint(ivec2 q, out vec3 x) {
   float z = texelFetch(u_depth, q, 0).r;
+  if (isinf(z)) return false;
   vec2 pix = vec2(float(q.x) + 0.5, u_size.y - float(q.y) - 0.5);
-  return u_Rt * vec3((pix - u_K.zw) / u_K.xy * z, z);
+  x = u_Rt * vec3((pix - u_K.zw) / u_K.xy * z, z);
+  return true;
 }
 
-// True when the surface at pixel p (point c) faces the render camera's up within 37 degrees:
-// the ground. Its normal from the neighbours nearer to c on each axis (a depth edge does not
-// tilt it); false where that is undefined (a pixel with no surface beside it).
+// The step s from point c (pixel p) to its neighbour at p + e or p − e, whichever sees a surface
+// and is nearer to c (a depth edge does not tilt it); false when neither does (or both lie
+// outside the image).
+bool NeighbourStep(ivec2 p, ivec2 e, vec3 c, out vec3 s) {
+  vec3 a, b;
+  bool ha = all(lessThan(p + e, ivec2(u_size))) && SurfacePoint(p + e, a);
+  bool hb = all(greaterThanEqual(p - e, ivec2(0))) && SurfacePoint(p - e, b);
+  if (ha && (!hb || length(a - c) < length(c - b))) {
+    s = a - c;
+    return true;
+  }
+  s = c - b;
+  return hb;
+}
+
+// True when the surface at pixel p (point c), turned towards the camera, faces the render
+// camera's up within 37 degrees: the ground (not a ceiling above the camera). Its normal from
+// the neighbours (NeighbourStep); false where that is undefined.
 bool OnGround(ivec2 p, vec3 c) {
-  ivec2 lim = ivec2(u_size) - 1;
-  vec3 l = SurfacePoint(clamp(p - ivec2(1, 0), ivec2(0), lim));
-  vec3 r = SurfacePoint(clamp(p + ivec2(1, 0), ivec2(0), lim));
-  vec3 d = SurfacePoint(clamp(p - ivec2(0, 1), ivec2(0), lim));
-  vec3 u = SurfacePoint(clamp(p + ivec2(0, 1), ivec2(0), lim));
-  vec3 dx = length(r - c) < length(c - l) ? r - c : c - l;
-  vec3 dy = length(u - c) < length(c - d) ? u - c : c - d;
+  vec3 dx, dy;
+  if (!NeighbourStep(p, ivec2(1, 0), c, dx) || !NeighbourStep(p, ivec2(0, 1), c, dy))
+    return false;
   vec3 n = cross(dx, dy);
   float ln = length(n);
   if (!(ln > 0.0) || isinf(ln)) return false;
-  return abs(dot(n / ln, u_Rt * vec3(0.0, -1.0, 0.0))) > 0.8;
+  n /= ln;
+  if (dot(n, c) > 0.0) n = -n;  // towards the camera
+  return dot(n, u_Rt * vec3(0.0, -1.0, 0.0)) > 0.8;
 }
 #endif
 

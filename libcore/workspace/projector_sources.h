@@ -47,8 +47,9 @@ class ProjectorSources {
   const Image& ImageOf(size_t k);
   const Image& DepthOf(size_t k);
   const Image* MaskOf(size_t k);  // nullptr when the image has no mask file
-  // densify's map of what the photo saw (stereo/NAME.exr) at the image's size; nullptr when the
-  // workspace has none for the image.
+  // densify's map of what the photo saw (stereo/NAME.exr) at the image's size with its
+  // confidence as a second channel (ReadSeenDepthAtCamera); nullptr when the workspace has none
+  // for the image.
   const Image* SeenOf(size_t k);
   // The image's exposure from WS/exposure.tsv (gain 1, offset 0 when absent); true when it is
   // not the identity.

@@ -53,7 +53,8 @@ void DeclareSeenOptions(OptionTable& t, PtmRenderOptions& o) {
       .Range(0, 4096, true);
   t.Real("--seen-ground-conf", &o.seen.ground_confidence,
          "Seen surfaces: on the ground (mesh normal within 37 degrees of the camera's up) only "
-         "densify's depths of at least this confidence count (0: all, 1: none)")
+         "densify's depths of at least this confidence count (0: every depth; a map without a "
+         "confidence file counts as sure)")
       .Range(0, 1);
   t.Integer("--seen-projectors", &o.seen.projectors,
             "Seen surfaces: the first N projectors searched (at most --projectors)")

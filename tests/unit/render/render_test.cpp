@@ -691,63 +691,83 @@ TEST_F(RenderTest, SeenSurfacesAheadOfAndBehindTheProjector) {
 
 TEST_F(RenderTest, SeenSurfacesOnTheGroundNeedConfidence) {
   // A flat ground 1.5 below the cameras (y down: the render camera's up is −y), nothing else.
-  // The projector at the origin photographed red in a patch of it 3.7..7.1 ahead (rows 34..43,
-  // |u − 32| < 12) and blue elsewhere; its seen map holds the ground's depth, but 0.75 of it in
-  // the patch: a false surface in front of the road, as a repetitive marking matched a period
-  // off gives. Rendered from 1 m to the right: with the false depths sure (confidence 0.9) some
-  // ground pixels take the patch's red where they showed blue; unsure (0.3, below the default
-  // floor 0.6) the frame is the one without seen surfaces, pixel for pixel; with the floor at 0
-  // the unsure map acts as the sure one. Also scaled by 0.2 at UTM coordinates.
-  for (const auto& [k, o] : {std::pair{1.0, Eigen::Vector3d(0, 0, 0)},
-                             std::pair{0.2, Eigen::Vector3d(451000.25, 5410000.75, 120.5)}}) {
-    Renderer r(Grid(
-        8, 8,
-        [&](int i, int j) -> Eigen::Vector3d {
-          return o + k * Eigen::Vector3d(-20 + 5 * i, 1.5, 1 + 5 * j);
-        },
-        [](int, int) {
-          return std::array<uint8_t, 3>{0, 90, 0};
-        }));
-    View proj{Cam(), LookingDownZ(o)};
-    const Image pd = r.RenderDepth(proj);
-    Image img(64, 48, 3, 8);
-    auto patch = [](int x, int y) { return std::abs(x + 0.5 - 32) < 12 && y >= 34 && y < 44; };
-    for (int y = 0; y < 48; ++y)
-      for (int x = 0; x < 64; ++x) {
-        img.at(x, y, 0) = patch(x, y) ? 250.f : 0.f;
-        img.at(x, y, 2) = patch(x, y) ? 0.f : 200.f;
-      }
-    auto map = [&](float confidence) {
-      Image m(64, 48, 2, 32);
+  // The projector at the origin photographed red on a patch of it from 3.2 ahead to 7.1 (rows
+  // 34..47, down to the image's bottom row; |u − 32| < 12) and blue elsewhere; its seen map
+  // holds the ground's depth, but 0.75 of it on the patch: a false surface in front of the road,
+  // as a repetitive marking matched a period off gives. Rendered from 1 m to the right: with the
+  // false depths sure (confidence 0.9) ground pixels beside the patch take its red where they
+  // showed blue; unsure (0.3, below the default floor 0.6) the frame is the one without seen
+  // surfaces, pixel for pixel (the bottom row included); with the floor at 0 the unsure map acts as
+  // the sure one. The same plane 1.5 above the cameras is a ceiling, not the ground: there the
+  // unsure map acts as the sure one at the default floor. Also scaled by 0.2 at UTM coordinates,
+  // and that world turned by 0.3 rad about (1, 2, 3) with the cameras (their up turns with them).
+  const Eigen::Matrix3d turn =
+      Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  struct World {
+    double k;
+    Eigen::Vector3d o;
+    Eigen::Matrix3d q;  // world from the unturned world
+  };
+  const Eigen::Vector3d utm(451000.25, 5410000.75, 120.5);
+  for (const World& w : {World{1.0, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity()},
+                         World{0.2, utm, Eigen::Matrix3d::Identity()}, World{0.2, utm, turn}})
+    for (double below : {1.0, -1.0}) {
+      auto at = [&](const Eigen::Vector3d& x) -> Eigen::Vector3d { return w.o + w.q * (w.k * x); };
+      auto camera = [&](const Eigen::Vector3d& c) {
+        const Eigen::Matrix3d qt = w.q.transpose();
+        return View{Cam(), Rigid3d(Eigen::Quaterniond(qt), -(qt * at(c)))};
+      };
+      Renderer r(Grid(
+          8, 8,
+          [&](int i, int j) {
+            return at({-20.0 + 5 * i, 1.5 * below, 1.0 + 5 * j});
+          },
+          [](int, int) {
+            return std::array<uint8_t, 3>{0, 90, 0};
+          }));
+      const View proj = camera({0, 0, 0});
+      const Image pd = r.RenderDepth(proj);
+      Image img(64, 48, 3, 8);
+      auto patch = [below](int x, int y) {
+        return std::abs(x + 0.5 - 32) < 12 && (below > 0 ? y >= 34 : y < 14);
+      };
       for (int y = 0; y < 48; ++y)
         for (int x = 0; x < 64; ++x) {
-          m.at(x, y, 0) = pd.at(x, y) * (patch(x, y) ? 0.75f : 1.f);
-          m.at(x, y, 1) = confidence;
+          img.at(x, y, 0) = patch(x, y) ? 250.f : 0.f;
+          img.at(x, y, 2) = patch(x, y) ? 0.f : 200.f;
         }
-      return m;
-    };
-    const Image sure = map(0.9f), unsure = map(0.3f);
-    View side{Cam(), LookingDownZ(o + Eigen::Vector3d(1 * k, 0, 0))};
-    const EffectsPlan plan = SeenPlan(true), without = SeenPlan(false);
-    Projector p{proj, &img, &pd, nullptr};
-    const Renderer::Frame b = r.Render(side, {p}, without);
-    p.seen = &sure;
-    const Renderer::Frame a = r.Render(side, {p}, plan);
-    // Pixels changed; of those, the patch's full red (all but a few at its bilinear edge).
-    size_t taken = 0, red = 0;
-    for (size_t i = 0; i < a.colour.pixels(); ++i)
-      if (a.colour.data[3 * i] != b.colour.data[3 * i]) {
-        ++taken;
-        red += a.colour.data[3 * i] == 250.f;
-      }
-    EXPECT_GT(red, 20u) << k;
-    EXPECT_GE(red + 5, taken) << k;
-    p.seen = &unsure;
-    EXPECT_EQ(r.Render(side, {p}, plan).colour.data, b.colour.data) << k;
-    EffectsPlan any = plan;
-    any.seen_surfaces.ground_confidence = 0;
-    EXPECT_EQ(r.Render(side, {p}, any).colour.data, a.colour.data) << k;
-  }
+      auto map = [&](float confidence) {
+        Image m(64, 48, 2, 32);
+        for (int y = 0; y < 48; ++y)
+          for (int x = 0; x < 64; ++x) {
+            m.at(x, y, 0) = pd.at(x, y) * (patch(x, y) ? 0.75f : 1.f);
+            m.at(x, y, 1) = confidence;
+          }
+        return m;
+      };
+      const Image sure = map(0.9f), unsure = map(0.3f);
+      const View side = camera({1, 0, 0});
+      const EffectsPlan plan = SeenPlan(true), without = SeenPlan(false);
+      Projector p{proj, &img, &pd, nullptr};
+      const Renderer::Frame b = r.Render(side, {p}, without);
+      p.seen = &sure;
+      const Renderer::Frame a = r.Render(side, {p}, plan);
+      const std::string at_k = std::to_string(w.k) + " " + std::to_string(below);
+      // Pixels changed; of those, the full red (all but a few at the red's bilinear edge).
+      size_t taken = 0, red = 0;
+      for (size_t i = 0; i < a.colour.pixels(); ++i)
+        if (a.colour.data[3 * i] != b.colour.data[3 * i]) {
+          ++taken;
+          red += a.colour.data[3 * i] == 250.f;
+        }
+      EXPECT_GT(red, 20u) << at_k;
+      EXPECT_GE(red + 5, taken) << at_k;
+      p.seen = &unsure;
+      EXPECT_EQ(r.Render(side, {p}, plan).colour.data, (below > 0 ? b : a).colour.data) << at_k;
+      EffectsPlan any = plan;
+      any.seen_surfaces.ground_confidence = 0;
+      EXPECT_EQ(r.Render(side, {p}, any).colour.data, a.colour.data) << at_k;
+    }
 }
 
 TEST_F(RenderTest, BadInputsAreClearErrors) {
