@@ -97,7 +97,8 @@ void main() {
       o_source = uint(k);
     }
 #ifdef MVTM_SEEN
-    if (SeenSurface(rel / z, 1.0 / (z * (1.0 - u_seen_front)), OnGround(p, rel), k, c)) {
+    bool ground = u_seen_ground_conf > 0.0 && OnGround(p, rel);  // no floor: no need to know
+    if (SeenSurface(rel / z, 1.0 / (z * (1.0 - u_seen_front)), ground, k, c)) {
       o_colour = vec4(Expose(c), 1.0);
       o_source = uint(k);
     }

@@ -389,18 +389,20 @@ struct Renderer::Impl {
                     d.data.data());
   }
 
-  // Depth and confidence; a projector without a seen map saw nothing (+inf everywhere), a map
-  // without a confidence channel is sure (1).
+  // Depth and confidence (a map read by ReadSeenDepthAtCamera is uploaded as it is); a projector
+  // without a seen map saw nothing (+inf everywhere), a map without a confidence channel is
+  // sure (1).
   void UploadSeen(int layer, const Image* d) {
-    std::vector<float> buf(static_cast<size_t>(layer_w) * layer_h * 2, 1.f);
-    for (size_t p = 0; p < buf.size() / 2; ++p) {
-      buf[2 * p] = d ? d->data[p * d->channels] : INFINITY;
-      if (d && d->channels >= 2) buf[2 * p + 1] = d->data[p * d->channels + 1];
+    std::vector<float> buf;
+    if (!d || d->channels != 2) {
+      buf.assign(static_cast<size_t>(layer_w) * layer_h * 2, 1.f);
+      for (size_t p = 0; p < buf.size() / 2; ++p)
+        buf[2 * p] = d ? d->data[p * d->channels] : INFINITY;
     }
     glActiveTexture(GL_TEXTURE5);  // 3 and 4 hold the surface pass's targets while shading
     glBindTexture(GL_TEXTURE_2D_ARRAY, seens);
     glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, layer_w, layer_h, 1, GL_RG, GL_FLOAT,
-                    buf.data());
+                    buf.empty() ? d->data.data() : buf.data());
   }
 
   void UploadMask(int layer, const Image* m) {
