@@ -158,9 +158,9 @@ TEST(PoseIndex, FewerAdmissibleThanKAndEmpty) {
 
 // Approximate methods: bounded miss rates on a trajectory-like set; grid9 and flann with
 // everything in reach are exact. FLANN's trees are shuffled from std::random_device (not
-// reproducible), so its miss rates are judged by the median over nine independent builds: one
-// build's rate has a long tail (0.03 % to 9 % measured with 128 checks; the median of five
-// builds once reached 5.55 %).
+// reproducible), so its miss rates are judged where their spread is narrow, measured over 60
+// builds each: 8 checks miss 70-86 % of the slots (median 78 %), 128 checks 0.05-10 % (a long
+// tail: the median of nine builds once reached 6.6 %), 256 checks at most 0.03 %.
 TEST(PoseIndex, ApproximateMethodsAreCloseAndConvergeToExact) {
   std::mt19937 g(5);
   std::normal_distribution<double> n(0, 1);
@@ -200,15 +200,11 @@ TEST(PoseIndex, ApproximateMethodsAreCloseAndConvergeToExact) {
     EXPECT_GE(d.extra_cost, 0);
     return d;
   };
-  std::vector<double> few, more;
-  for (int build = 0; build < 9; ++build) {
-    few.push_back(flann_miss(8).MissRate());
-    more.push_back(flann_miss(128).MissRate());
+  // Few checks must really be approximate (the budget reaches FLANN), more must converge.
+  for (int build = 0; build < 5; ++build) {
+    EXPECT_GT(flann_miss(8).MissRate(), 0.3) << "build " << build;
+    EXPECT_LT(flann_miss(256).MissRate(), 0.01) << "build " << build;
   }
-  std::nth_element(few.begin(), few.begin() + 4, few.end());
-  std::nth_element(more.begin(), more.begin() + 4, more.end());
-  EXPECT_GT(few[4], more[4]);
-  EXPECT_LT(more[4], 0.05);
   // Every leaf in reach: exact whatever the trees.
   SelectionDiff all = flann_miss(100000);
   EXPECT_EQ(all.misses, 0u);
