@@ -53,13 +53,15 @@
 #              height, which a road without sparse points on the asphalt cannot give),
 #              DYNAMIC (0: no label-free masks when OUT/ws/labels is missing; default 1: dynmask),
 #              DYNMASK_FLAGS (extra dynmask options, e.g. "--threshold 0.08"),
+#              BORESIGHT (0: keep the poses' recorded attitude; default 1: boresight fits the
+#              camera's mount rotation to the photos' tracks, poses of record only),
 #              HOLDOUT_STRICT (1: also score a strict hold-out: a second workspace without the
 #              held-out photos builds the mesh, its colours and the projectors; they take part in
 #              nothing that is scored, as in novel-view benchmarks)
 #
 # Steps: [frames (VIDEO)] → orb2colmap (poses as priors, or the camera alone with POSES -) →
 # COLMAP feature_extractor / sequential_matcher / point_triangulator / bundle_adjuster (poses of
-# record) or mapper + georef (POSES -) / image_undistorter (CPU) → mesh (COLMAP dense MVS +
+# record; then boresight) or mapper + georef (POSES -) / image_undistorter (CPU) → mesh (COLMAP dense MVS +
 # poisson_mesher when COLMAP has CUDA, else densify + roadmesh --dense, or roadmesh alone) → segtrack (when OUT/ws/labels exists;
 # else dynmask, label-free, and the mesh again without the masked pixels) →
 # pickview --partners (when the names carry several passes, A_0000.png …) → bakedepth →
@@ -237,6 +239,21 @@ fi
 if [ ! -d "$ws/sparse" ]; then
   colmap_log colmap image_undistorter --image_path "$images" --input_path "$out/ba" \
     --output_path "$ws" --output_type COLMAP
+fi
+# Poses of record carry the attitude of the vehicle's navigation, not of the camera: one mount
+# rotation (boresight) fitted to the photos' tracks turns every camera about its recorded centre
+# (SfM poses need none: they are the photos' own). With HOLDOUT_STRICT the held-out photos take
+# no part in the fit. BORESIGHT=0 keeps the recorded attitude.
+if [ "$poses" != - ] && [ "${BORESIGHT:-1}" = 1 ] && [ ! -f "$out/boresight/boresight.json" ]; then
+  log "2b. boresight: the camera's mount rotation against the poses of record"
+  bs_opts=()
+  if [ "${HOLDOUT_STRICT:-0}" = 1 ]; then
+    ls "$ws/images" | awk -v h="$holdout" '(NR - 1) % h == 0' > "$out/boresight_excluded.txt"
+    bs_opts=(--exclude "$out/boresight_excluded.txt")
+  fi
+  "$bin/boresight" --binary "${bs_opts[@]}" "$ws/sparse" "$out/boresight.tmp"
+  cp "$out/boresight.tmp"/*.bin "$ws/sparse/"
+  rm -rf "$out/boresight"; mv "$out/boresight.tmp" "$out/boresight"
 fi
 [ -f "$out/ba/georef.json" ] && cp "$out/ba/georef.json" "$ws/georef.json"
 # A video's burned-in overlay: undistorted like the photos, one mask per image, so that fusion,
