@@ -25,6 +25,8 @@ tool and OUT/index.html, the page to read before choosing settings. Work folders
              --seen-ground-conf): SSIM
              against the ray-traced off-path truth, against ptmrender's own ms per frame
   densify    (examples/sweep_densify.py) depth within 2 % against densify's ms per image
+  boresight  --conditioning, --max-error, --min-angle, --min-track on the road's model turned
+             into a record with a known mount rotation: degrees from it, against whole-process ms
 
 Cheap runs are repeated (--repeat, default 3) and the fastest kept, to damp the noise of other
 load. --short (the ctest sweep_short) runs a few settings of every tool on a small road. Either
@@ -575,10 +577,88 @@ def sweep_simulate(c):
                    "(simulate's render time)", ylabel="mean SSIM against ptmrender's full quality")
 
 
+def record_like_model(sparse, dst, mount_deg, noise_px, seed=3):
+    """The road's true model as a navigation record would give it: the true centres, every
+    attitude off by one mount rotation (camera-axis rotation vector, degrees), each 2-D point
+    moved by N(0, noise_px) so that the tracks are not exact. Text model in dst."""
+    rng = np.random.default_rng(seed)
+    M = Rotation.from_rotvec(np.radians(mount_deg))
+    os.makedirs(dst, exist_ok=True)
+    shutil.copy(os.path.join(sparse, "cameras.txt"), os.path.join(dst, "cameras.txt"))
+    shutil.copy(os.path.join(sparse, "points3D.txt"), os.path.join(dst, "points3D.txt"))
+    lines = open(os.path.join(sparse, "images.txt")).read().split("\n")
+    out, i = [], 0
+    while i < len(lines):
+        if lines[i].startswith("#") or not lines[i].strip():
+            out.append(lines[i])
+            i += 1
+            continue
+        f = lines[i].split()
+        q = np.array(list(map(float, f[1:5])))
+        t = np.array(list(map(float, f[5:8])))
+        R = Rotation.from_quat([q[1], q[2], q[3], q[0]])
+        C = -R.inv().apply(t)
+        Rr = M.inv() * R
+        qq = Rr.as_quat()
+        out.append(" ".join([f[0]] + [f"{v:.17g}" for v in (qq[3], qq[0], qq[1], qq[2])]
+                            + [f"{v:.17g}" for v in -Rr.apply(C)] + f[8:]))
+        pts = lines[i + 1].split()
+        for k in range(0, len(pts) - 2, 3):
+            pts[k] = f"{float(pts[k]) + rng.normal(0, noise_px):.6f}"
+            pts[k + 1] = f"{float(pts[k + 1]) + rng.normal(0, noise_px):.6f}"
+        out.append(" ".join(pts))
+        i += 2
+    with open(os.path.join(dst, "images.txt"), "w") as f:
+        f.write("\n".join(out))
+    return dst
+
+
+def sweep_boresight(c):
+    """boresight's knobs on the road's true model turned into a record with a known mount
+    rotation (pitch 0.3, yaw -0.5, roll 0.2 degrees) and 0.5 px of noise on the 2-D points: the
+    angle between the fitted and the true mount rotation, against whole-process milliseconds."""
+    folder = os.path.join(c.work, "boresight")
+    shutil.rmtree(folder, ignore_errors=True)
+    mount = np.array([0.3, -0.5, 0.2])
+    rec = record_like_model(os.path.join(c.road, "sparse"), os.path.join(folder, "rec"), mount, 0.5)
+    defaults = {"--conditioning": 0.01, "--max-error": 4, "--min-angle": 1, "--min-track": 3}
+    knobs = [("conditioning", "--conditioning", (0, 0.01, 0.1) if c.short else (0, 0.001, 0.01, 0.1, 0.5)),
+             ("max-error", "--max-error", (1, 4) if c.short else (1, 2, 4, 16)),
+             ("min-angle", "--min-angle", (0, 1) if c.short else (0, 1, 3, 10)),
+             ("min-track", "--min-track", (3,) if c.short else (2, 3, 5))]
+    want = Rotation.from_rotvec(np.radians(mount))
+    rows = []
+    for group, opt, values in knobs:
+        for v in values:
+            o = os.path.join(folder, f"{group}-{v}")
+            (_, _, wall), _ = c.tools.best_wall(c.repeat, "boresight", "-q", "--force", opt, v, rec, o)
+            j = json.load(open(os.path.join(o, "boresight.json")))
+            err = np.degrees((Rotation.from_matrix(np.array(j["R"])) * want.inv()).magnitude())
+            rows.append({"group": group, "setting": f"{group}={v}", "default": v == defaults[opt],
+                         "error_deg": round(float(err), 5), "frozen": len(j["frozen_directions"]),
+                         "ms": round(wall * 1000, 1)})
+            sl.log("boresight", rows[-1]["setting"], f"error {err:.4f} deg  {wall * 1000:7.1f} ms")
+    base = [r for r in rows if r["default"]]
+    c.checks(all(r["error_deg"] < 0.05 for r in base),
+             f"boresight default finds the mount within 0.05 deg ({base[0]['error_deg']:.4f})")
+    sec = sl.Section(
+        "boresight", "boresight's knobs: error of the fitted mount rotation against milliseconds",
+        rows, ["group", "setting", "default", "error_deg", "frozen", "ms"],
+        "<b>Knobs:</b> <code>--conditioning</code>, <code>--max-error</code>, "
+        "<code>--min-angle</code>, <code>--min-track</code>. <b>Accuracy:</b> the angle (degrees) "
+        "between the fitted rotation and the mount rotation the record was made with (the road's "
+        "true model, every attitude off by pitch 0.3, yaw -0.5, roll 0.2 degrees, 0.5 px of noise "
+        "on the 2-D points); a frozen direction keeps its share of the mount as error. "
+        f"<b>Time:</b> whole process, fastest of {c.repeat} runs. <b>Read:</b> lower is better.")
+    return sl.emit(c.out, sec, "ms", "error_deg", xlabel="milliseconds (whole process)",
+                   ylabel="degrees from the true mount rotation")
+
+
 SWEEPS = {"pickview": sweep_pickview, "segtrack": sweep_segtrack, "inpaint3d": sweep_inpaint3d,
           "dynmask": sweep_dynmask,
           "bakedepth": sweep_bakedepth, "ptmrender": sweep_ptmrender,
-          "densify": sweep_densify.sweep, "simulate": sweep_simulate}
+          "densify": sweep_densify.sweep, "simulate": sweep_simulate,
+          "boresight": sweep_boresight}
 
 
 def main():
