@@ -25,7 +25,7 @@ tool and OUT/index.html, the page to read before choosing settings. Work folders
              --seen-ground-conf): SSIM
              against the ray-traced off-path truth, against ptmrender's own ms per frame
   densify    (examples/sweep_densify.py) depth within 2 % against densify's ms per image
-  boresight  --conditioning, --max-error, --min-angle, --min-track on the road's model turned
+  boresight  --conditioning, --max-error, --min-angle, --min-track, --min-gain on the road's model turned
              into a record with a known mount rotation: degrees from it, against whole-process ms
 
 Cheap runs are repeated (--repeat, default 3) and the fastest kept, to damp the noise of other
@@ -621,11 +621,13 @@ def sweep_boresight(c):
     shutil.rmtree(folder, ignore_errors=True)
     mount = np.array([0.3, -0.5, 0.2])
     rec = record_like_model(os.path.join(c.road, "sparse"), os.path.join(folder, "rec"), mount, 0.5)
-    defaults = {"--conditioning": 0.01, "--max-error": 4, "--min-angle": 1, "--min-track": 3}
+    defaults = {"--conditioning": 0.01, "--max-error": 4, "--min-angle": 1, "--min-track": 3,
+                "--min-gain": 0.05}
     knobs = [("conditioning", "--conditioning", (0, 0.01, 0.1) if c.short else (0, 0.001, 0.01, 0.1, 0.5)),
              ("max-error", "--max-error", (1, 4) if c.short else (1, 2, 4, 16)),
              ("min-angle", "--min-angle", (0, 1) if c.short else (0, 1, 3, 10)),
-             ("min-track", "--min-track", (3,) if c.short else (2, 3, 5))]
+             ("min-track", "--min-track", (3,) if c.short else (2, 3, 5)),
+             ("min-gain", "--min-gain", (0.05,) if c.short else (0, 0.05, 0.2, 0.5))]
     want = Rotation.from_rotvec(np.radians(mount))
     rows = []
     for group, opt, values in knobs:
@@ -633,7 +635,7 @@ def sweep_boresight(c):
             o = os.path.join(folder, f"{group}-{v}")
             (_, _, wall), _ = c.tools.best_wall(c.repeat, "boresight", "-q", "--force", opt, v, rec, o)
             j = json.load(open(os.path.join(o, "boresight.json")))
-            err = np.degrees((Rotation.from_matrix(np.array(j["R"])) * want.inv()).magnitude())
+            err = np.degrees((Rotation.from_matrix(np.array(j["R"])) * want.inv()).magnitude())  # R: as applied
             rows.append({"group": group, "setting": f"{group}={v}", "default": v == defaults[opt],
                          "error_deg": round(float(err), 5), "frozen": len(j["frozen_directions"]),
                          "ms": round(wall * 1000, 1)})
@@ -645,7 +647,7 @@ def sweep_boresight(c):
         "boresight", "boresight's knobs: error of the fitted mount rotation against milliseconds",
         rows, ["group", "setting", "default", "error_deg", "frozen", "ms"],
         "<b>Knobs:</b> <code>--conditioning</code>, <code>--max-error</code>, "
-        "<code>--min-angle</code>, <code>--min-track</code>. <b>Accuracy:</b> the angle (degrees) "
+        "<code>--min-angle</code>, <code>--min-track</code>, <code>--min-gain</code> (a fit under it is not applied: its error is then the whole mount). <b>Accuracy:</b> the angle (degrees) "
         "between the fitted rotation and the mount rotation the record was made with (the road's "
         "true model, every attitude off by pitch 0.3, yaw -0.5, roll 0.2 degrees, 0.5 px of noise "
         "on the 2-D points); a frozen direction keeps its share of the mount as error. "

@@ -52,11 +52,20 @@ bool Triangulate(const std::vector<Eigen::Vector3d>& d, const std::vector<Eigen:
   return x_rel.allFinite();
 }
 
+// The largest angle between any two of the rays (unit directions).
 double MaxRayAngle(const std::vector<Eigen::Vector3d>& d) {
   double best = 0;
-  for (size_t j = 1; j < d.size(); ++j)
-    best = std::max(best, std::atan2(d[0].cross(d[j]).norm(), d[0].dot(d[j])));
+  for (size_t i = 0; i < d.size(); ++i)
+    for (size_t j = i + 1; j < d.size(); ++j)
+      best = std::max(best, std::atan2(d[i].cross(d[j]).norm(), d[i].dot(d[j])));
   return best;
+}
+
+size_t DistinctImages(const std::vector<Obs>& obs, size_t s, size_t e) {
+  std::vector<size_t> ims;
+  for (size_t j = s; j < e; ++j) ims.push_back(obs[j].image);
+  std::sort(ims.begin(), ims.end());
+  return static_cast<size_t>(std::unique(ims.begin(), ims.end()) - ims.begin());
 }
 
 // Residuals (2 per observation, pixels) with every camera turned by Rb; points triangulated again.
@@ -106,8 +115,10 @@ double RobustCost(const Eigen::VectorXd& r, double h) {
   return c;
 }
 
-// Observations of the fitted images, grouped by point; outliers at the start dropped.
-Problem Gather(const Reconstruction& rec, const BoresightOptions& o, BoresightFit& fit) {
+// Observations of the fitted images, grouped by point; outliers (judged with every camera turned
+// by R0) dropped, then points without min_track images or without parallax.
+Problem Gather(const Reconstruction& rec, const BoresightOptions& o, const Eigen::Matrix3d& R0,
+               BoresightFit& fit) {
   Problem p;
   std::map<uint32_t, size_t> index;
   for (const auto& [id, im] : rec.images) {
@@ -119,6 +130,7 @@ Problem Gather(const Reconstruction& rec, const BoresightOptions& o, BoresightFi
     p.C.push_back(im.world_to_camera.Centre());
     p.cam.push_back(&cam);
   }
+  const size_t need = std::max<size_t>(2, o.min_track);
   std::vector<Obs> all;
   std::vector<size_t> all_start{0};
   for (const auto& [pid, pt] : rec.points3D) {
@@ -133,35 +145,37 @@ Problem Gather(const Reconstruction& rec, const BoresightOptions& o, BoresightFi
       ob.ray = p.cam[ob.image]->Unproject(ob.uv, 1.0);
       all.push_back(ob);
     }
-    if (all.size() - all_start.back() < std::max<size_t>(2, o.min_track))
+    if (DistinctImages(all, all_start.back(), all.size()) < need)
       all.resize(all_start.back());
     else
       all_start.push_back(all.size());
   }
-  // Outliers at the recorded attitude, then parallax; a point keeps min_track inliers or goes.
   Problem first = p;
   first.obs = all;
   first.start = all_start;
-  const std::vector<double> e0 = Norms(Residuals(first, Eigen::Matrix3d::Identity(), 1e9));
+  const std::vector<double> e0 = Norms(Residuals(first, R0, 1e9));
   p.start.push_back(0);
   std::vector<Eigen::Vector3d> d;
   std::vector<bool> used(p.R.size(), false);
+  fit.outliers = 0;
   for (size_t k = 0; k + 1 < all_start.size(); ++k) {
     const size_t before = p.obs.size();
+    size_t outliers = 0;
     d.clear();
     for (size_t j = all_start[k]; j < all_start[k + 1]; ++j) {
       if (!(e0[j] <= o.max_error_px)) {
-        ++fit.outliers;
+        ++outliers;
         continue;
       }
       p.obs.push_back(all[j]);
-      d.push_back((p.R[all[j].image].transpose() * all[j].ray).normalized());
+      d.push_back(((R0 * p.R[all[j].image]).transpose() * all[j].ray).normalized());
     }
-    if (p.obs.size() - before < std::max<size_t>(2, o.min_track) ||
+    if (DistinctImages(p.obs, before, p.obs.size()) < need ||
         MaxRayAngle(d) < o.min_angle_deg * kPi / 180) {
       p.obs.resize(before);
       continue;
     }
+    fit.outliers += outliers;
     for (size_t j = before; j < p.obs.size(); ++j) used[p.obs[j].image] = true;
     p.start.push_back(p.obs.size());
   }
@@ -213,77 +227,161 @@ int FreeDirections(const Eigen::Matrix3d& H, double conditioning, Eigen::Matrix3
   return free_dirs;
 }
 
-// Standard error (degrees) along the least determined of the free directions.
+// Standard error (degrees) of the rotation along its least determined free direction: the
+// Huber-weighted residual variance (each point's three coordinates and the free directions
+// counted as spent) times the largest eigenvalue of the inverse normal matrix on the free
+// directions.
 double SigmaDegrees(const std::vector<double>& n, double huber, const Eigen::Matrix3d& H,
-                    const Eigen::Matrix3d& basis, int free_dirs) {
+                    const Eigen::Matrix3d& basis, int free_dirs, size_t points) {
+  if (free_dirs == 0) return 0;
   double s2 = 0, wsum = 0;
   for (double e : n) {
     const double wt = e <= huber ? 1.0 : huber / e;
     s2 += wt * e * e;
     wsum += wt;
   }
-  s2 /= std::max(1.0, 2 * wsum - free_dirs);
-  double sigma = 0;
-  for (int k = 0; k < free_dirs; ++k) {
-    const double lam = basis.col(k).dot(H * basis.col(k));
-    if (lam > 0) sigma = std::max(sigma, std::sqrt(s2 / lam) * 180 / kPi);
+  s2 /= std::max(1.0, 2 * wsum - 3.0 * points - free_dirs);
+  const Eigen::MatrixXd B = basis.leftCols(free_dirs);
+  const Eigen::MatrixXd Hs = B.transpose() * H * B;
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Hs);
+  const double lam = es.eigenvalues()(0);
+  return lam > 0 ? std::sqrt(s2 / lam) * 180 / kPi : 0;
+}
+
+// Gauss-Newton (with step halving) from w along the free columns of basis; returns w.
+Eigen::Vector3d Solve(const Problem& p, Eigen::Vector3d w, const Eigen::Matrix3d& basis,
+                      int free_dirs, double behind, double huber, int& iterations) {
+  if (free_dirs == 0) return w;
+  Eigen::VectorXd r = Residuals(p, RotationOf(w), behind);
+  double cost = RobustCost(r, huber);
+  const Eigen::MatrixXd B = basis.leftCols(free_dirs);
+  for (int it = 0; it < 30; ++it) {
+    ++iterations;
+    Eigen::Matrix3d H;
+    Eigen::Vector3d g;
+    NormalEquations(p, w, r, behind, huber, H, g);
+    const Eigen::MatrixXd Hs = B.transpose() * H * B;
+    const Eigen::VectorXd step = -(B * Hs.ldlt().solve(B.transpose() * g));
+    double taken = 0;
+    for (double scale = 1; scale > 1e-3 && taken == 0; scale *= 0.5) {
+      const Eigen::Vector3d wn = w + scale * step;
+      const Eigen::VectorXd rn = Residuals(p, RotationOf(wn), behind);
+      const double cn = RobustCost(rn, huber);
+      if (cn < cost) {
+        w = wn;
+        r = rn;
+        cost = cn;
+        taken = scale;
+      }
+    }
+    if (taken == 0 || taken * step.norm() < 1e-10) break;
   }
-  return sigma;
+  return w;
+}
+
+void Require(const BoresightFit& fit, const BoresightOptions& o) {
+  if (fit.points < 10 || fit.images < 2)
+    throw Error("boresight: " + std::to_string(fit.points) + " points seen under " +
+                std::to_string(o.min_angle_deg) + " degrees of parallax or more by " +
+                std::to_string(fit.images) +
+                " fitted images: too few to fit a rotation (10 points and 2 images at least)");
 }
 
 }  // namespace
 
 BoresightFit FitBoresight(const Reconstruction& rec, const BoresightOptions& o) {
   BoresightFit fit;
-  const Problem p = Gather(rec, o, fit);
-  fit.points = p.Points();
-  fit.observations = p.obs.size();
-  if (fit.points < 10 || fit.images < 2)
-    throw Error("boresight: " + std::to_string(fit.points) + " points seen under " +
-                std::to_string(o.min_angle_deg) + " degrees of parallax or more by " +
-                std::to_string(fit.images) +
-                " fitted images: too few to fit a rotation (10 points and 2 images at least)");
   const double behind = 4 * o.max_error_px;  // a point turned behind a camera: a large residual
-  Eigen::Vector3d w = Eigen::Vector3d::Zero();
-  Eigen::VectorXd r = Residuals(p, Eigen::Matrix3d::Identity(), behind);
-  fit.mean_before = MeanOf(Norms(r));
-  fit.median_before = Median(Norms(r));
-  double cost = RobustCost(r, o.huber_px);
-  Eigen::Matrix3d basis = Eigen::Matrix3d::Identity();  // columns: free directions first
-  int free_dirs = 3;
+  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+  // First pass: outliers judged at the recorded attitude; the free directions from the normal
+  // matrix there.
+  const Problem p0 = Gather(rec, o, I, fit);
+  fit.points = p0.Points();
+  Require(fit, o);
   Eigen::Matrix3d H;
   Eigen::Vector3d g;
-  for (int it = 0; it < 30; ++it) {
-    fit.iterations = it + 1;
-    NormalEquations(p, w, r, behind, o.huber_px, H, g);
-    if (it == 0) free_dirs = FreeDirections(H, o.conditioning, basis, fit);
-    if (free_dirs == 0) break;
-    const Eigen::MatrixXd B = basis.leftCols(free_dirs);
-    const Eigen::MatrixXd Hs = B.transpose() * H * B;
-    const Eigen::VectorXd step = -(B * Hs.ldlt().solve(B.transpose() * g));
-    double scale = 1;
-    bool better = false;
-    for (int halve = 0; halve < 8 && !better; ++halve, scale *= 0.5) {
-      const Eigen::Vector3d wn = w + scale * step;
-      const Eigen::VectorXd rn = Residuals(p, RotationOf(wn), behind);
-      const double cn = RobustCost(rn, o.huber_px);
-      if (cn < cost) {
-        w = wn;
-        r = rn;
-        cost = cn;
-        better = true;
-      }
-    }
-    if (!better || scale * step.norm() < 1e-10) break;
-  }
+  const Eigen::VectorXd r0 = Residuals(p0, I, behind);
+  NormalEquations(p0, Eigen::Vector3d::Zero(), r0, behind, o.huber_px, H, g);
+  Eigen::Matrix3d basis = I;  // columns: free directions first
+  const int free_dirs = FreeDirections(H, o.conditioning, basis, fit);
+  const Eigen::Vector3d w1 =
+      Solve(p0, Eigen::Vector3d::Zero(), basis, free_dirs, behind, o.huber_px, fit.iterations);
+  // Second pass: outliers judged again at the fitted attitude (the mount error itself can put
+  // good observations over max_error_px at the recorded one), solved from there.
+  const Problem p = Gather(rec, o, RotationOf(w1), fit);
+  fit.points = p.Points();
+  fit.observations = p.obs.size();
+  Require(fit, o);
+  const Eigen::Vector3d w = Solve(p, w1, basis, free_dirs, behind, o.huber_px, fit.iterations);
   fit.rotation = w;
   fit.R = RotationOf(w);
+  const std::vector<double> n0 = Norms(Residuals(p, I, behind));
+  fit.mean_before = MeanOf(n0);
+  fit.median_before = Median(n0);
+  const Eigen::VectorXd r = Residuals(p, fit.R, behind);
   const std::vector<double> n = Norms(r);
   fit.mean_after = MeanOf(n);
   fit.median_after = Median(n);
-  fit.sigma_deg = SigmaDegrees(n, o.huber_px, H, basis, free_dirs);
+  NormalEquations(p, w, r, behind, o.huber_px, H, g);
+  fit.sigma_deg = SigmaDegrees(n, o.huber_px, H, basis, free_dirs, fit.points);
+  fit.applied = fit.median_before - fit.median_after >= o.min_gain * fit.median_before &&
+                fit.rotation.norm() > 0;
   return fit;
 }
+
+namespace {
+
+struct Seen {
+  const Camera* cam;
+  Eigen::Matrix3d R;      // world-to-camera rotation (turned)
+  Eigen::Vector3d c_rel;  // centre relative to the point's origin
+  Eigen::Vector2d uv;
+};
+
+// Huber (1 px) reprojection cost of a point over its observations; points behind count 1e6.
+double PointCost(const std::vector<Seen>& seen, const Eigen::Vector3d& x_rel) {
+  double c = 0;
+  for (const Seen& s : seen) {
+    const Eigen::Vector3d xc = s.R * (x_rel - s.c_rel);
+    if (!(xc.z() > 0)) return 1e6 * seen.size();
+    const double e = (s.cam->Project(xc) - s.uv).norm();
+    c += e <= 1 ? e * e : 2 * e - 1;
+  }
+  return c;
+}
+
+// Gauss-Newton on the point's Huber-weighted reprojection error; a step is kept only when it
+// lowers the cost.
+void RefinePoint(const std::vector<Seen>& seen, Eigen::Vector3d& x_rel) {
+  double cost = PointCost(seen, x_rel);
+  for (int it = 0; it < 8; ++it) {
+    Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d g = Eigen::Vector3d::Zero();
+    for (const Seen& s : seen) {
+      const Eigen::Vector3d xc = s.R * (x_rel - s.c_rel);
+      if (!(xc.z() > 0)) return;
+      const Eigen::Vector2d res = s.cam->Project(xc) - s.uv;
+      const double e = res.norm(), wt = e <= 1 ? 1.0 : 1.0 / e;
+      Eigen::Matrix<double, 2, 3> dp;
+      dp << s.cam->fx() / xc.z(), 0, -s.cam->fx() * xc.x() / (xc.z() * xc.z()), 0,
+          s.cam->fy() / xc.z(), -s.cam->fy() * xc.y() / (xc.z() * xc.z());
+      const Eigen::Matrix<double, 2, 3> Jx = dp * s.R;
+      H += wt * Jx.transpose() * Jx;
+      g += wt * Jx.transpose() * res;
+    }
+    Eigen::FullPivLU<Eigen::Matrix3d> lu(H);
+    if (!lu.isInvertible()) return;
+    const Eigen::Vector3d step = -lu.solve(g);
+    if (!step.allFinite()) return;
+    const double c = PointCost(seen, x_rel + step);
+    if (!(c < cost)) return;
+    x_rel += step;
+    cost = c;
+    if (step.norm() < 1e-12 * (1 + x_rel.norm())) return;
+  }
+}
+
+}  // namespace
 
 void ApplyBoresight(Reconstruction& rec, const Eigen::Matrix3d& R, double min_angle_deg) {
   std::map<uint32_t, Eigen::Matrix3d> before;
@@ -294,63 +392,45 @@ void ApplyBoresight(Reconstruction& rec, const Eigen::Matrix3d& R, double min_an
     const Eigen::Matrix3d Rn = R * Ri;
     im.world_to_camera = Rigid3d(NormalizedQuaternion(Eigen::Quaterniond(Rn)), -Rn * C);
   }
-  std::vector<Eigen::Vector3d> d, c_rel;
+  std::vector<Eigen::Vector3d> d;
+  std::vector<Seen> seen;
   for (auto& [pid, pt] : rec.points3D) {
-    if (pt.track.empty()) continue;
-    const auto first = rec.images.find(pt.track[0].image_id);
-    if (first == rec.images.end()) continue;
-    const Eigen::Vector3d origin = first->second.world_to_camera.Centre();
-    // Fixed to its first camera: the same ray and depth there.
+    // Its origin: the first camera of its track that the model has.
+    const ImageRecord* first = nullptr;
+    for (const TrackElement& t : pt.track) {
+      const auto it = rec.images.find(t.image_id);
+      if (it != rec.images.end()) {
+        first = &it->second;
+        break;
+      }
+    }
+    if (!first) continue;
+    const Eigen::Vector3d origin = first->world_to_camera.Centre();
+    // Fixed to that camera: the same ray and depth there.
     Eigen::Vector3d x_rel =
-        first->second.world_to_camera.R().transpose() * (before[first->first] * (pt.xyz - origin));
-    // Refined over its track where its rays meet at an angle.
+        first->world_to_camera.R().transpose() * (before[first->id] * (pt.xyz - origin));
     d.clear();
-    c_rel.clear();
-    std::vector<std::pair<const ImageRecord*, Eigen::Vector2d>> seen;
+    seen.clear();
     for (const TrackElement& t : pt.track) {
       const auto it = rec.images.find(t.image_id);
       if (it == rec.images.end() || t.point2D_idx >= it->second.points2D.size()) continue;
       const ImageRecord& im = it->second;
       const Camera& cam = rec.cameras.at(im.camera_id);
-      const Eigen::Vector2d uv = im.points2D[t.point2D_idx].xy;
       if (!cam.IsUndistorted()) continue;
-      d.push_back((im.world_to_camera.R().transpose() * cam.Unproject(uv, 1.0)).normalized());
-      c_rel.push_back(im.world_to_camera.Centre() - origin);
-      seen.emplace_back(&im, uv);
+      const Eigen::Vector2d uv = im.points2D[t.point2D_idx].xy;
+      const Eigen::Matrix3d Rj = im.world_to_camera.R();
+      d.push_back((Rj.transpose() * cam.Unproject(uv, 1.0)).normalized());
+      seen.push_back({&cam, Rj, im.world_to_camera.Centre() - origin, uv});
     }
-    if (seen.size() >= 2 && MaxRayAngle(d) >= min_angle_deg * kPi / 180) {
-      for (int it = 0; it < 5; ++it) {
-        Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
-        Eigen::Vector3d g = Eigen::Vector3d::Zero();
-        for (size_t j = 0; j < seen.size(); ++j) {
-          const Camera& cam = rec.cameras.at(seen[j].first->camera_id);
-          const Eigen::Matrix3d Rj = seen[j].first->world_to_camera.R();
-          const Eigen::Vector3d xc = Rj * (x_rel - c_rel[j]);
-          if (!(xc.z() > 0)) continue;
-          const Eigen::Vector2d res = cam.Project(xc) - seen[j].second;
-          Eigen::Matrix<double, 2, 3> dp;
-          dp << cam.fx() / xc.z(), 0, -cam.fx() * xc.x() / (xc.z() * xc.z()), 0, cam.fy() / xc.z(),
-              -cam.fy() * xc.y() / (xc.z() * xc.z());
-          const Eigen::Matrix<double, 2, 3> Jx = dp * Rj;
-          H += Jx.transpose() * Jx;
-          g += Jx.transpose() * res;
-        }
-        Eigen::FullPivLU<Eigen::Matrix3d> lu(H);
-        if (!lu.isInvertible()) break;
-        const Eigen::Vector3d step = -lu.solve(g);
-        if (!step.allFinite()) break;
-        x_rel += step;
-        if (step.norm() < 1e-12 * (1 + x_rel.norm())) break;
-      }
-    }
+    // Refined over its track where its rays meet at an angle.
+    if (seen.size() >= 2 && MaxRayAngle(d) >= min_angle_deg * kPi / 180) RefinePoint(seen, x_rel);
     pt.xyz = origin + x_rel;
     double sum = 0;
     size_t cnt = 0;
-    for (size_t j = 0; j < seen.size(); ++j) {
-      const Camera& cam = rec.cameras.at(seen[j].first->camera_id);
-      const Eigen::Vector3d xc = seen[j].first->world_to_camera.R() * (x_rel - c_rel[j]);
+    for (const Seen& s : seen) {
+      const Eigen::Vector3d xc = s.R * (x_rel - s.c_rel);
       if (!(xc.z() > 0)) continue;
-      sum += (cam.Project(xc) - seen[j].second).norm();
+      sum += (s.cam->Project(xc) - s.uv).norm();
       ++cnt;
     }
     if (cnt > 0) pt.error = sum / cnt;

@@ -40,6 +40,10 @@ OptionTable DeclareOptions(BoresightToolOptions& o) {
          "A direction of rotation whose curvature is under this fraction of the best-determined "
          "one's stays as recorded (the roll about the optical axis on a straight road)")
       .Range(0, 1);
+  t.Real("--min-gain", &o.min_gain,
+         "The model is turned only when the fit removes at least this share of the median "
+         "reprojection error; else it is written as recorded (0: always turned)")
+      .Range(0, 1);
   t.Flag("--binary", &o.binary, "Write cameras.bin, images.bin, points3D.bin");
   t.Flag("--force", &o.force, "Rewrite the model even when it is up to date").Cosmetic();
   DeclareQuietOption(t, o.quiet);
@@ -82,8 +86,11 @@ nlohmann::json Record(const BoresightFit& f, size_t excluded) {
                        {"yaw", f.rotation.y() * deg},
                        {"roll", f.rotation.z() * deg}};
   j["angle_deg"] = f.rotation.norm() * deg;
+  j["applied"] = f.applied;
   j["sigma_deg"] = f.sigma_deg;
-  for (int r = 0; r < 3; ++r) j["R"].push_back({f.R(r, 0), f.R(r, 1), f.R(r, 2)});
+  // The rotation the model was turned by: the fitted one, or the identity when not applied.
+  const Eigen::Matrix3d R = f.applied ? f.R : Eigen::Matrix3d::Identity();
+  for (int r = 0; r < 3; ++r) j["R"].push_back({R(r, 0), R(r, 1), R(r, 2)});
   j["frozen_directions"] = nlohmann::json::array();
   for (const auto& d : f.frozen) j["frozen_directions"].push_back({d.x(), d.y(), d.z()});
   j["curvature"] = {f.curvature(0), f.curvature(1), f.curvature(2)};
@@ -130,9 +137,10 @@ BoresightReport RunBoresight(const BoresightToolOptions& o) {
   bo.min_angle_deg = o.min_angle;
   bo.max_error_px = o.max_error;
   bo.conditioning = o.conditioning;
+  bo.min_gain = o.min_gain;
   rep.excluded = bo.exclude.size();
   rep.fit = FitBoresight(rec, bo);
-  ApplyBoresight(rec, rep.fit.R, o.min_angle);
+  if (rep.fit.applied) ApplyBoresight(rec, rep.fit.R, o.min_angle);
   CreateFolder(o.outdir);
   if (o.binary)
     WriteColmapBinary(rec, o.outdir);

@@ -19,6 +19,7 @@ struct BoresightToolOptions {
   double min_angle = 1;  // degrees
   double max_error = 4;  // pixels
   double conditioning = 0.01;
+  double min_gain = 0.05;
   bool binary = false;
   bool force = false;
   bool quiet = false;

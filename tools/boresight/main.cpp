@@ -24,10 +24,12 @@ void PrintSummary(const mvtm::BoresightToolOptions& o, const mvtm::BoresightRepo
                "boresight: pitch %+.4f yaw %+.4f roll %+.4f deg (+- %.2g; %zu of 3 directions "
                "left as recorded) from %zu points, %zu observations in %zu images (%zu "
                "excluded, %zu outliers); reprojection error median %.3f -> %.3f px, mean %.3f "
-               "-> %.3f px%s\n",
+               "-> %.3f px; %s%s\n",
                f.rotation.x() * deg, f.rotation.y() * deg, f.rotation.z() * deg, f.sigma_deg,
                f.frozen.size(), f.points, f.observations, f.images, r.excluded, f.outliers,
                f.median_before, f.median_after, f.mean_before, f.mean_after,
+               f.applied ? "the model turned by it"
+                         : "under --min-gain of the error: the model written as recorded",
                r.why.empty() ? "" : (" [" + r.why + "]").c_str());
 }
 
