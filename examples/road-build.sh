@@ -239,21 +239,33 @@ fi
 if [ ! -d "$ws/sparse" ]; then
   colmap_log colmap image_undistorter --image_path "$images" --input_path "$out/ba" \
     --output_path "$ws" --output_type COLMAP
+  rm -rf "$out/sparse_record"
 fi
 # Poses of record carry the attitude of the vehicle's navigation, not of the camera: one mount
 # rotation (boresight) fitted to the photos' tracks turns every camera about its recorded centre
-# (SfM poses need none: they are the photos' own). With HOLDOUT_STRICT the held-out photos take
-# no part in the fit. BORESIGHT=0 keeps the recorded attitude.
-if [ "$poses" != - ] && [ "${BORESIGHT:-1}" = 1 ] && [ ! -f "$out/boresight/boresight.json" ]; then
-  log "2b. boresight: the camera's mount rotation against the poses of record"
-  bs_opts=()
-  if [ "${HOLDOUT_STRICT:-0}" = 1 ]; then
-    ls "$ws/images" | awk -v h="$holdout" '(NR - 1) % h == 0' > "$out/boresight_excluded.txt"
-    bs_opts=(--exclude "$out/boresight_excluded.txt")
+# (SfM poses need none: they are the photos' own). The undistorted model as recorded is kept in
+# OUT/sparse_record; boresight fits it on every run (its record makes a rerun with the same inputs
+# and settings cheap) and the workspace gets its output, or the record again with BORESIGHT=0.
+# With HOLDOUT_STRICT the held-out photos take no part in the fit.
+if [ "$poses" != - ]; then
+  [ -d "$out/sparse_record" ] || cp -r "$ws/sparse" "$out/sparse_record"
+  model=$out/sparse_record
+  if [ "${BORESIGHT:-1}" = 1 ]; then
+    log "2b. boresight: the camera's mount rotation against the poses of record"
+    bs_opts=()
+    if [ "${HOLDOUT_STRICT:-0}" = 1 ]; then
+      ls "$ws/images" | awk -v h="$holdout" '(NR - 1) % h == 0' > "$out/boresight_excluded.tmp"
+      cmp -s "$out/boresight_excluded.tmp" "$out/boresight_excluded.txt" ||
+        mv "$out/boresight_excluded.tmp" "$out/boresight_excluded.txt"
+      rm -f "$out/boresight_excluded.tmp"
+      bs_opts=(--exclude "$out/boresight_excluded.txt")
+    fi
+    "$bin/boresight" --binary "${bs_opts[@]}" "$model" "$out/boresight"
+    model=$out/boresight
   fi
-  "$bin/boresight" --binary "${bs_opts[@]}" "$ws/sparse" "$out/boresight.tmp"
-  cp "$out/boresight.tmp"/*.bin "$ws/sparse/"
-  rm -rf "$out/boresight"; mv "$out/boresight.tmp" "$out/boresight"
+  for f in cameras.bin images.bin points3D.bin; do
+    cmp -s "$model/$f" "$ws/sparse/$f" || cp "$model/$f" "$ws/sparse/$f"
+  done
 fi
 [ -f "$out/ba/georef.json" ] && cp "$out/ba/georef.json" "$ws/georef.json"
 # A video's burned-in overlay: undistorted like the photos, one mask per image, so that fusion,
