@@ -2,11 +2,11 @@
 
 #include <Eigen/Geometry>
 #include <filesystem>
-#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "base/atomic_file.h"
 #include "base/error.h"
+#include "base/text.h"
 #include "cli/work.h"
 #include "io/colmap_model.h"
 #include "run/ledger.h"
@@ -61,16 +61,11 @@ namespace {
 
 // Image names, one per line (blank lines and # comments skipped); each must name an image.
 std::set<std::string> ReadExcluded(const std::string& file, const Reconstruction& rec) {
-  std::ifstream in(file);
-  if (!in) throw Error(file + ": cannot read");
+  LineReader r(file);
   std::set<std::string> names;
   std::string line;
-  for (long n = 1; std::getline(in, line); ++n) {
-    while (!line.empty() && (line.back() == '\r' || line.back() == ' ' || line.back() == '\t'))
-      line.pop_back();
-    if (line.empty() || line[0] == '#') continue;
-    if (!rec.FindImage(line))
-      throw Error(file + ":" + std::to_string(n) + ": image '" + line + "' is not in the model");
+  while (r.Next(line)) {
+    if (!rec.FindImage(line)) r.Fail("image '" + line + "' is not in the model");
     names.insert(line);
   }
   return names;
