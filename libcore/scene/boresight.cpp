@@ -109,9 +109,14 @@ double MeanOf(const std::vector<double>& v) {
   return v.empty() ? 0 : s / v.size();
 }
 
+// Huber's loss of a residual norm e with scale h (e^2 inside, linear outside), and the weight
+// that makes weighted least squares minimise it.
+double HuberCost(double e, double h) { return e <= h ? e * e : 2 * h * e - h * h; }
+double HuberWeight(double e, double h) { return e <= h ? 1.0 : h / e; }
+
 double RobustCost(const Eigen::VectorXd& r, double h) {
   double c = 0;
-  for (double e : Norms(r)) c += e <= h ? e * e : 2 * h * e - h * h;
+  for (double e : Norms(r)) c += HuberCost(e, h);
   return c;
 }
 
@@ -183,10 +188,6 @@ Problem Gather(const Reconstruction& rec, const BoresightOptions& o, const Eigen
   return p;
 }
 
-}  // namespace
-
-namespace {
-
 // Gauss-Newton normal equations at w (Huber weights, Jacobian by central differences).
 void NormalEquations(const Problem& p, const Eigen::Vector3d& w, const Eigen::VectorXd& r,
                      double behind, double huber, Eigen::Matrix3d& H, Eigen::Vector3d& g) {
@@ -201,8 +202,7 @@ void NormalEquations(const Problem& p, const Eigen::Vector3d& w, const Eigen::Ve
   }
   Eigen::VectorXd wt(r.size());
   const std::vector<double> n = Norms(r);
-  for (size_t j = 0; j < n.size(); ++j)
-    wt.segment<2>(2 * j).setConstant(n[j] <= huber ? 1.0 : huber / n[j]);
+  for (size_t j = 0; j < n.size(); ++j) wt.segment<2>(2 * j).setConstant(HuberWeight(n[j], huber));
   H = J.transpose() * wt.asDiagonal() * J;
   g = J.transpose() * wt.asDiagonal() * r;
 }
@@ -236,7 +236,7 @@ double SigmaDegrees(const std::vector<double>& n, double huber, const Eigen::Mat
   if (free_dirs == 0) return 0;
   double s2 = 0, wsum = 0;
   for (double e : n) {
-    const double wt = e <= huber ? 1.0 : huber / e;
+    const double wt = HuberWeight(e, huber);
     s2 += wt * e * e;
     wsum += wt;
   }
@@ -248,11 +248,12 @@ double SigmaDegrees(const std::vector<double>& n, double huber, const Eigen::Mat
   return lam > 0 ? std::sqrt(s2 / lam) * 180 / kPi : 0;
 }
 
-// Gauss-Newton (with step halving) from w along the free columns of basis; returns w.
-Eigen::Vector3d Solve(const Problem& p, Eigen::Vector3d w, const Eigen::Matrix3d& basis,
-                      int free_dirs, double behind, double huber, int& iterations) {
+// Gauss-Newton (with step halving) from w along the free columns of basis; r holds the
+// residuals at w on entry and at the returned rotation on exit.
+Eigen::Vector3d Solve(const Problem& p, Eigen::Vector3d w, Eigen::VectorXd& r,
+                      const Eigen::Matrix3d& basis, int free_dirs, double behind, double huber,
+                      int& iterations) {
   if (free_dirs == 0) return w;
-  Eigen::VectorXd r = Residuals(p, RotationOf(w), behind);
   double cost = RobustCost(r, huber);
   const Eigen::MatrixXd B = basis.leftCols(free_dirs);
   for (int it = 0; it < 30; ++it) {
@@ -300,25 +301,25 @@ BoresightFit FitBoresight(const Reconstruction& rec, const BoresightOptions& o) 
   Require(fit, o);
   Eigen::Matrix3d H;
   Eigen::Vector3d g;
-  const Eigen::VectorXd r0 = Residuals(p0, I, behind);
-  NormalEquations(p0, Eigen::Vector3d::Zero(), r0, behind, o.huber_px, H, g);
+  Eigen::VectorXd r = Residuals(p0, I, behind);
+  NormalEquations(p0, Eigen::Vector3d::Zero(), r, behind, o.huber_px, H, g);
   Eigen::Matrix3d basis = I;  // columns: free directions first
   const int free_dirs = FreeDirections(H, o.conditioning, basis, fit);
   const Eigen::Vector3d w1 =
-      Solve(p0, Eigen::Vector3d::Zero(), basis, free_dirs, behind, o.huber_px, fit.iterations);
+      Solve(p0, Eigen::Vector3d::Zero(), r, basis, free_dirs, behind, o.huber_px, fit.iterations);
   // Second pass: outliers judged again at the fitted attitude (the mount error itself can put
   // good observations over max_error_px at the recorded one), solved from there.
   const Problem p = Gather(rec, o, RotationOf(w1), fit);
   fit.points = p.Points();
   fit.observations = p.obs.size();
   Require(fit, o);
-  const Eigen::Vector3d w = Solve(p, w1, basis, free_dirs, behind, o.huber_px, fit.iterations);
+  r = Residuals(p, RotationOf(w1), behind);
+  const Eigen::Vector3d w = Solve(p, w1, r, basis, free_dirs, behind, o.huber_px, fit.iterations);
   fit.rotation = w;
   fit.R = RotationOf(w);
   const std::vector<double> n0 = Norms(Residuals(p, I, behind));
   fit.mean_before = MeanOf(n0);
   fit.median_before = Median(n0);
-  const Eigen::VectorXd r = Residuals(p, fit.R, behind);
   const std::vector<double> n = Norms(r);
   fit.mean_after = MeanOf(n);
   fit.median_after = Median(n);
@@ -345,7 +346,7 @@ double PointCost(const std::vector<Seen>& seen, const Eigen::Vector3d& x_rel) {
     const Eigen::Vector3d xc = s.R * (x_rel - s.c_rel);
     if (!(xc.z() > 0)) return 1e6 * seen.size();
     const double e = (s.cam->Project(xc) - s.uv).norm();
-    c += e <= 1 ? e * e : 2 * e - 1;
+    c += HuberCost(e, 1);
   }
   return c;
 }
@@ -361,7 +362,7 @@ void RefinePoint(const std::vector<Seen>& seen, Eigen::Vector3d& x_rel) {
       const Eigen::Vector3d xc = s.R * (x_rel - s.c_rel);
       if (!(xc.z() > 0)) return;
       const Eigen::Vector2d res = s.cam->Project(xc) - s.uv;
-      const double e = res.norm(), wt = e <= 1 ? 1.0 : 1.0 / e;
+      const double wt = HuberWeight(res.norm(), 1);
       Eigen::Matrix<double, 2, 3> dp;
       dp << s.cam->fx() / xc.z(), 0, -s.cam->fx() * xc.x() / (xc.z() * xc.z()), 0,
           s.cam->fy() / xc.z(), -s.cam->fy() * xc.y() / (xc.z() * xc.z());

@@ -1,5 +1,4 @@
 // boresight — thin main: the declared option table, then RunBoresight().
-#include <cmath>
 #include <cstdio>
 
 #include "boresight.h"
