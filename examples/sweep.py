@@ -13,7 +13,9 @@ tool and OUT/index.html, the page to read before choosing settings. Work folders
   segtrack   --smooth, --max-gap, --min-life on damaged labels: mask IoU against truth/masks,
              against whole-process milliseconds per frame
   dynmask    --threshold, --flow-threshold, --no-flow, --neighbours, --partners, --min-baseline,
-             --passes, --segments, --probability, --grounded (no labels): mask IoU against truth/masks and
+             --passes, --segments, --probability, --grounded, --min-height, --min-ratio, --max-gap
+             (no labels; the fixture's true mesh, no densify maps, so --seen-tolerance has nothing
+             to compare: its rows are the road build's, issue 21's note): mask IoU against truth/masks and
              the share of drive B masked, against whole-process milliseconds per image
   inpaint3d  --method 3d|telea|ns|patch2d, --partners, --dilate: SSIM inside the vehicle masks
              against truth/background, against whole-process milliseconds per inpainted image
@@ -490,12 +492,16 @@ def sweep_dynmask(c):
                  ("passes", "--passes", (1, 2)),
                  ("segments", "--segments", (0, 100, 300, 1000)),
                  ("probability", "--probability", (0.3, 0.4, 0.5, 0.6)),
-                 ("grounded", "--grounded", (0, 0.25, 0.5))]
+                 ("grounded", "--grounded", (0, 0.25, 0.5)),
+                 ("min-height", "--min-height", (0, 0.3, 0.5, 0.7)),
+                 ("min-ratio", "--min-ratio", (0.3, 0.4, 0.5)),
+                 ("max-gap", "--max-gap", (1, 3, 10))]
     defaults = {"--threshold": 0.05, "--flow-threshold": 2.5, "--no-flow": False,
                 "--flow-relative": 0,
                 "--neighbours": 4, "--partners": 2, "--min-baseline": 0.25, "--passes": 2,
                 "--segments": 300,
-                "--probability": 0.4, "--grounded": 0.25}
+                "--probability": 0.4, "--grounded": 0.25, "--min-height": 0.5,
+                "--min-ratio": 0.4, "--max-gap": 3}
     rows = []
     for group, opt, values in knobs:
         for v in values:
@@ -521,7 +527,9 @@ def sweep_dynmask(c):
         f"<code>--neighbours</code>, <code>--partners</code> (photos of the other drive), "
         f"<code>--min-baseline</code>, <code>--passes</code>, "
         f"<code>--segments</code> (Felzenszwalb's k; 0 = no regions), "
-        f"<code>--probability</code>, <code>--grounded</code>. Each varied alone on the "
+        f"<code>--probability</code>, <code>--grounded</code>, <code>--min-height</code> "
+        f"(blobs must stand that share of the camera's height), <code>--min-ratio</code>, "
+        f"<code>--max-gap</code> (tracking). Each varied alone on the "
         f"fixture's photos and true mesh ({len(a_names)} frames per drive, 640x192). "
         f"<b>Accuracy:</b> IoU of drive A's masks against truth/masks, pooled (the column "
         f"pass_b_masked: the share of drive B, which has no vehicle, masked: lower is better). "

@@ -358,21 +358,91 @@ double HeightOf(const DynamicView& t, const Eigen::Vector3d& up_cam, int x, int 
   return p.dot(up_cam);
 }
 
-}  // namespace
-
-int KeepGrounded(const DynamicView& t, const Eigen::Vector3d& up, double at, double tolerance,
-                 cv::Mat& probability) {
-  const Eigen::Vector3d up_cam = t.world_to_camera.R() * up;  // world direction in the camera
+// The ground's height under the camera along `up_cam`, relative to its centre (negative): the
+// median height of the static points of the image's lower middle (its lowest fifth, middle
+// half: the road ahead); NaN without 16 such points or when it is not below the camera.
+double GroundBelow(const DynamicView& t, const Eigen::Vector3d& up_cam) {
   std::vector<double> road;
   for (int y = t.depth.rows * 4 / 5; y < t.depth.rows; ++y)
     for (int x = t.depth.cols / 4; x < t.depth.cols * 3 / 4; ++x) {
       const double h = HeightOf(t, up_cam, x, y);
       if (std::isfinite(h)) road.push_back(h);
     }
-  if (road.size() < 16) return 0;
+  if (road.size() < 16) return std::numeric_limits<double>::quiet_NaN();
   std::nth_element(road.begin(), road.begin() + long(road.size() / 2), road.end());
-  const double ground = road[road.size() / 2];  // negative: below the camera
-  if (!(ground < 0)) return 0;
+  const double ground = road[road.size() / 2];
+  return ground < 0 ? ground : std::numeric_limits<double>::quiet_NaN();
+}
+
+// The static point of pixel (x, y) in camera coordinates; NaN when it has no depth.
+Eigen::Vector3d StaticPoint(const DynamicView& t, int x, int y) {
+  const float z = t.depth.at<float>(y, x);
+  if (!(z > 0) || !std::isfinite(z)) return Eigen::Vector3d::Constant(std::nan(""));
+  return {(x + 0.5 - t.camera.cx()) / t.camera.fx() * z,
+          (y + 0.5 - t.camera.cy()) / t.camera.fy() * z, z};
+}
+
+// How high a blob column rises above the ground at its foot, along `up_cam`, in the units of the
+// static depth: the top pixel's ray taken to the foot's distance across `up_cam`; NaN when the
+// foot has no static point (at the lowest pixel or the one below it).
+double ColumnRise(const DynamicView& t, const Eigen::Vector3d& up_cam, int x, int top, int low) {
+  Eigen::Vector3d f = StaticPoint(t, x, low);
+  if (!f.allFinite() && low + 1 < t.depth.rows) f = StaticPoint(t, x, low + 1);
+  if (!f.allFinite()) return std::numeric_limits<double>::quiet_NaN();
+  const Eigen::Vector3d r((x + 0.5 - t.camera.cx()) / t.camera.fx(),
+                          (top + 0.5 - t.camera.cy()) / t.camera.fy(), 1);
+  const double across = (r - r.dot(up_cam) * up_cam).norm();
+  const double reach = (f - f.dot(up_cam) * up_cam).norm();
+  if (!(across > 1e-9)) return std::numeric_limits<double>::quiet_NaN();
+  return r.dot(up_cam) * reach / across - f.dot(up_cam);
+}
+
+// Per blob of `labels` (n labels, 0 = background): the highest rise of its columns relative to
+// `height` (NaN: no column judged).
+std::vector<double> BlobRises(const DynamicView& t, const Eigen::Vector3d& up_cam,
+                              const cv::Mat& labels, int n, double height) {
+  std::vector<double> rise(size_t(n), std::numeric_limits<double>::quiet_NaN());
+  std::vector<int> top(static_cast<size_t>(n)), low(static_cast<size_t>(n));
+  for (int x = 0; x < labels.cols; ++x) {
+    std::fill(top.begin(), top.end(), -1);
+    for (int y = 0; y < labels.rows; ++y) {
+      const size_t b = size_t(labels.at<int>(y, x));
+      if (b == 0) continue;
+      if (top[b] < 0) top[b] = y;
+      low[b] = y;
+    }
+    for (size_t b = 1; b < size_t(n); ++b) {
+      if (top[b] < 0) continue;
+      const double r = ColumnRise(t, up_cam, x, top[b], low[b]) / height;
+      if (std::isfinite(r) && !(r <= rise[b])) rise[b] = r;
+    }
+  }
+  return rise;
+}
+
+// Sets to 0 the probability of every pixel where the photo's own depth is the static depth
+// within `tolerance` (relative); the number of pixels so cleared that were at or above `at`.
+size_t ClearExplained(const DynamicView& t, double tolerance, double at, cv::Mat& probability) {
+  size_t cleared = 0;
+  for (int y = 0; y < probability.rows; ++y)
+    for (int x = 0; x < probability.cols; ++x) {
+      const float z = t.depth.at<float>(y, x), s = t.seen.at<float>(y, x);
+      if (!(z > 0) || !std::isfinite(z) || !(s > 0) || !std::isfinite(s)) continue;
+      if (std::abs(s - z) > tolerance * z) continue;
+      float& p = probability.at<float>(y, x);
+      cleared += p >= at;
+      p = 0;
+    }
+  return cleared;
+}
+
+}  // namespace
+
+int KeepGrounded(const DynamicView& t, const Eigen::Vector3d& up, double at, double tolerance,
+                 cv::Mat& probability) {
+  const Eigen::Vector3d up_cam = t.world_to_camera.R() * up;  // world direction in the camera
+  const double ground = GroundBelow(t, up_cam);               // negative: below the camera
+  if (!std::isfinite(ground)) return 0;
   cv::Mat labels, stats, cents;
   const cv::Mat on = probability >= at;
   const int n = cv::connectedComponentsWithStats(on, labels, stats, cents, 8, CV_32S);
@@ -437,6 +507,34 @@ cv::Mat MaskFromProbability(const cv::Mat& probability, const MaskOptions& o) {
       if (l > 0 && l < k && stats.at<int>(l, cv::CC_STAT_AREA) < min_px) m.at<uint8_t>(y, x) = 0;
     }
   return m;
+}
+
+BlobTestCounts KeepStandingUnexplained(const DynamicView& t, const Eigen::Vector3d& up,
+                                       const MaskOptions& mask, const BlobTestOptions& o,
+                                       cv::Mat& probability) {
+  if (!(o.min_height >= 0) || !(o.seen_tolerance >= 0 && o.seen_tolerance < 1))
+    throw Error("KeepStandingUnexplained: options out of range");
+  CheckView(t, "target view");
+  if (probability.type() != CV_32F || probability.size() != t.depth.size())
+    throw Error("target view: the probability must be float of the depth's size");
+  BlobTestCounts counts;
+  if (o.seen_tolerance > 0 && !t.seen.empty())
+    counts.explained = ClearExplained(t, o.seen_tolerance, mask.probability, probability);
+  const Eigen::Vector3d up_cam = t.world_to_camera.R() * up;
+  const double ground = GroundBelow(t, up_cam);
+  if (!(o.min_height > 0) || !std::isfinite(ground)) return counts;
+  cv::Mat labels;
+  const int n = cv::connectedComponents(MaskFromProbability(probability, mask), labels, 8, CV_32S);
+  const std::vector<double> rise = BlobRises(t, up_cam, labels, n, -ground);
+  std::vector<uint8_t> drop(size_t(n), 0);
+  for (size_t b = 1; b < size_t(n); ++b) {
+    drop[b] = rise[b] < o.min_height;
+    counts.lying += drop[b];
+  }
+  for (int y = 0; y < probability.rows; ++y)
+    for (int x = 0; x < probability.cols; ++x)
+      if (drop[size_t(labels.at<int>(y, x))]) probability.at<float>(y, x) = 0;
+  return counts;
 }
 
 }  // namespace mvtm

@@ -138,4 +138,37 @@ struct MaskOptions {
 // holes filled (a region enclosed by the mask is the vehicle's body), small blobs dropped.
 cv::Mat MaskFromProbability(const cv::Mat& probability, const MaskOptions& options);
 
+// What stays "not static" only where something stands on the road and the photo's own depth
+// does not show the static surface:
+//  * explained pixels: where `target.seen` (densify's depth of this very photo, from stereo with
+//    its neighbours) is the static depth within `seen_tolerance` (relative), the photo saw the
+//    static surface: probability 0. A vehicle's pixels have no consistent depth or a wrong one
+//    (moving: its motion read as parallax) or a nearer one (parked in this drive only: a mesh
+//    fused without it). Pixel by pixel, so a vehicle merged with a patch of road keeps its
+//    body. Without `seen`, nothing is cleared.
+//  * lying blobs: then the blobs of the mask `mask` makes of the probability (a vehicle whole,
+//    its outline's evidence closed and filled) that lie in the road rather than stand on it go
+//    too: in no column does the blob's highest pixel reach `min_height` × the camera's height
+//    above the ground at its foot. The foot is the static point of the column's lowest blob
+//    pixel (or of the one below it, when that has no depth); the top, the column's highest blob
+//    pixel's ray where it passes the foot's distance from the camera (across `up`). Vehicles,
+//    cyclists and pedestrians stand a good share of a camera's height (a car 1.45 m, a dashcam
+//    1.2-1.7 m high); a wet patch, a shadow or a stain of the road flickers in the photos but
+//    lies flat: as high as its far edge is beyond its near one (a patch 10 to 20 m ahead: half
+//    the camera's height). The camera's height is KeepGrounded's (the static points of the
+//    image's lower middle); without them no blob is judged, and a blob without a column whose
+//    foot has depth is kept.
+// seen_tolerance 0 or min_height 0 turns a test off.
+struct BlobTestOptions {
+  double min_height = 0.5;       // × the camera's height above the ground, >= 0; 0 off
+  double seen_tolerance = 0.05;  // relative, in [0, 1); 0 off
+};
+struct BlobTestCounts {
+  size_t explained = 0;  // pixels at or above mask.probability cleared: the seen static surface
+  int lying = 0;         // blobs left out: flat in the road
+};
+BlobTestCounts KeepStandingUnexplained(const DynamicView& target, const Eigen::Vector3d& up,
+                                       const MaskOptions& mask, const BlobTestOptions& options,
+                                       cv::Mat& probability);
+
 }  // namespace mvtm

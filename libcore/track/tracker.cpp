@@ -193,31 +193,46 @@ Tracker::Smoothed Tracker::Smooth(const Track& tr, const std::vector<Blob>& blob
   return s;
 }
 
-void Tracker::AddDetectedRows(const Track& tr, const Smoothed& s, bool rejected,
-                              TrackResult& res) const {
+std::vector<uint8_t> Tracker::Rejected(const Track& tr) const {
+  std::vector<uint8_t> rejected(tr.dets.size(), 0);
+  for (size_t b = 0; b < tr.dets.size();) {
+    size_t e = b + 1;  // the stretch [b, e): no gap inside longer than max_gap
+    while (e < tr.dets.size() && tr.dets[e].frame - tr.dets[e - 1].frame - 1 <= o_.max_gap) ++e;
+    const int span = tr.dets[e - 1].frame - tr.dets[b].frame + 1;
+    const bool r = span < o_.min_life || static_cast<double>(e - b) < o_.min_ratio * span;
+    std::fill(rejected.begin() + long(b), rejected.begin() + long(e), r);
+    b = e;
+  }
+  return rejected;
+}
+
+void Tracker::AddDetectedRows(const Track& tr, const Smoothed& s,
+                              const std::vector<uint8_t>& rejected, TrackResult& res) const {
   for (size_t i = 0; i < tr.dets.size(); ++i) {
     const Blob& b = res.blobs[tr.dets[i].blob];
     TrackRow r;
     r.frame = tr.dets[i].frame;
     r.track = tr.id;
-    r.state = rejected ? RowState::kRejected : RowState::kDetected;
+    r.state = rejected[i] ? RowState::kRejected : RowState::kDetected;
     r.x = b.x, r.y = b.y, r.w = b.w, r.h = b.h, r.cx = b.cx, r.cy = b.cy, r.area = b.area;
     r.scx = s.cx[i], r.scy = s.cy[i], r.sw = s.w[i], r.sh = s.h[i];
     r.blob = tr.dets[i].blob;
     r.draw_x = b.x, r.draw_y = b.y;
     res.rows.push_back(r);
-    rejected ? ++res.summary.rejected_blobs : ++res.summary.detected;
+    rejected[i] ? ++res.summary.rejected_blobs : ++res.summary.detected;
   }
 }
 
-void Tracker::FillGaps(const Track& tr, const Smoothed& s, TrackResult& res) const {
+void Tracker::FillGaps(const Track& tr, const Smoothed& s, const std::vector<uint8_t>& rejected,
+                       TrackResult& res) const {
   for (size_t i = 0; i + 1 < tr.dets.size(); ++i) {
     const int f0 = tr.dets[i].frame, f1 = tr.dets[i + 1].frame, gap = f1 - f0 - 1;
     if (gap == 0) continue;
-    if (gap > o_.max_gap) {
-      ++res.summary.unfilled_gaps;
+    if (gap > o_.max_gap) {  // between two stretches; counted when one of them is kept
+      if (!rejected[i] || !rejected[i + 1]) ++res.summary.unfilled_gaps;
       continue;
     }
+    if (rejected[i]) continue;  // inside a rejected stretch
     const size_t src_index = tr.dets[i].blob;
     for (int t = f0 + 1; t < f1; ++t) {
       const double a = static_cast<double>(t - f0) / (f1 - f0);
@@ -273,12 +288,10 @@ TrackResult Tracker::Finish() {
   sum.tracks = static_cast<int>(tracks_.size());
   for (const Track& tr : tracks_) {
     const Smoothed s = Smooth(tr, res.blobs);
-    const int span = tr.dets.back().frame - tr.dets.front().frame + 1;
-    const bool rejected =
-        span < o_.min_life || static_cast<double>(tr.dets.size()) < o_.min_ratio * span;
-    rejected ? ++sum.rejected : ++sum.kept;
+    const std::vector<uint8_t> rejected = Rejected(tr);
+    std::count(rejected.begin(), rejected.end(), 0) > 0 ? ++sum.kept : ++sum.rejected;
     AddDetectedRows(tr, s, rejected, res);
-    if (!rejected) FillGaps(tr, s, res);
+    FillGaps(tr, s, rejected, res);
   }
   IndexFrames(res);
 

@@ -14,8 +14,10 @@
 //  4. Gaps of at most max_gap frames between two detections are filled: centroid and size are
 //     interpolated linearly between the smoothed values, and the last detected blob's pixels
 //     are scaled (nearest neighbour) by the size ratio and moved so their centroid lands there.
-//  5. Rejection: a track whose span (first to last detection, in frames) is shorter than
-//     min_life, or whose detected/span ratio is below min_ratio, is a false positive.
+//  5. Rejection, per stretch: a track is cut at its gaps longer than max_gap (never filled: a
+//     sighting ends there); a stretch whose span (first to last detection, in frames) is shorter
+//     than min_life, or whose detected/span ratio is below min_ratio, is a false positive. A
+//     track is kept when one of its stretches is.
 //
 // Memory: every detection's pixels are kept until Finish() (the rejection needs a whole track).
 // Thread safety: a Tracker is used from one thread; a finished TrackResult is read-only.
@@ -99,8 +101,12 @@ class Tracker {
   };
   // The steps of Finish(), one track at a time, then the frame index of the sorted rows.
   Smoothed Smooth(const Track& tr, const std::vector<Blob>& blobs) const;
-  void AddDetectedRows(const Track& tr, const Smoothed& s, bool rejected, TrackResult& res) const;
-  void FillGaps(const Track& tr, const Smoothed& s, TrackResult& res) const;
+  // Per detection of `tr`: whether the stretch it belongs to is rejected (step 5).
+  std::vector<uint8_t> Rejected(const Track& tr) const;
+  void AddDetectedRows(const Track& tr, const Smoothed& s, const std::vector<uint8_t>& rejected,
+                       TrackResult& res) const;
+  void FillGaps(const Track& tr, const Smoothed& s, const std::vector<uint8_t>& rejected,
+                TrackResult& res) const;
   void IndexFrames(TrackResult& res) const;
   int width_, height_;
   TrackOptions o_;

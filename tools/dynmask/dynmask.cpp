@@ -66,6 +66,25 @@ void DeclareMaskOptions(OptionTable& t, DynmaskOptions& o) {
       .Alternative("0.5");
 }
 
+// The tests on what the evidence finds: blobs on the ground, standing up, pixels unexplained.
+void DeclareStandingOptions(OptionTable& t, DynmaskOptions& o) {
+  t.Real("--grounded", &o.grounded,
+         "Keep only blobs that stand on the ground: a foot within F x the camera's height of "
+         "the road under it (0: keep every blob)")
+      .Range(0, 10)
+      .Alternative("0");
+  t.Real("--min-height", &o.min_height,
+         "Keep only blobs that rise H x the camera's height above the ground at their foot: "
+         "vehicles, cyclists, pedestrians; not wet patches or shadows in the road (0: off)")
+      .Range(0, 10)
+      .Alternative("0");
+  t.Real("--seen-tolerance", &o.seen_tolerance,
+         "Pixels where densify's depth of the photo is the static depth within T (relative) "
+         "are static: the photo saw the static surface there (0: off)")
+      .Range(0, 1, false, true)
+      .Alternative("0");
+}
+
 }  // namespace
 
 OptionTable DeclareOptions(DynmaskOptions& o) {
@@ -88,11 +107,7 @@ OptionTable DeclareOptions(DynmaskOptions& o) {
          "Nearest neighbour allowed, in median camera spacings (larger: more parallax)")
       .Range(0, 10)
       .Alternative("1.5");
-  t.Real("--grounded", &o.grounded,
-         "Keep only blobs that stand on the ground: a foot within F x the camera's height of "
-         "the road under it (0: keep every blob)")
-      .Range(0, 10)
-      .Alternative("0");
+  DeclareStandingOptions(t, o);
   t.Integer("--passes", &o.passes,
             "2: a second pass leaves out the neighbours' and partners' pixels inside their own "
             "first pass's blobs (the road a vehicle covers there); 1: one pass")
@@ -504,6 +519,13 @@ void ComputeMaps(const DynmaskOptions& o, const Workspace& ws, const Scene& s, c
     if (o.grounded > 0)
       rep.floating += size_t(
           KeepGrounded(cache.Get(job.i), s.up, o.mask.probability, o.grounded, e.probability));
+    if (o.min_height > 0 || o.seen_tolerance > 0) {
+      DynamicView t = cache.Get(job.i);
+      t.seen = cache.Seen(job.i);
+      const BlobTestCounts c =
+          KeepStandingUnexplained(t, s.up, o.mask, {o.min_height, o.seen_tolerance}, e.probability);
+      rep.lying += size_t(c.lying), rep.explained += c.explained;
+    }
     const fs::path out = ws.DynamicPath(s.images[job.i]->name);
     CreateFolder(out.parent_path());
     WriteProbability(out, e.probability);

@@ -28,15 +28,24 @@ struct DynmaskOptions : WorkOptions {
   bool no_flow = false;                    // --no-flow: photometric evidence only
   double grounded = 0.25;  // blobs must touch the ground within this × camera height; 0: off
   int passes = 2;  // 2: neighbours' pixels that their own first pass finds moving are left out
-  DynamicOptions evidence;  // --threshold, --flow/--no-flow, --quantile, ...
-  MaskOptions mask;         // --probability, --open, --close, --min-area
-  TrackOptions track;       // segtrack's tracking options; max_jump 0: a quarter width
-  std::string also;         // folder of masks OR-ed into the output (e.g. a video overlay)
-  std::string labels;       // folder of label images: blobs confirmed or rejected by geometry
+  double min_height = 0.5;       // blobs must rise this × the camera's height; 0: off
+  double seen_tolerance = 0.05;  // pixels where densify's depth is the static one: static; 0 off
+  DynamicOptions evidence;       // --threshold, --flow/--no-flow, --quantile, ...
+  MaskOptions mask;              // --probability, --open, --close, --min-area
+  TrackOptions track;            // segtrack's tracking options (defaults: the constructor)
+  std::string also;              // folder of masks OR-ed into the output (e.g. a video overlay)
+  std::string labels;            // folder of label images: blobs confirmed or rejected by geometry
   std::string classes = "8,9,10";  // their classes (CamVid: car, pedestrian, cyclist)
   double confirm = 0.25;           // a label blob whose mean probability reaches this is masked
 
-  DynmaskOptions() { track.max_jump = 0; }
+  // Tracking as segtrack's but for: max_jump 0 (a quarter width: probability blobs jump more
+  // than label blobs); min_ratio 0.4 (two vehicles side by side often make one blob for some
+  // frames, which one of their tracks then misses); max_gap 3 (a blob of light at the image
+  // border and a vehicle entering there frames later are not one vehicle to interpolate);
+  // min_life 2 (photos metres apart see a vehicle passing the camera in two).
+  DynmaskOptions() {
+    track.max_jump = 0, track.min_ratio = 0.4, track.max_gap = 3, track.min_life = 2;
+  }
   void Check() const;
 };
 
@@ -47,6 +56,8 @@ struct DynmaskReport {
   size_t no_neighbours = 0;  // images that no neighbour and no partner saw any pixel of
   size_t with_partners = 0;  // images checked against another drive's photos too
   size_t floating = 0;       // blobs removed: not standing on the ground
+  size_t lying = 0;          // blobs removed: flat in the road (wet patches, shadows)
+  size_t explained = 0;      // pixels cleared: the photo's own depth is the static depth there
   bool masked = false;       // masks and tracks.tsv were (re)made
   size_t masks_written = 0;
   TrackSummary summary;

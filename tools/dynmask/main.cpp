@@ -24,6 +24,9 @@ int RunAndReport(mvtm::DynmaskOptions& o) {
   if (r.with_partners)
     std::fprintf(stderr, "; %zu checked against other drives too", r.with_partners);
   if (r.floating) std::fprintf(stderr, "; %zu blobs off the ground left out", r.floating);
+  if (r.lying) std::fprintf(stderr, "; %zu blobs lying in the road left out", r.lying);
+  if (r.explained)
+    std::fprintf(stderr, "; %zu pixels the photo's own depth explains cleared", r.explained);
   if (r.no_neighbours)
     std::fprintf(stderr, "; %zu images seen by no other photo (nothing masked)", r.no_neighbours);
   if (r.masked) {

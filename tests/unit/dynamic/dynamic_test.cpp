@@ -249,6 +249,89 @@ TEST(Dynamic, MaskFromProbabilityFillsAndDropsSpecks) {
             200 * 100);  // a full mask stays full
 }
 
+// The blob tests' scene: the target of MakeView over a level road (up is -y), a probability map
+// holding a patch lying on the road 8 to 14 m ahead (rows 64..74: the rows whose ground is 13.7
+// and 8.1 m away) and a vehicle standing 10 m ahead (rows 52..69: its foot row's ground 10.15 m
+// away, its top row 1.65 - 2.5 / 120 x 10.15 = 1.44 m above the ground there).
+constexpr double kPatchRise = 1 - (198 / 24.5) / (198 / 14.5);  // 0.408 of the camera's height
+constexpr double kVehicleRise = (1.65 - 2.5 / 120 * (198 / 19.5)) / 1.65;  // 0.872
+const cv::Rect kPatch(20, 64, 41, 11), kVehicle(150, 52, 51, 18);
+
+cv::Mat BlobTestProbability() {
+  cv::Mat p(kH, kW, CV_32F, 0.f);
+  p(kPatch).setTo(0.9f);
+  p(kVehicle).setTo(0.9f);
+  return p;
+}
+
+MaskOptions ExactBlobs() {  // no opening, closing or size limit: the rectangles as they are
+  MaskOptions m;
+  m.open = 0, m.close = 0, m.min_area = 0;
+  return m;
+}
+
+TEST(Dynamic, BlobsLyingInTheRoadGoThoseStandingStay) {
+  const DynamicView t = MakeView(10, nullptr);
+  const Eigen::Vector3d up(0, -1, 0);
+  const auto run = [&](const DynamicView& v, const Eigen::Vector3d& u, double min_height,
+                       int& lying) {
+    cv::Mat p = BlobTestProbability();
+    lying = KeepStandingUnexplained(v, u, ExactBlobs(), {min_height, 0}, p).lying;
+    return std::pair<bool, bool>{p.at<float>(70, 40) > 0, p.at<float>(60, 170) > 0};
+  };
+  int lying = 0;
+  // Thresholds just either side of each blob's hand-derived rise.
+  EXPECT_EQ(run(t, up, kPatchRise - 0.01, lying), std::make_pair(true, true));
+  EXPECT_EQ(lying, 0);
+  EXPECT_EQ(run(t, up, kPatchRise + 0.01, lying), std::make_pair(false, true));
+  EXPECT_EQ(lying, 1);
+  EXPECT_EQ(run(t, up, kVehicleRise - 0.01, lying), std::make_pair(false, true));
+  EXPECT_EQ(run(t, up, kVehicleRise + 0.01, lying), std::make_pair(false, false));
+  EXPECT_EQ(lying, 2);
+  EXPECT_EQ(run(t, up, 0, lying), std::make_pair(true, true));  // off
+  // A similar world (rotated, scale 0.2, UTM-sized offset): the same decisions.
+  const Eigen::Quaterniond q(Eigen::AngleAxisd(0.7, Eigen::Vector3d(0.2, 1, 0.1).normalized()));
+  DynamicView m = t;
+  m.world_to_camera.q = t.world_to_camera.q * q.inverse();
+  m.world_to_camera.t =
+      0.2 * t.world_to_camera.t - m.world_to_camera.q * Eigen::Vector3d(451000, 120, 5410000);
+  m.depth = t.depth * 0.2;
+  EXPECT_EQ(run(m, q * up, kPatchRise + 0.01, lying), std::make_pair(false, true));
+  EXPECT_EQ(run(m, q * up, kVehicleRise - 0.01, lying), std::make_pair(false, true));
+  EXPECT_EQ(run(m, q * up, kVehicleRise + 0.01, lying), std::make_pair(false, false));
+  // Without the road's points in the image's lower middle, no camera height: nothing judged.
+  DynamicView sky = t;
+  sky.depth = cv::Mat(kH, kW, CV_32F, std::numeric_limits<float>::infinity());
+  EXPECT_EQ(run(sky, up, 0.9, lying), std::make_pair(true, true));
+  EXPECT_EQ(lying, 0);
+}
+
+TEST(Dynamic, PixelsThePhotosOwnDepthExplainsAreCleared) {
+  DynamicView t = MakeView(10, nullptr);
+  const Eigen::Vector3d up(0, -1, 0);
+  cv::Mat p = BlobTestProbability();
+  // No depth of its own: nothing cleared.
+  EXPECT_EQ(KeepStandingUnexplained(t, up, ExactBlobs(), {0, 0.05}, p).explained, 0u);
+  EXPECT_EQ(cv::countNonZero(p > 0), kPatch.area() + kVehicle.area());
+  // Densify found the road under the patch (within 4 %) and the vehicle nearer than the road.
+  t.seen = t.depth * 1.04f;
+  t.seen(kVehicle) = t.depth(kVehicle) * 0.6f;
+  EXPECT_EQ(KeepStandingUnexplained(t, up, ExactBlobs(), {0, 0.05}, p).explained,
+            size_t(kPatch.area()));
+  EXPECT_EQ(cv::countNonZero(p(kPatch) > 0), 0);
+  EXPECT_EQ(cv::countNonZero(p(kVehicle) > 0), kVehicle.area());
+  // A tighter tolerance than the 4 % leaves the patch; 0 turns the test off.
+  for (double tol : {0.03, 0.0}) {
+    cv::Mat q = BlobTestProbability();
+    EXPECT_EQ(KeepStandingUnexplained(t, up, ExactBlobs(), {0, tol}, q).explained, 0u);
+    EXPECT_EQ(cv::countNonZero(q > 0), kPatch.area() + kVehicle.area());
+  }
+  cv::Mat small(10, 10, CV_32F, 0.f);
+  EXPECT_THROW(KeepStandingUnexplained(t, up, ExactBlobs(), {0.5, 0.05}, small), Error);
+  EXPECT_THROW(KeepStandingUnexplained(t, up, ExactBlobs(), {-1, 0.05}, p), Error);
+  EXPECT_THROW(KeepStandingUnexplained(t, up, ExactBlobs(), {0.5, 1}, p), Error);
+}
+
 TEST(Dynamic, BadInputs) {
   DynamicView t = MakeView(10, nullptr);
   t.depth = cv::Mat(10, 10, CV_32F, 1.f);

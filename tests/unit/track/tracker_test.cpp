@@ -160,6 +160,38 @@ TEST(Tracker, LowRatioTrackIsRejected) {
   EXPECT_EQ(r2.summary.interpolated, 6u);
 }
 
+// Rejection per stretch: a blob in frame 0 (a flicker), none for 12 frames (longer than max_gap,
+// shorter than max_missed: the same track takes the next blob), then a vehicle at the same place
+// in frames 13..20. Judged as one track, 9 detections over a span of 21 (< 0.5) would reject the
+// vehicle with the flicker; cut at the gap never filled, the flicker (span 1 < min_life) goes and
+// the vehicle (8 of 8) stays, and the gap stays open.
+TEST(Tracker, RejectionIsJudgedPerStretchBetweenUnfilledGaps) {
+  TrackOptions o;
+  o.max_gap = 10;
+  Tracker t(kW, kH, o);
+  for (int f = 0; f < 21; ++f) {
+    auto m = Draw(f == 0 || f >= 13 ? std::vector<Box>{{50, 50, 6, 6}} : std::vector<Box>{});
+    t.AddFrame(m.data());
+  }
+  TrackResult r = t.Finish();
+  EXPECT_EQ(r.summary.tracks, 1);
+  EXPECT_EQ(r.summary.kept, 1);
+  EXPECT_EQ(r.summary.rejected_blobs, 1u);
+  EXPECT_EQ(r.summary.detected, 8u);
+  EXPECT_EQ(r.summary.interpolated, 0u);
+  EXPECT_EQ(r.summary.unfilled_gaps, 1u);
+  ASSERT_EQ(RowsOf(r, 0).size(), 1u);
+  EXPECT_EQ(RowsOf(r, 0)[0]->state, RowState::kRejected);
+  EXPECT_TRUE(RowsOf(r, 5).empty());
+  ASSERT_EQ(RowsOf(r, 15).size(), 1u);
+  EXPECT_EQ(RowsOf(r, 15)[0]->state, RowState::kDetected);
+  std::vector<uint8_t> mask;
+  r.RenderMask(0, 0, mask);
+  EXPECT_EQ(mask[52 * kW + 52], 0);
+  r.RenderMask(15, 0, mask);
+  EXPECT_EQ(mask[52 * kW + 52], 255);
+}
+
 // Two 8x8 boxes cross: A moves right along row 46..53, B down along column 56..63; at frame 5
 // both are at (56, 46) and merge into one blob. Identities must survive the crossing, and the
 // track that lost the merged blob is interpolated at its true position.
