@@ -520,7 +520,7 @@ BlobTestCounts KeepStandingUnexplained(const DynamicView& t, const Eigen::Vector
   BlobTestCounts counts;
   if (o.seen_tolerance > 0 && !t.seen.empty())
     counts.explained = ClearExplained(t, o.seen_tolerance, mask.probability, probability);
-  const Eigen::Vector3d up_cam = t.world_to_camera.R() * up;
+  const Eigen::Vector3d up_cam = t.world_to_camera.R() * up.normalized();
   const double ground = GroundBelow(t, up_cam);
   if (!(o.min_height > 0) || !std::isfinite(ground)) return counts;
   cv::Mat labels;

@@ -154,10 +154,10 @@ cv::Mat MaskFromProbability(const cv::Mat& probability, const MaskOptions& optio
 //    pixel's ray where it passes the foot's distance from the camera (across `up`). Vehicles,
 //    cyclists and pedestrians stand a good share of a camera's height (a car 1.45 m, a dashcam
 //    1.2-1.7 m high); a wet patch, a shadow or a stain of the road flickers in the photos but
-//    lies flat: as high as its far edge is beyond its near one (a patch 10 to 20 m ahead: half
-//    the camera's height). The camera's height is KeepGrounded's (the static points of the
-//    image's lower middle); without them no blob is judged, and a blob without a column whose
-//    foot has depth is kept.
+//    lies flat: its top reaches (far - near) / far of the camera's height, its near and far
+//    edges' distances (a patch 10 to 20 m ahead: half). `up` is normalised here. The camera's
+//    height is KeepGrounded's (the static points of the image's lower middle); without them no
+//    blob is judged, and a blob without a column whose foot has depth is kept.
 // seen_tolerance 0 or min_height 0 turns a test off.
 struct BlobTestOptions {
   double min_height = 0.5;       // × the camera's height above the ground, >= 0; 0 off

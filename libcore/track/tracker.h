@@ -37,8 +37,8 @@ struct TrackOptions {
   int max_missed = 50;     // frames: a track ends after this many consecutive frames without a blob
   int max_gap = 10;        // frames: longest run of missed frames that is filled by interpolation
   double smooth = 1.0;     // frames: Gaussian sigma for centroid and size (0: no smoothing)
-  int min_life = 3;        // frames: tracks spanning fewer frames are rejected
-  double min_ratio = 0.5;  // tracks with detected/span below this are rejected
+  int min_life = 3;        // frames: stretches (step 5) spanning fewer frames are rejected
+  double min_ratio = 0.5;  // stretches with detected/span below this are rejected
   int dilate = 0;          // pixels: radius of the disk the output masks are dilated by
 
   void Check() const;  // throws UsageError naming the bad value and the allowed range

@@ -276,6 +276,7 @@ class DepthProvider {
     ws.Require("dynmask", {WsItem::kStereo});
   }
   std::string Name() const { return use_mesh_ ? "mesh (ray-cast)" : "stereo/ (densify)"; }
+  bool UsesMesh() const { return use_mesh_; }
   fs::path Input(const std::string& name) const {
     return use_mesh_ ? ws_.MeshPath() : ws_.StereoDepthPath(name);
   }
@@ -468,6 +469,8 @@ std::vector<Job> StaleMaps(const DynmaskOptions& o, const Workspace& ws, const S
     };
     job.in.push_back(ws.ImagePath(s.images[i]->name));
     job.in.push_back(d.Input(s.images[i]->name));
+    const fs::path own = ws.StereoDepthPath(s.images[i]->name);  // --seen-tolerance reads it
+    if (o.seen_tolerance > 0 && d.UsesMesh() && fs::exists(own)) job.in.push_back(own);
     for (size_t j : nbs[i]) view(j);
     for (size_t j : pair.partners[i]) {
       view(j);
@@ -521,7 +524,9 @@ void ComputeMaps(const DynmaskOptions& o, const Workspace& ws, const Scene& s, c
           KeepGrounded(cache.Get(job.i), s.up, o.mask.probability, o.grounded, e.probability));
     if (o.min_height > 0 || o.seen_tolerance > 0) {
       DynamicView t = cache.Get(job.i);
-      t.seen = cache.Seen(job.i);
+      // The photo's own map against the mesh's depth; with densify's maps as the static depth
+      // they are one map and explain nothing.
+      if (d.UsesMesh()) t.seen = cache.Seen(job.i);
       const BlobTestCounts c =
           KeepStandingUnexplained(t, s.up, o.mask, {o.min_height, o.seen_tolerance}, e.probability);
       rep.lying += size_t(c.lying), rep.explained += c.explained;
