@@ -18,6 +18,9 @@ namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
+// A depth map's convention: +inf, NaN and <= 0 are "no depth".
+bool HasDepth(double z) { return z > 0 && std::isfinite(z); }
+
 void CheckView(const DynamicView& v, const char* what) {
   v.camera.RequireUndistorted();
   const int w = static_cast<int>(v.camera.width), h = static_cast<int>(v.camera.height);
@@ -57,7 +60,7 @@ void WarpMaps(const DynamicView& t, const DynamicView& nb, double tol, cv::Mat& 
       for (int x = 0; x < t.depth.cols; ++x) {
         ox[x] = oy[x] = kNaN;
         const double d = z[x];
-        if (!(d > 0) || !std::isfinite(d)) continue;
+        if (!HasDepth(d)) continue;
         const Eigen::Vector3d pc((x + 0.5 - cx) / fx * d, (y + 0.5 - cy) / fy * d, d);
         const Eigen::Vector3d q = R * pc + tr;
         if (!(q.z() > 0)) continue;
@@ -69,7 +72,7 @@ void WarpMaps(const DynamicView& t, const DynamicView& nb, double tol, cv::Mat& 
         const auto nearer = [&](const cv::Mat& map) {
           if (map.empty()) return false;
           const float dn = map.at<float>(iv, iu);
-          return dn > 0 && std::isfinite(dn) && dn < q.z() * (1 - tol);
+          return HasDepth(dn) && dn < q.z() * (1 - tol);
         };
         // Behind the static surface, or behind what nb saw there (a parked vehicle).
         if (nearer(nb.depth) || nearer(nb.seen)) continue;
@@ -348,14 +351,18 @@ DynamicEvidence EstimateDynamic(const DynamicView& t,
 
 namespace {
 
+// The static point of pixel (x, y) in camera coordinates; NaN when it has no depth.
+Eigen::Vector3d StaticPoint(const DynamicView& t, int x, int y) {
+  const float z = t.depth.at<float>(y, x);
+  if (!HasDepth(z)) return Eigen::Vector3d::Constant(std::nan(""));
+  return {(x + 0.5 - t.camera.cx()) / t.camera.fx() * z,
+          (y + 0.5 - t.camera.cy()) / t.camera.fy() * z, z};
+}
+
 // The static point of pixel (x, y) of `t` along `up` relative to the camera centre; NaN when the
 // pixel has no depth.
 double HeightOf(const DynamicView& t, const Eigen::Vector3d& up_cam, int x, int y) {
-  const float z = t.depth.at<float>(y, x);
-  if (!(z > 0) || !std::isfinite(z)) return std::numeric_limits<double>::quiet_NaN();
-  const Eigen::Vector3d p((x + 0.5 - t.camera.cx()) / t.camera.fx() * z,
-                          (y + 0.5 - t.camera.cy()) / t.camera.fy() * z, z);
-  return p.dot(up_cam);
+  return StaticPoint(t, x, y).dot(up_cam);
 }
 
 // The ground's height under the camera along `up_cam`, relative to its centre (negative): the
@@ -372,14 +379,6 @@ double GroundBelow(const DynamicView& t, const Eigen::Vector3d& up_cam) {
   std::nth_element(road.begin(), road.begin() + long(road.size() / 2), road.end());
   const double ground = road[road.size() / 2];
   return ground < 0 ? ground : std::numeric_limits<double>::quiet_NaN();
-}
-
-// The static point of pixel (x, y) in camera coordinates; NaN when it has no depth.
-Eigen::Vector3d StaticPoint(const DynamicView& t, int x, int y) {
-  const float z = t.depth.at<float>(y, x);
-  if (!(z > 0) || !std::isfinite(z)) return Eigen::Vector3d::Constant(std::nan(""));
-  return {(x + 0.5 - t.camera.cx()) / t.camera.fx() * z,
-          (y + 0.5 - t.camera.cy()) / t.camera.fy() * z, z};
 }
 
 // How high a blob column rises above the ground at its foot, along `up_cam`, in the units of the
@@ -427,13 +426,20 @@ size_t ClearExplained(const DynamicView& t, double tolerance, double at, cv::Mat
   for (int y = 0; y < probability.rows; ++y)
     for (int x = 0; x < probability.cols; ++x) {
       const float z = t.depth.at<float>(y, x), s = t.seen.at<float>(y, x);
-      if (!(z > 0) || !std::isfinite(z) || !(s > 0) || !std::isfinite(s)) continue;
+      if (!HasDepth(z) || !HasDepth(s)) continue;
       if (std::abs(s - z) > tolerance * z) continue;
       float& p = probability.at<float>(y, x);
       cleared += p >= at;
       p = 0;
     }
   return cleared;
+}
+
+// Sets to 0 the probability of every pixel whose blob (`labels`, 0 = background) `drop` marks.
+void ZeroBlobs(const cv::Mat& labels, const std::vector<uint8_t>& drop, cv::Mat& probability) {
+  for (int y = 0; y < probability.rows; ++y)
+    for (int x = 0; x < probability.cols; ++x)
+      if (drop[size_t(labels.at<int>(y, x))]) probability.at<float>(y, x) = 0;
 }
 
 }  // namespace
@@ -466,12 +472,10 @@ int KeepGrounded(const DynamicView& t, const Eigen::Vector3d& up, double at, dou
       state[size_t(b)] = 2;
     }
   }
-  int removed = 0;
-  for (int b = 1; b < n; ++b) removed += state[size_t(b)] == 2;
-  for (int y = 0; y < probability.rows; ++y)
-    for (int x = 0; x < probability.cols; ++x)
-      if (state[size_t(labels.at<int>(y, x))] == 2) probability.at<float>(y, x) = 0;
-  return removed;
+  std::vector<uint8_t> drop(size_t(n), 0);
+  for (int b = 1; b < n; ++b) drop[size_t(b)] = state[size_t(b)] == 2;
+  ZeroBlobs(labels, drop, probability);
+  return int(std::count(drop.begin(), drop.end(), 1));
 }
 
 cv::Mat MaskFromProbability(const cv::Mat& probability, const MaskOptions& o) {
@@ -531,9 +535,7 @@ BlobTestCounts KeepStandingUnexplained(const DynamicView& t, const Eigen::Vector
     drop[b] = rise[b] < o.min_height;
     counts.lying += drop[b];
   }
-  for (int y = 0; y < probability.rows; ++y)
-    for (int x = 0; x < probability.cols; ++x)
-      if (drop[size_t(labels.at<int>(y, x))]) probability.at<float>(y, x) = 0;
+  ZeroBlobs(labels, drop, probability);
   return counts;
 }
 
