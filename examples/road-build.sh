@@ -124,7 +124,10 @@ if [ "$poses" = - ]; then
     # 0.64 %).
     fixed=(--Mapper.filter_max_reproj_error "${SFM_MAX_REPROJ:-2}")
     [ -n "${SFM_THREADS:-}" ] && fixed+=(--Mapper.num_threads "$SFM_THREADS")
-    [ $# -ge 1 ] && fixed+=(--Mapper.ba_refine_focal_length 0 --Mapper.ba_refine_extra_params 0)
+    self_calibrating=1
+    if [ $# -ge 1 ]; then
+      self_calibrating=0; fixed+=(--Mapper.ba_refine_focal_length 0 --Mapper.ba_refine_extra_params 0)
+    fi
     # Forward motion gives small triangulation angles: when COLMAP's defaults find no initial
     # pair (or register under half the images), the mapper runs again as for a dashcam (initial
     # pairs from 1 degree and 50 inliers, forward-moving pairs allowed; KITTI 06 and CamVid need
@@ -158,6 +161,25 @@ if [ "$poses" = - ]; then
         read -r fwd_n fwd <<< "$(largest "${d}_forward")"
         if [ "$fwd_n" -gt "$best_n" ]; then rm -rf "$d"; mv "${d}_forward" "$d"; fi
         rm -rf "${d}_forward"
+        read -r best_n best <<< "$(largest "$d")"
+      fi
+      # Self-calibrating, a two-view start can refine the one camera into nonsense (focal length
+      # and distortion from a pair with a small baseline), after which no further image registers
+      # (CamVid 0016E5: 0 of 60 both times on two runs). Then the mapper runs with the camera
+      # held at its starting guess, and one bundle adjustment of the whole model refines it
+      # (CamVid, COLMAP's initial-pair defaults: 60 of 60, 0.65 px, then focal 576 -> 471).
+      if [ "$best_n" -lt $(( (want + 1) / 2 )) ] && [ "$self_calibrating" = 1 ]; then
+        echo "SfM registered $best_n of $want images: again with the camera held, refined afterwards" >&2
+        map_run "${d}_held" "$@" --Mapper.ba_refine_focal_length 0 --Mapper.ba_refine_extra_params 0
+        read -r fwd_n fwd <<< "$(largest "${d}_held")"
+        if [ "$fwd_n" -gt "$best_n" ]; then
+          colmap bundle_adjuster --input_path "$fwd" --output_path "$fwd" \
+            --BundleAdjustment.refine_focal_length 1 --BundleAdjustment.refine_extra_params 1 \
+            >> "$out/colmap.log" 2>&1 ||
+            echo "warning: the camera held at its starting guess (its refinement failed: $out/colmap.log)" >&2
+          rm -rf "$d"; mv "${d}_held" "$d"
+        fi
+        rm -rf "${d}_held"
         read -r best_n best <<< "$(largest "$d")"
       fi
       for m in "$d"/*/; do

@@ -13,7 +13,8 @@ tool and OUT/index.html, the page to read before choosing settings. Work folders
   segtrack   --smooth, --max-gap, --min-life on damaged labels: mask IoU against truth/masks,
              against whole-process milliseconds per frame
   dynmask    --threshold, --flow-threshold, --no-flow, --neighbours, --partners, --min-baseline,
-             --passes, --segments, --probability, --grounded, --min-height, --min-ratio, --max-gap
+             --partners-ahead, --passes, --segments, --probability, --grounded, --min-height,
+             --occludes, --occlusion-gap, --min-ratio, --max-gap
              (no labels; the fixture's true mesh, no densify maps, so --seen-tolerance has nothing
              to compare: its rows are the road build's, issue 21's note): mask IoU against truth/masks and
              the share of drive B masked, against whole-process milliseconds per image
@@ -488,17 +489,21 @@ def sweep_dynmask(c):
                  ("flow-relative", "--flow-relative", (0, 0.05, 0.1, 0.2)),
                  ("neighbours", "--neighbours", (2, 4, 6, 8)),
                  ("partners", "--partners", (0, 1, 2, 4)),
+                 ("partners-ahead", "--partners-ahead", (0, 1, 2, 4)),
                  ("min-baseline", "--min-baseline", (0.25, 1.5, 2.5)),
                  ("passes", "--passes", (1, 2)),
                  ("segments", "--segments", (0, 100, 300, 1000)),
                  ("probability", "--probability", (0.3, 0.4, 0.5, 0.6)),
                  ("grounded", "--grounded", (0, 0.25, 0.5)),
                  ("min-height", "--min-height", (0, 0.3, 0.5, 0.7)),
+                 ("occludes", "--occludes", (0, 0.1, 0.2, 0.35)),
+                 ("occlusion-gap", "--occlusion-gap", (0.1, 0.25, 0.5)),
                  ("min-ratio", "--min-ratio", (0.3, 0.4, 0.5)),
                  ("max-gap", "--max-gap", (1, 3, 10))]
     defaults = {"--threshold": 0.05, "--flow-threshold": 2.5, "--no-flow": False,
                 "--flow-relative": 0,
-                "--neighbours": 4, "--partners": 2, "--min-baseline": 0.25, "--passes": 2,
+                "--neighbours": 4, "--partners": 2, "--partners-ahead": 2,
+                "--min-baseline": 0.25, "--passes": 2, "--occludes": 0.2, "--occlusion-gap": 0.25,
                 "--segments": 300,
                 "--probability": 0.4, "--grounded": 0.25, "--min-height": 0.5,
                 "--min-ratio": 0.4, "--max-gap": 3}
@@ -525,10 +530,13 @@ def sweep_dynmask(c):
         f"<b>Knobs:</b> <code>--threshold</code> (photometric residual at p = 0.5), "
         f"<code>--flow-threshold</code> (flow residual in pixels), <code>--no-flow</code>, "
         f"<code>--neighbours</code>, <code>--partners</code> (photos of the other drive), "
+        f"<code>--partners-ahead</code> (photos of the other drive that saw the far road), "
         f"<code>--min-baseline</code>, <code>--passes</code>, "
         f"<code>--segments</code> (Felzenszwalb's k; 0 = no regions), "
         f"<code>--probability</code>, <code>--grounded</code>, <code>--min-height</code> "
-        f"(blobs must stand that share of the camera's height), <code>--min-ratio</code>, "
+        f"(blobs must stand that share of the camera's height), <code>--occludes</code>, "
+        f"<code>--occlusion-gap</code> (blobs must hide something behind them; on this true "
+        f"mesh there are no facade errors for them to remove), <code>--min-ratio</code>, "
         f"<code>--max-gap</code> (tracking). Each varied alone on the "
         f"fixture's photos and true mesh ({len(a_names)} frames per drive, 640x192). "
         f"<b>Accuracy:</b> IoU of drive A's masks against truth/masks, pooled (the column "

@@ -60,7 +60,7 @@ void WarpMaps(const DynamicView& t, const DynamicView& nb, double tol, cv::Mat& 
       for (int x = 0; x < t.depth.cols; ++x) {
         ox[x] = oy[x] = kNaN;
         const double d = z[x];
-        if (!HasDepth(d)) continue;
+        if (!HasDepth(d) || d < nb.beyond) continue;
         const Eigen::Vector3d pc((x + 0.5 - cx) / fx * d, (y + 0.5 - cy) / fy * d, d);
         const Eigen::Vector3d q = R * pc + tr;
         if (!(q.z() > 0)) continue;
@@ -396,11 +396,10 @@ double ColumnRise(const DynamicView& t, const Eigen::Vector3d& up_cam, int x, in
   return r.dot(up_cam) * reach / across - f.dot(up_cam);
 }
 
-// Per blob of `labels` (n labels, 0 = background): the highest rise of its columns relative to
-// `height` (NaN: no column judged).
-std::vector<double> BlobRises(const DynamicView& t, const Eigen::Vector3d& up_cam,
-                              const cv::Mat& labels, int n, double height) {
-  std::vector<double> rise(size_t(n), std::numeric_limits<double>::quiet_NaN());
+// Calls visit(x, b, top, low) for every column x of every blob b of `labels` (n labels, 0 =
+// background) that has pixels in it: its highest and lowest row there.
+template <class Visit>
+void ForEachBlobColumn(const cv::Mat& labels, int n, Visit visit) {
   std::vector<int> top(static_cast<size_t>(n)), low(static_cast<size_t>(n));
   for (int x = 0; x < labels.cols; ++x) {
     std::fill(top.begin(), top.end(), -1);
@@ -410,13 +409,43 @@ std::vector<double> BlobRises(const DynamicView& t, const Eigen::Vector3d& up_ca
       if (top[b] < 0) top[b] = y;
       low[b] = y;
     }
-    for (size_t b = 1; b < size_t(n); ++b) {
-      if (top[b] < 0) continue;
-      const double r = ColumnRise(t, up_cam, x, top[b], low[b]) / height;
-      if (std::isfinite(r) && !(r <= rise[b])) rise[b] = r;
-    }
+    for (size_t b = 1; b < size_t(n); ++b)
+      if (top[b] >= 0) visit(x, b, top[b], low[b]);
   }
+}
+
+// Per blob of `labels` (n labels, 0 = background): the highest rise of its columns relative to
+// `height` (NaN: no column judged).
+std::vector<double> BlobRises(const DynamicView& t, const Eigen::Vector3d& up_cam,
+                              const cv::Mat& labels, int n, double height) {
+  std::vector<double> rise(size_t(n), std::numeric_limits<double>::quiet_NaN());
+  ForEachBlobColumn(labels, n, [&](int x, size_t b, int top, int low) {
+    const double r = ColumnRise(t, up_cam, x, top, low) / height;
+    if (std::isfinite(r) && !(r <= rise[b])) rise[b] = r;
+  });
   return rise;
+}
+
+// Per blob of `labels` (n labels, 0 = background): the share of its upper pixels (in each column,
+// those above the middle between its top and lowest pixel) whose static depth is more than
+// (1 + gap) times its foot's (the column's lowest pixel's, or the one below it), or none (sky):
+// what the blob hides behind it. NaN when no column has a foot.
+std::vector<double> BlobOcclusions(const DynamicView& t, const cv::Mat& labels, int n, double gap) {
+  std::vector<double> behind(size_t(n), 0), judged(size_t(n), 0);
+  ForEachBlobColumn(labels, n, [&](int x, size_t b, int top, int low) {
+    float foot = t.depth.at<float>(low, x);
+    if (!HasDepth(foot) && low + 1 < t.depth.rows) foot = t.depth.at<float>(low + 1, x);
+    if (!HasDepth(foot)) return;
+    for (int y = top; 2 * y < top + low; ++y) {
+      if (size_t(labels.at<int>(y, x)) != b) continue;
+      const float z = t.depth.at<float>(y, x);
+      judged[b] += 1;
+      behind[b] += !HasDepth(z) || z > (1 + gap) * foot;
+    }
+  });
+  for (size_t b = 1; b < size_t(n); ++b)
+    behind[b] = judged[b] > 0 ? behind[b] / judged[b] : std::numeric_limits<double>::quiet_NaN();
+  return behind;
 }
 
 // Sets to 0 the probability of every pixel where the photo's own depth is the static depth
@@ -516,7 +545,8 @@ cv::Mat MaskFromProbability(const cv::Mat& probability, const MaskOptions& o) {
 BlobTestCounts KeepStandingUnexplained(const DynamicView& t, const Eigen::Vector3d& up,
                                        const MaskOptions& mask, const BlobTestOptions& o,
                                        cv::Mat& probability) {
-  if (!(o.min_height >= 0) || !(o.seen_tolerance >= 0 && o.seen_tolerance < 1))
+  if (!(o.min_height >= 0) || !(o.seen_tolerance >= 0 && o.seen_tolerance < 1) ||
+      !(o.occludes >= 0 && o.occludes <= 1) || !(o.occlusion_gap > 0))
     throw Error("KeepStandingUnexplained: options out of range");
   CheckView(t, "target view");
   if (probability.type() != CV_32F || probability.size() != t.depth.size())
@@ -526,14 +556,19 @@ BlobTestCounts KeepStandingUnexplained(const DynamicView& t, const Eigen::Vector
     counts.explained = ClearExplained(t, o.seen_tolerance, mask.probability, probability);
   const Eigen::Vector3d up_cam = t.world_to_camera.R() * up.normalized();
   const double ground = GroundBelow(t, up_cam);
-  if (!(o.min_height > 0) || !std::isfinite(ground)) return counts;
+  const bool rise_test = o.min_height > 0 && std::isfinite(ground);
+  if (!rise_test && !(o.occludes > 0)) return counts;
   cv::Mat labels;
   const int n = cv::connectedComponents(MaskFromProbability(probability, mask), labels, 8, CV_32S);
-  const std::vector<double> rise = BlobRises(t, up_cam, labels, n, -ground);
+  std::vector<double> rise(size_t(n), std::numeric_limits<double>::quiet_NaN()), behind = rise;
+  if (rise_test) rise = BlobRises(t, up_cam, labels, n, -ground);
+  if (o.occludes > 0) behind = BlobOcclusions(t, labels, n, o.occlusion_gap);
   std::vector<uint8_t> drop(size_t(n), 0);
   for (size_t b = 1; b < size_t(n); ++b) {
-    drop[b] = rise[b] < o.min_height;
-    counts.lying += drop[b];
+    if (rise[b] < o.min_height)
+      drop[b] = 1, ++counts.lying;
+    else if (behind[b] < o.occludes)
+      drop[b] = 1, ++counts.surface;
   }
   ZeroBlobs(labels, drop, probability);
   return counts;

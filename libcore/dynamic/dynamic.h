@@ -12,7 +12,8 @@
 //    pixel is not valid for j when X is behind j, q falls outside j's image, or j's own static
 //    depth at q is nearer than X by more than depth_tolerance · z (X is hidden in j), or j's own
 //    first-pass probability at q is 0.5 or more (X is hidden in j by something that moves: the
-//    road a vehicle covers in j is not evidence against this photo's road).
+//    road a vehicle covers in j is not evidence against this photo's road), or z(p) is under
+//    j's `beyond` (a partner chosen for the far surfaces compares those only).
 //  * Exposure: j's warped luma times the gain exp(median(log target − log warped)) over the
 //    valid pixels (a camera's auto exposure changes between photos).
 //  * Photometric residual: the distance of the target's luma to the interval [min, max] of the
@@ -44,7 +45,7 @@
 // world-to-camera; luma float 0..1; depth float linear camera-space z, +inf/NaN/≤0 = none.
 // Pixel centres at +0.5 (COLMAP). Lengths are relative (depth tolerance) or in pixels of the
 // images given (slack, window): the caller picks the working resolution. Everything is invariant
-// under similarity transforms of the world.
+// under similarity transforms of the world (`beyond` is a depth: the caller scales it with it).
 // Thread safety: pure functions (OpenCV's thread pool inside).
 #pragma once
 
@@ -63,9 +64,11 @@ struct DynamicView {
   cv::Mat depth;            // CV_32F linear z of the static reconstruction; inf/NaN/<=0: none
   cv::Mat colour;           // CV_8UC3 of the same size for the segmentation, or empty (luma)
   cv::Mat dynamic;          // CV_32F: this view's own probability from a first pass, or empty
-  cv::Mat seen;  // CV_32F linear z of what this photo saw (densify's map: a parked vehicle
-                 // included), or empty; as a neighbour or partner, a point farther than it is
-                 // hidden in this view like one behind its static depth
+  cv::Mat seen;       // CV_32F linear z of what this photo saw (densify's map: a parked vehicle
+                      // included), or empty; as a neighbour or partner, a point farther than it is
+                      // hidden in this view like one behind its static depth
+  double beyond = 0;  // as a neighbour or partner: compared with the target's pixels whose
+                      // static depth is at least this only (0: all)
 };
 
 struct DynamicOptions {
@@ -158,14 +161,26 @@ cv::Mat MaskFromProbability(const cv::Mat& probability, const MaskOptions& optio
 //    edges' distances (a patch 10 to 20 m ahead: half). `up` is normalised here. The camera's
 //    height is KeepGrounded's (the static points of the image's lower middle); without them no
 //    blob is judged, and a blob without a column whose foot has depth is kept.
-// seen_tolerance 0 or min_height 0 turns a test off.
+//  * blobs on the static surface: a vehicle, a cyclist, a pedestrian stands in front of the
+//    static surface and hides what lies behind it: above its middle, the static depth of its
+//    pixels is well beyond its foot's (the road behind a car, the facade across the street, the
+//    sky). A blob whose upper pixels' static depth is its foot's (a door, a shop front, a stretch
+//    of facade whose mesh is wrong, the photo's border where few neighbours see it) stands for
+//    nothing in front of the surface: it goes when under `occludes` of its upper pixels (in each
+//    column, those above the middle between its top and lowest pixel) have a static depth over
+//    (1 + `occlusion_gap`) × the foot's (the column's lowest pixel's or the one below's), or
+//    none. Needs no ground; a blob without a column whose foot has depth is kept.
+// seen_tolerance 0, min_height 0 or occludes 0 turns a test off.
 struct BlobTestOptions {
   double min_height = 0.5;       // × the camera's height above the ground, >= 0; 0 off
   double seen_tolerance = 0.05;  // relative, in [0, 1); 0 off
+  double occludes = 0.2;         // share of a blob's upper pixels, in [0, 1]; 0 off
+  double occlusion_gap = 0.25;   // relative depth beyond the foot that counts as behind, > 0
 };
 struct BlobTestCounts {
   size_t explained = 0;  // pixels at or above mask.probability cleared: the seen static surface
   int lying = 0;         // blobs left out: flat in the road
+  int surface = 0;       // blobs left out: on the static surface, hiding nothing behind them
 };
 BlobTestCounts KeepStandingUnexplained(const DynamicView& target, const Eigen::Vector3d& up,
                                        const MaskOptions& mask, const BlobTestOptions& options,

@@ -83,6 +83,17 @@ void DeclareStandingOptions(OptionTable& t, DynmaskOptions& o) {
          "are static: the photo saw the static surface there (0: off)")
       .Range(0, 1, false, true)
       .Alternative("0");
+  t.Real("--occludes", &o.occludes,
+         "Keep only blobs that hide something: at least S of their upper pixels have a static "
+         "depth beyond their foot's (by --occlusion-gap) or none; not doors, shop fronts or "
+         "stretches of a facade the mesh has wrong (0: off)")
+      .Range(0, 1)
+      .Alternative("0");
+  t.Real("--occlusion-gap", &o.occlusion_gap,
+         "With --occludes: how far beyond the foot (relative to its depth) a static surface "
+         "counts as behind the blob")
+      .Range(0, 10, true, false)
+      .Alternative("0.5");
 }
 
 }  // namespace
@@ -102,6 +113,12 @@ OptionTable DeclareOptions(DynmaskOptions& o) {
             "Photos of the other drives of the road each photo is also checked against: a "
             "vehicle parked in one drive only (0: its own drive only)")
       .Range(0, 16)
+      .Alternative("0");
+  t.Integer("--partners-ahead", &o.partners_ahead,
+            "Photos of the other drives that saw the photo's far surfaces (its far model points), "
+            "taken farther along the road: they see the far road past a vehicle driving ahead "
+            "of their camera; compared at the far pixels only (0: none)")
+      .Range(0, 8)
       .Alternative("0");
   t.Real("--min-baseline", &o.min_baseline,
          "Nearest neighbour allowed, in median camera spacings (larger: more parallax)")
@@ -230,14 +247,85 @@ std::map<std::string, double> DriveSpacings(const Scene& s) {
   return out;
 }
 
+// Partners that saw the far surfaces (`count` of them, greedily: each the photo of another drive
+// looking within 45 degrees of the image's way that observed the most of the image's far model
+// points, those at least half as deep as its 90th-percentile point, not observed by the ones
+// chosen before). A vehicle driving ahead of the other drive's camera, at its speed, hides the
+// far road in the nearest partners of every photo (and its own drive's photos cannot see it
+// move); the photos of that drive that observed those points (the model's tracks say which) saw
+// the far road past it. `centre` and `way` are the camera centres and viewing directions of
+// `others`, made once per drive. `far` is set to the half-depth (0: no far points).
+struct OtherDrives {
+  std::vector<size_t> images;           // indices into s.images
+  std::vector<Eigen::Vector3d> centre;  // their camera centres
+  std::vector<Eigen::Vector3d> way;     // their viewing directions
+};
+std::vector<size_t> PartnersFar(const Scene& s, size_t i, const OtherDrives& others, int count,
+                                double& far) {
+  std::vector<size_t> out;
+  far = 0;
+  if (count <= 0) return out;
+  const ImageRecord& im = *s.images[i];
+  std::vector<std::pair<double, const Point3D*>> seen;
+  for (const Point2D& p : im.points2D) {
+    const auto it = s.rec.points3D.find(p.point3D_id);
+    if (it == s.rec.points3D.end()) continue;
+    const double d = (im.world_to_camera * it->second.xyz).z();
+    if (d > 0 && std::isfinite(d)) seen.emplace_back(d, &it->second);
+  }
+  if (seen.size() < 8) return out;
+  std::sort(seen.begin(), seen.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
+  far = 0.5 * seen[size_t(0.9 * double(seen.size() - 1))].first;
+  std::map<uint32_t, size_t> candidate;  // image id -> index into s.images
+  const Eigen::Vector3d v = im.world_to_camera.ViewDirection(), c = im.world_to_camera.Centre();
+  for (size_t k = 0; k < others.images.size(); ++k)
+    if (others.way[k].dot(v) >= std::sqrt(0.5) && (others.centre[k] - c).dot(v) > 0)
+      candidate[s.images[others.images[k]]->id] = others.images[k];
+  std::vector<const Point3D*> left;
+  for (const auto& [d, pt] : seen)
+    if (d >= far) left.push_back(pt);
+  for (int k = 0; k < count && !left.empty(); ++k) {
+    std::map<size_t, int> votes;
+    for (const Point3D* pt : left)
+      for (const TrackElement& e : pt->track) {
+        const auto hit = candidate.find(e.image_id);
+        if (hit != candidate.end()) ++votes[hit->second];
+      }
+    if (votes.empty()) break;
+    const auto best =
+        std::max_element(votes.begin(), votes.end(),
+                         [](const auto& a, const auto& b) { return a.second < b.second; });
+    const uint32_t id = s.images[best->first]->id;
+    out.push_back(best->first);
+    candidate.erase(id);
+    left.erase(std::remove_if(left.begin(), left.end(),
+                              [&](const Point3D* pt) {
+                                return std::any_of(
+                                    pt->track.begin(), pt->track.end(),
+                                    [&](const TrackElement& e) { return e.image_id == id; });
+                              }),
+               left.end());
+  }
+  return out;
+}
+
 // Partners of every image among the images of the other drives: the nearest centres looking the
 // same way (index/view_selection.h, the projector rule: within 45°, one just behind preferred),
 // no farther than 3 camera spacings (beyond, a photo of another place). The spacing is the
 // larger of the image's own drive's median and the median over the road's drives, so a drive
 // of one photo, or one that mostly stood still, still has partners.
-std::vector<std::vector<size_t>> ChoosePartners(const Scene& s, int count) {
-  std::vector<std::vector<size_t>> out(s.images.size());
-  if (count <= 0 || s.drives.size() < 2) return out;
+// Each image's partners and the static depth each compares from (0: all pixels; a partner
+// that saw the far surfaces: the far pixels only).
+struct Partners {
+  std::vector<std::vector<size_t>> images;
+  std::vector<std::vector<double>> beyond;
+};
+Partners ChoosePartners(const Scene& s, int count, int ahead) {
+  Partners p{std::vector<std::vector<size_t>>(s.images.size()),
+             std::vector<std::vector<double>>(s.images.size())};
+  auto& out = p.images;
+  if (count <= 0 || s.drives.size() < 2) return p;
   ViewSelectionOptions vo;
   vo.k = size_t(count);
   const std::map<std::string, double> spacing = DriveSpacings(s);
@@ -247,16 +335,26 @@ std::vector<std::vector<size_t>> ChoosePartners(const Scene& s, int count) {
   const double road = moving.empty() ? 0 : Median(moving);
   for (const auto& [name, idx] : s.drives) {
     std::vector<Rigid3d> others;
-    std::vector<size_t> other_idx;
+    OtherDrives od;
     for (const auto& [other, jdx] : s.drives)
       if (other != name)
-        for (size_t j : jdx) others.push_back(s.images[j]->world_to_camera), other_idx.push_back(j);
+        for (size_t j : jdx) {
+          const Rigid3d& w2c = s.images[j]->world_to_camera;
+          others.push_back(w2c), od.images.push_back(j);
+          od.centre.push_back(w2c.Centre()), od.way.push_back(w2c.ViewDirection());
+        }
     const double reach = 3 * std::max(spacing.at(name), road);
-    for (size_t i : idx)
+    for (size_t i : idx) {
       for (const Candidate& c : SelectViews(s.images[i]->world_to_camera, others, vo))
-        if (c.distance <= reach) out[i].push_back(other_idx[c.index]);
+        if (c.distance <= reach) out[i].push_back(od.images[c.index]);
+      p.beyond[i].assign(out[i].size(), 0.0);
+      double far = 0;
+      for (size_t j : PartnersFar(s, i, od, ahead, far))
+        if (std::find(out[i].begin(), out[i].end(), j) == out[i].end())
+          out[i].push_back(j), p.beyond[i].push_back(far);
+    }
   }
-  return out;
+  return p;
 }
 
 // Static depth of one image at its working size.
@@ -447,7 +545,8 @@ struct Job {
 
 // Each image's neighbours of its own drive and partners of the other drives.
 struct Pairing {
-  std::vector<std::vector<size_t>> neighbours, partners;
+  std::vector<std::vector<size_t>> neighbours;
+  Partners partner;
 };
 
 // The selected images whose probability map is stale.
@@ -472,7 +571,7 @@ std::vector<Job> StaleMaps(const DynmaskOptions& o, const Workspace& ws, const S
     const fs::path own = ws.StereoDepthPath(s.images[i]->name);  // --seen-tolerance reads it
     if (o.seen_tolerance > 0 && d.UsesMesh() && fs::exists(own)) job.in.push_back(own);
     for (size_t j : nbs[i]) view(j);
-    for (size_t j : pair.partners[i]) {
+    for (size_t j : pair.partner.images[i]) {
       view(j);
       const fs::path seen = ws.StereoDepthPath(s.images[j]->name);
       if (fs::exists(seen)) job.in.push_back(seen);
@@ -514,22 +613,27 @@ void ComputeMaps(const DynmaskOptions& o, const Workspace& ws, const Scene& s, c
   };
   for (const Job& job : todo) {
     cache.Next();
-    const std::vector<DynamicView> nv = views_of(pair.neighbours[job.i], false),
-                                   pv = views_of(pair.partners[job.i], true);
+    const std::vector<DynamicView> nv = views_of(pair.neighbours[job.i], false);
+    std::vector<DynamicView> pv = views_of(pair.partner.images[job.i], true);
+    for (size_t k = 0; k < pv.size(); ++k) pv[k].beyond = pair.partner.beyond[job.i][k];
     DynamicEvidence e = EstimateDynamic(cache.Get(job.i), pointers(nv), ev, pointers(pv));
     if (e.neighbours + e.partners == 0) ++rep.no_neighbours;
     if (e.partners > 0) ++rep.with_partners;
     if (o.grounded > 0)
       rep.floating += size_t(
           KeepGrounded(cache.Get(job.i), s.up, o.mask.probability, o.grounded, e.probability));
-    if (o.min_height > 0 || o.seen_tolerance > 0) {
+    if (o.min_height > 0 || o.seen_tolerance > 0 || o.occludes > 0) {
       DynamicView t = cache.Get(job.i);
       // The photo's own map against the mesh's depth; with densify's maps as the static depth
-      // they are one map and explain nothing.
+      // they are one map and explain nothing, and a vehicle parked in this drive is in that
+      // "static" depth, hiding nothing behind it: the occlusion test needs the mesh too.
       if (d.UsesMesh()) t.seen = cache.Seen(job.i);
-      const BlobTestCounts c =
-          KeepStandingUnexplained(t, s.up, o.mask, {o.min_height, o.seen_tolerance}, e.probability);
-      rep.lying += size_t(c.lying), rep.explained += c.explained;
+      const BlobTestCounts c = KeepStandingUnexplained(
+          t, s.up, o.mask,
+          {o.min_height, o.seen_tolerance, d.UsesMesh() ? o.occludes : 0, o.occlusion_gap},
+          e.probability);
+      rep.lying += size_t(c.lying), rep.surface += size_t(c.surface);
+      rep.explained += c.explained;
     }
     const fs::path out = ws.DynamicPath(s.images[job.i]->name);
     CreateFolder(out.parent_path());
@@ -692,7 +796,7 @@ DynmaskReport RunDynmask(const DynmaskOptions& o) {
   const DepthProvider depth(ws, o.depth);
   const Scene s = LoadScene(ws, o.max_width);
   const Pairing pair{ChooseNeighbours(s, o.neighbours, o.min_baseline),
-                     ChoosePartners(s, o.partners)};
+                     ChoosePartners(s, o.partners, o.partners_ahead)};
   DynmaskReport rep;
   rep.images = s.images.size();
   rep.depth_source = depth.Name();

@@ -23,6 +23,7 @@ struct DynmaskOptions : WorkOptions {
   int max_width = 640;         // working resolution: images wider are scaled down to this
   int neighbours = 4;          // photos of the same drive each photo is checked against
   int partners = 2;            // photos of other drives each photo is also checked against
+  int partners_ahead = 2;      // ... and photos of other drives farther along the road
   double min_baseline = 0.25;  // nearest neighbour allowed, in median camera spacings
   DepthSource depth = DepthSource::kAuto;  // auto: the mesh, else densify's maps
   bool no_flow = false;                    // --no-flow: photometric evidence only
@@ -30,6 +31,8 @@ struct DynmaskOptions : WorkOptions {
   int passes = 2;  // 2: neighbours' pixels that their own first pass finds moving are left out
   double min_height = 0.5;       // blobs must rise this × the camera's height; 0: off
   double seen_tolerance = 0.05;  // pixels where densify's depth is the static one: static; 0 off
+  double occludes = 0.2;         // blobs must hide something behind them (share); 0: off
+  double occlusion_gap = 0.25;   // ... beyond their foot's depth by this (relative)
   DynamicOptions evidence;       // --threshold, --flow/--no-flow, --quantile, ...
   MaskOptions mask;              // --probability, --open, --close, --min-area
   TrackOptions track;            // segtrack's tracking options (defaults: the constructor)
@@ -57,6 +60,7 @@ struct DynmaskReport {
   size_t with_partners = 0;  // images checked against another drive's photos too
   size_t floating = 0;       // blobs removed: not standing on the ground
   size_t lying = 0;          // blobs removed: flat in the road (wet patches, shadows)
+  size_t surface = 0;        // blobs removed: on the static surface, hiding nothing
   size_t explained = 0;      // pixels cleared: the photo's own depth is the static depth there
   bool masked = false;       // masks and tracks.tsv were (re)made
   size_t masks_written = 0;

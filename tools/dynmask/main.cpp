@@ -25,6 +25,8 @@ int RunAndReport(mvtm::DynmaskOptions& o) {
     std::fprintf(stderr, "; %zu checked against other drives too", r.with_partners);
   if (r.floating) std::fprintf(stderr, "; %zu blobs off the ground left out", r.floating);
   if (r.lying) std::fprintf(stderr, "; %zu blobs lying in the road left out", r.lying);
+  if (r.surface)
+    std::fprintf(stderr, "; %zu blobs on the static surface (hiding nothing) left out", r.surface);
   if (r.explained)
     std::fprintf(stderr, "; %zu pixels the photo's own depth explains cleared", r.explained);
   if (r.no_neighbours)

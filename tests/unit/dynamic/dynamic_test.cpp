@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <limits>
 #include <opencv2/imgproc.hpp>
@@ -149,6 +150,21 @@ TEST(Dynamic, PartnerOfAnotherDriveFindsAVehicleParkedInThisDriveOnly) {
   Score(MaskFromProbability(e.probability, MaskOptions()), box, recall, fp);
   EXPECT_GE(recall, 0.85);
   EXPECT_LE(fp, 0.01);
+  // A partner that saw the far surfaces compares only the pixels at least `beyond` deep: the
+  // box's static depth runs from 198 / 39.5 = 5.0 m (row 89) to 198 / 15.5 = 12.8 m (row 65).
+  DynamicView far = other;
+  far.beyond = 5.0 - 0.1;  // all of the box: found as before
+  const DynamicEvidence all = EstimateDynamic(t, {}, DynamicOptions(), {&far});
+  Score(MaskFromProbability(all.probability, MaskOptions()), box, recall, fp);
+  EXPECT_GE(recall, 0.85);
+  EXPECT_TRUE(std::isnan(all.across.at<float>(100, 120)));  // the road nearer: not compared
+  far.beyond = 12.8 + 0.1;  // none of it: no evidence there, the road beyond still compared
+  const DynamicEvidence none = EstimateDynamic(t, {}, DynamicOptions(), {&far});
+  EXPECT_EQ(none.partners, 1);
+  Score(MaskFromProbability(none.probability, MaskOptions()), box, recall, fp);
+  EXPECT_LE(recall, 0.05);
+  EXPECT_TRUE(std::isnan(none.across.at<float>(80, 120)));
+  EXPECT_TRUE(std::isfinite(none.across.at<float>(55, 120)));
 }
 
 TEST(Dynamic, AVehicleParkedInThePartnersDriveDoesNotMaskTheRoad) {
@@ -264,6 +280,20 @@ cv::Mat BlobTestProbability() {
   return p;
 }
 
+// The rotation of the blob tests' similar world, and a view moved into that world: turned by q,
+// scaled by 0.2 and moved to UTM-sized coordinates (its depth scaled alike).
+Eigen::Quaterniond SimilarWorldRotation() {
+  return Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(0.2, 1, 0.1).normalized()));
+}
+DynamicView InSimilarWorld(const DynamicView& t, const Eigen::Quaterniond& q) {
+  DynamicView m = t;
+  m.world_to_camera.q = t.world_to_camera.q * q.inverse();
+  m.world_to_camera.t =
+      0.2 * t.world_to_camera.t - m.world_to_camera.q * Eigen::Vector3d(451000, 120, 5410000);
+  m.depth = t.depth * 0.2;
+  return m;
+}
+
 MaskOptions ExactBlobs() {  // no opening, closing or size limit: the rectangles as they are
   MaskOptions m;
   m.open = 0, m.close = 0, m.min_area = 0;
@@ -276,7 +306,7 @@ TEST(Dynamic, BlobsLyingInTheRoadGoThoseStandingStay) {
   const auto run = [&](const DynamicView& v, const Eigen::Vector3d& u, double min_height,
                        int& lying) {
     cv::Mat p = BlobTestProbability();
-    lying = KeepStandingUnexplained(v, u, ExactBlobs(), {min_height, 0}, p).lying;
+    lying = KeepStandingUnexplained(v, u, ExactBlobs(), {min_height, 0, 0}, p).lying;
     return std::pair<bool, bool>{p.at<float>(70, 40) > 0, p.at<float>(60, 170) > 0};
   };
   int lying = 0;
@@ -290,12 +320,8 @@ TEST(Dynamic, BlobsLyingInTheRoadGoThoseStandingStay) {
   EXPECT_EQ(lying, 2);
   EXPECT_EQ(run(t, up, 0, lying), std::make_pair(true, true));  // off
   // A similar world (rotated, scale 0.2, UTM-sized offset): the same decisions.
-  const Eigen::Quaterniond q(Eigen::AngleAxisd(0.7, Eigen::Vector3d(0.2, 1, 0.1).normalized()));
-  DynamicView m = t;
-  m.world_to_camera.q = t.world_to_camera.q * q.inverse();
-  m.world_to_camera.t =
-      0.2 * t.world_to_camera.t - m.world_to_camera.q * Eigen::Vector3d(451000, 120, 5410000);
-  m.depth = t.depth * 0.2;
+  const Eigen::Quaterniond q = SimilarWorldRotation();
+  const DynamicView m = InSimilarWorld(t, q);
   EXPECT_EQ(run(m, q * up, kPatchRise + 0.01, lying), std::make_pair(false, true));
   EXPECT_EQ(run(m, q * up, kVehicleRise - 0.01, lying), std::make_pair(false, true));
   EXPECT_EQ(run(m, q * up, kVehicleRise + 0.01, lying), std::make_pair(false, false));
@@ -306,24 +332,66 @@ TEST(Dynamic, BlobsLyingInTheRoadGoThoseStandingStay) {
   EXPECT_EQ(lying, 0);
 }
 
+// A facade across the road 9.9 m ahead in columns 20..99 (its foot on the road at row 69: the
+// ground 198 / (y - 49.5) m away), a door on it (rows 40..69, columns 40..60), a vehicle in front
+// of it (rows 50..79, columns 70..95: its foot row's ground 198 / 29.5 = 6.71 m away, its upper
+// half seeing the facade: 9.9 / 6.71 = 1.475 times as deep) and a blob in the sky (no foot).
+constexpr double kWallDepth = 9.9, kVehicleBehind = kWallDepth / (198 / 29.5);
+const cv::Rect kDoor(40, 40, 21, 30), kFront(70, 50, 26, 30), kCloud(150, 5, 30, 10);
+
+TEST(Dynamic, BlobsOnTheStaticSurfaceGoThoseHidingItStay) {
+  DynamicView t = MakeView(10, nullptr);
+  t.depth(cv::Rect(20, 0, 80, 70)).setTo(float(kWallDepth));
+  const Eigen::Vector3d up(0, -1, 0);
+  const auto run = [&](const DynamicView& v, double occludes, double gap, int& surface) {
+    cv::Mat p(kH, kW, CV_32F, 0.f);
+    for (const cv::Rect& r : {kDoor, kFront, kCloud}) p(r).setTo(0.9f);
+    surface = KeepStandingUnexplained(v, up, ExactBlobs(), {0, 0, occludes, gap}, p).surface;
+    return std::array<bool, 3>{p.at<float>(55, 50) > 0, p.at<float>(60, 80) > 0,
+                               p.at<float>(10, 160) > 0};
+  };
+  int surface = 0;
+  using B = std::array<bool, 3>;
+  // The door hides nothing: every upper pixel is as deep as its foot.
+  EXPECT_EQ(run(t, 0.2, 0.25, surface), (B{false, true, true}));
+  EXPECT_EQ(surface, 1);
+  // The vehicle's gap, either side of the hand-derived 1.475.
+  EXPECT_EQ(run(t, 0.2, kVehicleBehind - 1 - 0.01, surface), (B{false, true, true}));
+  EXPECT_EQ(run(t, 0.2, kVehicleBehind - 1 + 0.01, surface), (B{false, false, true}));
+  EXPECT_EQ(surface, 2);                                          // the sky blob has no foot: kept
+  EXPECT_EQ(run(t, 1.0, 0.25, surface), (B{false, true, true}));  // all its upper pixels
+  EXPECT_EQ(run(t, 0, 0.25, surface), (B{true, true, true}));     // off
+  EXPECT_EQ(surface, 0);
+  // A similar world (scale 0.2, UTM-sized offset, rotated): the same decisions.
+  const DynamicView m = InSimilarWorld(t, SimilarWorldRotation());
+  EXPECT_EQ(run(m, 0.2, kVehicleBehind - 1 - 0.01, surface), (B{false, true, true}));
+  EXPECT_EQ(run(m, 0.2, kVehicleBehind - 1 + 0.01, surface), (B{false, false, true}));
+  // The depth behind is part of the evidence: with the road everywhere (no facade), the door's
+  // upper pixels see the road far behind its foot and it stays.
+  EXPECT_EQ(run(MakeView(10, nullptr), 0.2, 0.25, surface), (B{true, true, true}));
+  cv::Mat p(kH, kW, CV_32F, 0.f);
+  EXPECT_THROW(KeepStandingUnexplained(t, up, ExactBlobs(), {0, 0, 1.5, 0.25}, p), Error);
+  EXPECT_THROW(KeepStandingUnexplained(t, up, ExactBlobs(), {0, 0, 0.2, 0}, p), Error);
+}
+
 TEST(Dynamic, PixelsThePhotosOwnDepthExplainsAreCleared) {
   DynamicView t = MakeView(10, nullptr);
   const Eigen::Vector3d up(0, -1, 0);
   cv::Mat p = BlobTestProbability();
   // No depth of its own: nothing cleared.
-  EXPECT_EQ(KeepStandingUnexplained(t, up, ExactBlobs(), {0, 0.05}, p).explained, 0u);
+  EXPECT_EQ(KeepStandingUnexplained(t, up, ExactBlobs(), {0, 0.05, 0}, p).explained, 0u);
   EXPECT_EQ(cv::countNonZero(p > 0), kPatch.area() + kVehicle.area());
   // Densify found the road under the patch (within 4 %) and the vehicle nearer than the road.
   t.seen = t.depth * 1.04f;
   t.seen(kVehicle) = t.depth(kVehicle) * 0.6f;
-  EXPECT_EQ(KeepStandingUnexplained(t, up, ExactBlobs(), {0, 0.05}, p).explained,
+  EXPECT_EQ(KeepStandingUnexplained(t, up, ExactBlobs(), {0, 0.05, 0}, p).explained,
             size_t(kPatch.area()));
   EXPECT_EQ(cv::countNonZero(p(kPatch) > 0), 0);
   EXPECT_EQ(cv::countNonZero(p(kVehicle) > 0), kVehicle.area());
   // A tighter tolerance than the 4 % leaves the patch; 0 turns the test off.
   for (double tol : {0.03, 0.0}) {
     cv::Mat q = BlobTestProbability();
-    EXPECT_EQ(KeepStandingUnexplained(t, up, ExactBlobs(), {0, tol}, q).explained, 0u);
+    EXPECT_EQ(KeepStandingUnexplained(t, up, ExactBlobs(), {0, tol, 0}, q).explained, 0u);
     EXPECT_EQ(cv::countNonZero(q > 0), kPatch.area() + kVehicle.area());
   }
   cv::Mat small(10, 10, CV_32F, 0.f);
