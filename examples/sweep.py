@@ -489,7 +489,7 @@ def sweep_dynmask(c):
                  ("flow-relative", "--flow-relative", (0, 0.05, 0.1, 0.2)),
                  ("neighbours", "--neighbours", (2, 4, 6, 8)),
                  ("partners", "--partners", (0, 1, 2, 4)),
-                 ("partners-ahead", "--partners-ahead", (0, 1, 2, 4)),
+                 ("partners-ahead", "--partners-ahead", (0, 2, 4, 6)),
                  ("min-baseline", "--min-baseline", (0.25, 1.5, 2.5)),
                  ("passes", "--passes", (1, 2)),
                  ("segments", "--segments", (0, 100, 300, 1000)),
@@ -502,7 +502,7 @@ def sweep_dynmask(c):
                  ("max-gap", "--max-gap", (1, 3, 10))]
     defaults = {"--threshold": 0.05, "--flow-threshold": 2.5, "--no-flow": False,
                 "--flow-relative": 0,
-                "--neighbours": 4, "--partners": 2, "--partners-ahead": 2,
+                "--neighbours": 4, "--partners": 2, "--partners-ahead": 4,
                 "--min-baseline": 0.25, "--passes": 2, "--occludes": 0.2, "--occlusion-gap": 0.25,
                 "--segments": 300,
                 "--probability": 0.4, "--grounded": 0.25, "--min-height": 0.5,
@@ -530,7 +530,7 @@ def sweep_dynmask(c):
         f"<b>Knobs:</b> <code>--threshold</code> (photometric residual at p = 0.5), "
         f"<code>--flow-threshold</code> (flow residual in pixels), <code>--no-flow</code>, "
         f"<code>--neighbours</code>, <code>--partners</code> (photos of the other drive), "
-        f"<code>--partners-ahead</code> (photos of the other drive that saw the far road), "
+        f"<code>--partners-ahead</code> (photos of the other drive farther along the road), "
         f"<code>--min-baseline</code>, <code>--passes</code>, "
         f"<code>--segments</code> (Felzenszwalb's k; 0 = no regions), "
         f"<code>--probability</code>, <code>--grounded</code>, <code>--min-height</code> "

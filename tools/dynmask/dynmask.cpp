@@ -115,9 +115,9 @@ OptionTable DeclareOptions(DynmaskOptions& o) {
       .Range(0, 16)
       .Alternative("0");
   t.Integer("--partners-ahead", &o.partners_ahead,
-            "Photos of the other drives that saw the photo's far surfaces (its far model points), "
-            "taken farther along the road: they see the far road past a vehicle driving ahead "
-            "of their camera; compared at the far pixels only (0: none)")
+            "Photos of the other drives farther along the road, at N depths up to the photo's "
+            "far surfaces: they see the far road in front of a vehicle driving ahead of their "
+            "camera; compared at the pixels beyond them only (0: none)")
       .Range(0, 8)
       .Alternative("0");
   t.Real("--min-baseline", &o.min_baseline,
@@ -247,65 +247,48 @@ std::map<std::string, double> DriveSpacings(const Scene& s) {
   return out;
 }
 
-// Partners that saw the far surfaces (`count` of them, greedily: each the photo of another drive
-// looking within 45 degrees of the image's way that observed the most of the image's far model
-// points, those at least half as deep as its 90th-percentile point, not observed by the ones
-// chosen before). A vehicle driving ahead of the other drive's camera, at its speed, hides the
-// far road in the nearest partners of every photo (and its own drive's photos cannot see it
-// move); the photos of that drive that observed those points (the model's tracks say which) saw
-// the far road past it. `centre` and `way` are the camera centres and viewing directions of
-// `others`, made once per drive. `far` is set to the half-depth (0: no far points).
+// The camera centres and viewing directions of the other drives' photos, made once per drive.
 struct OtherDrives {
   std::vector<size_t> images;           // indices into s.images
   std::vector<Eigen::Vector3d> centre;  // their camera centres
   std::vector<Eigen::Vector3d> way;     // their viewing directions
 };
-std::vector<size_t> PartnersFar(const Scene& s, size_t i, const OtherDrives& others, int count,
-                                double& far) {
-  std::vector<size_t> out;
-  far = 0;
+
+// Partners farther along the road (`count` of them): for k = 1..count, the photo of another
+// drive looking within 45 degrees of the image's way whose centre lies nearest to the depth
+// k / (count + 1) of its far surfaces (the 90th percentile of the depths of the model's points
+// it observes) in front of it, with that depth: it is compared at the image's pixels beyond it
+// only (nearer ones are behind it). A vehicle driving ahead of the other drive's camera, at its
+// speed, hides a cone of the far road in the nearest partners of every photo (and its own
+// drive's photos cannot see it move); a photo of that drive taken nearer to that far road, at
+// one of several distances, sees it in front of the vehicle.
+std::vector<std::pair<size_t, double>> PartnersAhead(const Scene& s, size_t i,
+                                                     const OtherDrives& others, int count) {
+  std::vector<std::pair<size_t, double>> out;
   if (count <= 0) return out;
   const ImageRecord& im = *s.images[i];
-  std::vector<std::pair<double, const Point3D*>> seen;
+  std::vector<double> z;
   for (const Point2D& p : im.points2D) {
     const auto it = s.rec.points3D.find(p.point3D_id);
     if (it == s.rec.points3D.end()) continue;
     const double d = (im.world_to_camera * it->second.xyz).z();
-    if (d > 0 && std::isfinite(d)) seen.emplace_back(d, &it->second);
+    if (d > 0 && std::isfinite(d)) z.push_back(d);
   }
-  if (seen.size() < 8) return out;
-  std::sort(seen.begin(), seen.end(),
-            [](const auto& a, const auto& b) { return a.first < b.first; });
-  far = 0.5 * seen[size_t(0.9 * double(seen.size() - 1))].first;
-  std::map<uint32_t, size_t> candidate;  // image id -> index into s.images
-  const Eigen::Vector3d v = im.world_to_camera.ViewDirection(), c = im.world_to_camera.Centre();
-  for (size_t k = 0; k < others.images.size(); ++k)
-    if (others.way[k].dot(v) >= std::sqrt(0.5) && (others.centre[k] - c).dot(v) > 0)
-      candidate[s.images[others.images[k]]->id] = others.images[k];
-  std::vector<const Point3D*> left;
-  for (const auto& [d, pt] : seen)
-    if (d >= far) left.push_back(pt);
-  for (int k = 0; k < count && !left.empty(); ++k) {
-    std::map<size_t, int> votes;
-    for (const Point3D* pt : left)
-      for (const TrackElement& e : pt->track) {
-        const auto hit = candidate.find(e.image_id);
-        if (hit != candidate.end()) ++votes[hit->second];
-      }
-    if (votes.empty()) break;
-    const auto best =
-        std::max_element(votes.begin(), votes.end(),
-                         [](const auto& a, const auto& b) { return a.second < b.second; });
-    const uint32_t id = s.images[best->first]->id;
-    out.push_back(best->first);
-    candidate.erase(id);
-    left.erase(std::remove_if(left.begin(), left.end(),
-                              [&](const Point3D* pt) {
-                                return std::any_of(
-                                    pt->track.begin(), pt->track.end(),
-                                    [&](const TrackElement& e) { return e.image_id == id; });
-                              }),
-               left.end());
+  if (z.size() < 8) return out;
+  std::sort(z.begin(), z.end());
+  const double p90 = z[size_t(0.9 * double(z.size() - 1))];
+  const Eigen::Vector3d v = im.world_to_camera.ViewDirection();
+  for (int k = 1; k <= count; ++k) {
+    const double want = p90 * k / (count + 1);
+    size_t best = others.images.size();
+    double best_d = std::numeric_limits<double>::infinity(), best_z = 0;
+    for (size_t j = 0; j < others.images.size(); ++j) {
+      if (others.way[j].dot(v) < std::sqrt(0.5)) continue;
+      const double zj = (im.world_to_camera * others.centre[j]).z();
+      if (!(zj > 0)) continue;
+      if (std::abs(zj - want) < best_d) best = j, best_d = std::abs(zj - want), best_z = zj;
+    }
+    if (best < others.images.size()) out.emplace_back(others.images[best], best_z);
   }
   return out;
 }
@@ -348,10 +331,9 @@ Partners ChoosePartners(const Scene& s, int count, int ahead) {
       for (const Candidate& c : SelectViews(s.images[i]->world_to_camera, others, vo))
         if (c.distance <= reach) out[i].push_back(od.images[c.index]);
       p.beyond[i].assign(out[i].size(), 0.0);
-      double far = 0;
-      for (size_t j : PartnersFar(s, i, od, ahead, far))
+      for (const auto& [j, z] : PartnersAhead(s, i, od, ahead))
         if (std::find(out[i].begin(), out[i].end(), j) == out[i].end())
-          out[i].push_back(j), p.beyond[i].push_back(far);
+          out[i].push_back(j), p.beyond[i].push_back(z);
     }
   }
   return p;

@@ -23,7 +23,7 @@ struct DynmaskOptions : WorkOptions {
   int max_width = 640;         // working resolution: images wider are scaled down to this
   int neighbours = 4;          // photos of the same drive each photo is checked against
   int partners = 2;            // photos of other drives each photo is also checked against
-  int partners_ahead = 2;      // ... and photos of other drives farther along the road
+  int partners_ahead = 4;      // ... and photos of other drives farther along the road
   double min_baseline = 0.25;  // nearest neighbour allowed, in median camera spacings
   DepthSource depth = DepthSource::kAuto;  // auto: the mesh, else densify's maps
   bool no_flow = false;                    // --no-flow: photometric evidence only
