@@ -146,22 +146,29 @@ if [ "$poses" = - ]; then
       done
       echo "$n $b"
     }
+    # Keeps NEW's models in place of DIR's when NEW's largest registered more images than best_n;
+    # removes NEW; sets best_n and best to DIR's largest. Returns 1 when DIR's were kept.
+    adopt_if_more() {  # DIR NEW
+      local n m kept=1
+      read -r n m <<< "$(largest "$2")"
+      if [ "$n" -gt "$best_n" ]; then rm -rf "$1"; mv "$2" "$1"; kept=0; fi
+      rm -rf "$2"
+      read -r best_n best <<< "$(largest "$1")"
+      return "$kept"
+    }
     # The mapper on one set of images (all, or one stretch's list): COLMAP's defaults, and when
     # they register under half the images, again as forward motion; the largest model is kept.
     # Sets best_n and best (count, path); several models when the chain of matches breaks: each
     # is reported.
     map_best() {  # OUTDIR COUNT [mapper options...]
-      local d=$1 want=$2 m k fwd_n fwd; shift 2
+      local d=$1 want=$2 m k; shift 2
       map_run "$d" "$@"
       read -r best_n best <<< "$(largest "$d")"
       if [ "$best_n" -lt $(( (want + 1) / 2 )) ]; then
         echo "SfM with COLMAP's defaults registered $best_n of $want images: again as forward motion" >&2
         map_run "${d}_forward" "$@" --Mapper.init_min_tri_angle 1 --Mapper.init_min_num_inliers 50 \
           --Mapper.init_max_forward_motion 1.0
-        read -r fwd_n fwd <<< "$(largest "${d}_forward")"
-        if [ "$fwd_n" -gt "$best_n" ]; then rm -rf "$d"; mv "${d}_forward" "$d"; fi
-        rm -rf "${d}_forward"
-        read -r best_n best <<< "$(largest "$d")"
+        adopt_if_more "$d" "${d}_forward" || true
       fi
       # Self-calibrating, a two-view start can refine the one camera into nonsense (focal length
       # and distortion from a pair with a small baseline), after which no further image registers
@@ -171,16 +178,12 @@ if [ "$poses" = - ]; then
       if [ "$best_n" -lt $(( (want + 1) / 2 )) ] && [ "$self_calibrating" = 1 ]; then
         echo "SfM registered $best_n of $want images: again with the camera held, refined afterwards" >&2
         map_run "${d}_held" "$@" --Mapper.ba_refine_focal_length 0 --Mapper.ba_refine_extra_params 0
-        read -r fwd_n fwd <<< "$(largest "${d}_held")"
-        if [ "$fwd_n" -gt "$best_n" ]; then
-          colmap bundle_adjuster --input_path "$fwd" --output_path "$fwd" \
+        if adopt_if_more "$d" "${d}_held"; then
+          colmap bundle_adjuster --input_path "$best" --output_path "$best" \
             --BundleAdjustment.refine_focal_length 1 --BundleAdjustment.refine_extra_params 1 \
             >> "$out/colmap.log" 2>&1 ||
             echo "warning: the camera held at its starting guess (its refinement failed: $out/colmap.log)" >&2
-          rm -rf "$d"; mv "${d}_held" "$d"
         fi
-        rm -rf "${d}_held"
-        read -r best_n best <<< "$(largest "$d")"
       fi
       for m in "$d"/*/; do
         [ -d "$m" ] || continue

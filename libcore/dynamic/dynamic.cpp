@@ -478,29 +478,17 @@ int KeepGrounded(const DynamicView& t, const Eigen::Vector3d& up, double at, dou
   const Eigen::Vector3d up_cam = t.world_to_camera.R() * up;  // world direction in the camera
   const double ground = GroundBelow(t, up_cam);               // negative: below the camera
   if (!std::isfinite(ground)) return 0;
-  cv::Mat labels, stats, cents;
-  const cv::Mat on = probability >= at;
-  const int n = cv::connectedComponentsWithStats(on, labels, stats, cents, 8, CV_32S);
-  // Per blob: its lowest row in each column, then whether a foot point is near the ground.
+  cv::Mat labels;
+  const int n = cv::connectedComponents(probability >= at, labels, 8, CV_32S);
+  // Per blob, column by column: whether the static point below its lowest pixel is near the
+  // ground (once one is, the blob is grounded).
   std::vector<int> state(size_t(n), 0);  // 0 unknown (kept), 1 grounded, 2 floating
-  std::vector<int> lowest(size_t(probability.cols));
-  for (int b = 1; b < n; ++b) {
-    const int x0 = stats.at<int>(b, cv::CC_STAT_LEFT), w = stats.at<int>(b, cv::CC_STAT_WIDTH);
-    const int y0 = stats.at<int>(b, cv::CC_STAT_TOP), h = stats.at<int>(b, cv::CC_STAT_HEIGHT);
-    for (int x = x0; x < x0 + w; ++x) {
-      int low = -1;
-      for (int y = y0; y < y0 + h; ++y)
-        if (labels.at<int>(y, x) == b) low = y;
-      if (low < 0 || low + 1 >= probability.rows) continue;
-      const double hf = HeightOf(t, up_cam, x, low + 1);
-      if (!std::isfinite(hf)) continue;
-      if (std::abs(hf - ground) <= tolerance * std::abs(ground)) {
-        state[size_t(b)] = 1;
-        break;
-      }
-      state[size_t(b)] = 2;
-    }
-  }
+  ForEachBlobColumn(labels, n, [&](int x, size_t b, int, int low) {
+    if (state[b] == 1 || low + 1 >= probability.rows) return;
+    const double hf = HeightOf(t, up_cam, x, low + 1);
+    if (!std::isfinite(hf)) return;
+    state[b] = std::abs(hf - ground) <= tolerance * std::abs(ground) ? 1 : 2;
+  });
   std::vector<uint8_t> drop(size_t(n), 0);
   for (int b = 1; b < n; ++b) drop[size_t(b)] = state[size_t(b)] == 2;
   ZeroBlobs(labels, drop, probability);

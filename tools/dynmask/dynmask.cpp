@@ -277,33 +277,38 @@ std::vector<std::pair<size_t, double>> PartnersAhead(const Scene& s, size_t i,
   if (z.size() < 8) return out;
   std::sort(z.begin(), z.end());
   const double p90 = z[size_t(0.9 * double(z.size() - 1))];
+  // The candidates' depths in front of the image, once: (depth, index into s.images).
   const Eigen::Vector3d v = im.world_to_camera.ViewDirection();
+  std::vector<std::pair<double, size_t>> ahead;
+  for (size_t j = 0; j < others.images.size(); ++j) {
+    const double zj = (im.world_to_camera * others.centre[j]).z();
+    if (others.way[j].dot(v) >= std::sqrt(0.5) && zj > 0) ahead.emplace_back(zj, others.images[j]);
+  }
+  if (ahead.empty()) return out;
   for (int k = 1; k <= count; ++k) {
     const double want = p90 * k / (count + 1);
-    size_t best = others.images.size();
-    double best_d = std::numeric_limits<double>::infinity(), best_z = 0;
-    for (size_t j = 0; j < others.images.size(); ++j) {
-      if (others.way[j].dot(v) < std::sqrt(0.5)) continue;
-      const double zj = (im.world_to_camera * others.centre[j]).z();
-      if (!(zj > 0)) continue;
-      if (std::abs(zj - want) < best_d) best = j, best_d = std::abs(zj - want), best_z = zj;
-    }
-    if (best < others.images.size()) out.emplace_back(others.images[best], best_z);
+    const auto& [zj, j] =
+        *std::min_element(ahead.begin(), ahead.end(), [&](const auto& a, const auto& b) {
+          return std::abs(a.first - want) < std::abs(b.first - want);
+        });
+    out.emplace_back(j, zj);
   }
   return out;
 }
 
-// Partners of every image among the images of the other drives: the nearest centres looking the
-// same way (index/view_selection.h, the projector rule: within 45°, one just behind preferred),
-// no farther than 3 camera spacings (beyond, a photo of another place). The spacing is the
-// larger of the image's own drive's median and the median over the road's drives, so a drive
-// of one photo, or one that mostly stood still, still has partners.
-// Each image's partners and the static depth each compares from (0: all pixels; a partner
-// that saw the far surfaces: the far pixels only).
+// Each image's partners and, for each, the static depth it compares from (0: all pixels; a
+// partner farther along the road: the pixels beyond its own centre's depth).
 struct Partners {
   std::vector<std::vector<size_t>> images;
-  std::vector<std::vector<double>> beyond;
+  std::vector<std::vector<double>> beyond;  // parallel to images
 };
+
+// Partners of every image among the images of the other drives: the nearest centres looking the
+// same way (index/view_selection.h, the projector rule: within 45°, one just behind preferred),
+// no farther than 3 camera spacings (beyond, a photo of another place), then the `ahead`
+// partners farther along the road (PartnersAhead), each once. The spacing is the larger of the
+// image's own drive's median and the median over the road's drives, so a drive of one photo, or
+// one that mostly stood still, still has partners. `count` 0: none at all.
 Partners ChoosePartners(const Scene& s, int count, int ahead) {
   Partners p{std::vector<std::vector<size_t>>(s.images.size()),
              std::vector<std::vector<double>>(s.images.size())};
