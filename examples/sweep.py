@@ -13,7 +13,8 @@ tool and OUT/index.html, the page to read before choosing settings. Work folders
   segtrack   --smooth, --max-gap, --min-life on damaged labels: mask IoU against truth/masks,
              against whole-process milliseconds per frame
   dynmask    --threshold, --flow-threshold, --no-flow, --neighbours, --partners, --min-baseline,
-             --partners-ahead, --passes, --segments, --probability, --grounded, --min-height,
+             --partners-ahead, --ahead (with --partners 0), --passes, --segments, --region-depth,
+             --probability, --grounded, --min-height,
              --occludes, --occlusion-gap, --min-ratio, --max-gap
              (no labels; the fixture's true mesh, no densify maps, so --seen-tolerance has nothing
              to compare: its rows are the road build's, issue 21's note): mask IoU against truth/masks and
@@ -490,9 +491,13 @@ def sweep_dynmask(c):
                  ("neighbours", "--neighbours", (2, 4, 6, 8)),
                  ("partners", "--partners", (0, 1, 2, 4)),
                  ("partners-ahead", "--partners-ahead", (0, 2, 4, 6)),
+                 # photos of the same drive farther along act only without partners: drive A as
+                 # a road of one drive
+                 ("ahead (--partners 0)", "--ahead", (0, 2, 4), ["--partners", 0]),
                  ("min-baseline", "--min-baseline", (0.25, 1.5, 2.5)),
                  ("passes", "--passes", (1, 2)),
                  ("segments", "--segments", (0, 100, 300, 1000)),
+                 ("region-depth", "--region-depth", (0.25, 0.5, 1)),
                  ("probability", "--probability", (0.3, 0.4, 0.5, 0.6)),
                  ("grounded", "--grounded", (0, 0.25, 0.5)),
                  ("min-height", "--min-height", (0, 0.3, 0.5, 0.7)),
@@ -502,15 +507,17 @@ def sweep_dynmask(c):
                  ("max-gap", "--max-gap", (1, 3, 10))]
     defaults = {"--threshold": 0.05, "--flow-threshold": 2.5, "--no-flow": False,
                 "--flow-relative": 0,
-                "--neighbours": 4, "--partners": 2, "--partners-ahead": 4,
+                "--neighbours": 4, "--partners": 2, "--partners-ahead": 4, "--ahead": 2,
+                "--region-depth": 0.5,
                 "--min-baseline": 0.25, "--passes": 2, "--occludes": 0.2, "--occlusion-gap": 0.25,
                 "--segments": 300,
                 "--probability": 0.4, "--grounded": 0.25, "--min-height": 0.5,
                 "--min-ratio": 0.4, "--max-gap": 3}
     rows = []
-    for group, opt, values in knobs:
+    for group, opt, values, *extra in knobs:
         for v in values:
             args = ([opt] if v is True else []) if opt == "--no-flow" else [opt, v]
+            args += extra[0] if extra else []
             (_, _, wall), slow = c.tools.best_wall(c.repeat, "dynmask", "-q", "--force", *args, ws)
             masks = [imageio.imread(os.path.join(ws, "masks", n)) > 0 for n in a_names]
             b_share = np.mean([(imageio.imread(os.path.join(ws, "masks", n)) > 0).mean()
@@ -531,6 +538,8 @@ def sweep_dynmask(c):
         f"<code>--flow-threshold</code> (flow residual in pixels), <code>--no-flow</code>, "
         f"<code>--neighbours</code>, <code>--partners</code> (photos of the other drive), "
         f"<code>--partners-ahead</code> (photos of the other drive farther along the road), "
+        f"<code>--ahead</code> (photos of the same drive farther along; only without partners, "
+        f"so measured with <code>--partners 0</code>), <code>--region-depth</code>, "
         f"<code>--min-baseline</code>, <code>--passes</code>, "
         f"<code>--segments</code> (Felzenszwalb's k; 0 = no regions), "
         f"<code>--probability</code>, <code>--grounded</code>, <code>--min-height</code> "

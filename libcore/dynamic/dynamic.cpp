@@ -230,19 +230,24 @@ void SpreadOverRegions(const DynamicView& t, const cv::Mat& has_depth, const Dyn
   cv::minMaxLoc(seg, nullptr, &max_label);
   const size_t n = static_cast<size_t>(max_label) + 1;
   const cv::Mat w = TextureWeight(t.grey, o.window, o.texture);
-  std::vector<double> sw(n, 0), swp(n, 0), area(n, 0);
+  std::vector<double> sw(n, 0), swp(n, 0), area(n, 0), nd(n, 0);
   for (int y = 0; y < p.rows; ++y)
     for (int x = 0; x < p.cols; ++x) {
       const size_t s = static_cast<size_t>(seg.at<int>(y, x));
       area[s] += 1;
       if (!has_depth.at<uint8_t>(y, x)) continue;
+      nd[s] += 1;
       sw[s] += w.at<float>(y, x);
       swp[s] += w.at<float>(y, x) * p.at<float>(y, x);
     }
   for (int y = 0; y < p.rows; ++y)
     for (int x = 0; x < p.cols; ++x) {
       const size_t s = static_cast<size_t>(seg.at<int>(y, x));
-      if (!has_depth.at<uint8_t>(y, x) || sw[s] < 0.05 * area[s]) continue;
+      if (sw[s] < 0.05 * area[s]) continue;
+      if (!has_depth.at<uint8_t>(y, x)) {  // the region's, when mostly with depth
+        if (nd[s] > o.region_depth * area[s]) p.at<float>(y, x) = float(swp[s] / sw[s]);
+        continue;
+      }
       const float wp = w.at<float>(y, x);
       p.at<float>(y, x) = wp * p.at<float>(y, x) + (1 - wp) * static_cast<float>(swp[s] / sw[s]);
     }
@@ -269,6 +274,8 @@ void DynamicOptions::Check() const {
     throw UsageError("--segments must be at least 0, got " + std::to_string(segments));
   if (!(texture > 0) || !std::isfinite(texture))
     throw UsageError("--texture must be above 0, got " + std::to_string(texture));
+  if (!(region_depth >= 0 && region_depth <= 1))
+    throw UsageError("--region-depth must be in [0, 1], got " + std::to_string(region_depth));
 }
 
 void MaskOptions::Check() const {
@@ -321,7 +328,8 @@ float CueProbability(int y, int x, std::initializer_list<std::pair<const cv::Mat
 DynamicEvidence EstimateDynamic(const DynamicView& t,
                                 const std::vector<const DynamicView*>& neighbours,
                                 const DynamicOptions& o,
-                                const std::vector<const DynamicView*>& partners) {
+                                const std::vector<const DynamicView*>& partners,
+                                const std::vector<const DynamicView*>& ahead) {
   o.Check();
   CheckView(t, "target view");
   DynamicEvidence ev;
@@ -333,6 +341,12 @@ DynamicEvidence EstimateDynamic(const DynamicView& t,
     ev.partners =
         ReducedResiduals(t, partners, photometric_only, "partner view", ev.across, no_flow);
   }
+  if (!ahead.empty()) {
+    DynamicOptions photometric_only = o;  // metres apart: the near road's warp is too distorted
+    photometric_only.flow = false;
+    cv::Mat no_flow;
+    ev.ahead = ReducedResiduals(t, ahead, photometric_only, "ahead view", ev.ahead_photo, no_flow);
+  }
   ev.probability.create(t.grey.size(), CV_32F);
   for (int y = 0; y < t.grey.rows; ++y)
     for (int x = 0; x < t.grey.cols; ++x)
@@ -341,8 +355,9 @@ DynamicEvidence EstimateDynamic(const DynamicView& t,
                                                           {&ev.photometric, o.threshold},
                                                           {&ev.flow, o.flow_threshold},
                                                           {&ev.across, o.threshold},
+                                                          {&ev.ahead_photo, o.threshold},
                                                       });
-  if (o.segments > 0 && ev.neighbours + ev.partners > 0) {
+  if (o.segments > 0 && ev.neighbours + ev.partners + ev.ahead > 0) {
     const cv::Mat has_depth = (t.depth > 0) & (t.depth < std::numeric_limits<float>::infinity());
     SpreadOverRegions(t, has_depth, o, ev.probability);
   }

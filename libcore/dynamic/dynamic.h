@@ -82,6 +82,8 @@ struct DynamicOptions {
   int window = 5;                 // box averaging the photometric residual, odd, 1..31
   double segments = 300;          // Felzenszwalb's k for the regions evidence spreads over; 0 off
   double texture = 0.02;          // luma gradient (per pixel) at which a pixel's evidence is full
+  double region_depth = 0.5;      // a pixel without depth takes its region's probability when
+                                  // more than this share of the region has depth, [0, 1]; 1 never
 
   void Check() const;  // throws UsageError naming the option
 };
@@ -92,8 +94,11 @@ struct DynamicEvidence {
   cv::Mat flow;         // CV_32F: the reduced flow residual in pixels (empty when flow is off)
   cv::Mat across;       // CV_32F: the photometric residual reduced over the partners (NaN where
                         // none saw the pixel; empty without partners)
+  cv::Mat ahead_photo;  // CV_32F: the photometric residual reduced over the photos of the drive
+                        // farther along the road (NaN where none saw it; empty without them)
   int neighbours = 0;   // neighbours that saw any of the target's pixels
   int partners = 0;     // partners that saw any of the target's pixels
+  int ahead = 0;        // photos farther along that saw any of the target's pixels
 };
 
 // The target's evidence against `neighbours` (any number, even none: then all zero). Throws
@@ -113,7 +118,8 @@ struct DynamicEvidence {
 DynamicEvidence EstimateDynamic(const DynamicView& target,
                                 const std::vector<const DynamicView*>& neighbours,
                                 const DynamicOptions& options,
-                                const std::vector<const DynamicView*>& partners = {});
+                                const std::vector<const DynamicView*>& partners = {},
+                                const std::vector<const DynamicView*>& ahead = {});
 
 // Vehicles, cyclists and pedestrians stand on the road; mistakes of a photo-built mesh (tree
 // canopies, facade edges, poles) float above it. Sets to 0 the probability of every blob (8-

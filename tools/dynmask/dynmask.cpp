@@ -96,44 +96,8 @@ void DeclareStandingOptions(OptionTable& t, DynmaskOptions& o) {
       .Alternative("0.5");
 }
 
-}  // namespace
-
-OptionTable DeclareOptions(DynmaskOptions& o) {
-  OptionTable t("dynmask");
-  t.Positional("WS", &o.workspace, "Workspace folder (sparse/, images/, mesh.ply or stereo/)")
-      .Dir();
-  t.Integer("--max-width", &o.max_width,
-            "Working resolution: images wider than W pixels are scaled down to W (64..16384)")
-      .Range(64, 16384)
-      .Alternative("1241");
-  t.Integer("--neighbours", &o.neighbours, "Photos of the same drive each photo is checked against")
-      .Range(1, 16)
-      .Alternative("2");
-  t.Integer("--partners", &o.partners,
-            "Photos of the other drives of the road each photo is also checked against: a "
-            "vehicle parked in one drive only (0: its own drive only)")
-      .Range(0, 16)
-      .Alternative("0");
-  t.Integer("--partners-ahead", &o.partners_ahead,
-            "Photos of the other drives farther along the road, at N depths up to the photo's "
-            "far surfaces: they see the far road in front of a vehicle driving ahead of their "
-            "camera; compared at the pixels beyond them only (0: none)")
-      .Range(0, 8)
-      .Alternative("0");
-  t.Real("--min-baseline", &o.min_baseline,
-         "Nearest neighbour allowed, in median camera spacings (larger: more parallax)")
-      .Range(0, 10)
-      .Alternative("1.5");
-  DeclareStandingOptions(t, o);
-  t.Integer("--passes", &o.passes,
-            "2: a second pass leaves out the neighbours' and partners' pixels inside their own "
-            "first pass's blobs (the road a vehicle covers there); 1: one pass")
-      .Range(1, 2);
-  t.Choice("--depth", &o.depth,
-           {{DepthSource::kAuto, "auto"},
-            {DepthSource::kMesh, "mesh"},
-            {DepthSource::kStereo, "stereo"}},
-           "Static depth: the mesh ray-cast, densify's maps, or auto (the mesh, else the maps)");
+// The evidence's options (libcore/dynamic's DynamicOptions).
+void DeclareEvidenceOptions(OptionTable& t, DynmaskOptions& o) {
   t.Real("--threshold", &o.evidence.threshold,
          "Photometric residual (luma 0..1) at which a pixel is 50 % not static")
       .Above(0)
@@ -168,6 +132,59 @@ OptionTable DeclareOptions(DynmaskOptions& o) {
   t.Real("--texture", &o.evidence.texture,
          "Luma gradient per pixel at which a pixel's own evidence counts fully")
       .Above(0);
+  t.Real("--region-depth", &o.evidence.region_depth,
+         "A pixel without static depth (sky, or beyond the reconstruction) takes its region's "
+         "probability when more than this share of the region has depth: a vehicle's top "
+         "against the sky (1: never)")
+      .Range(0, 1)
+      .Alternative("1");
+}
+
+}  // namespace
+
+OptionTable DeclareOptions(DynmaskOptions& o) {
+  OptionTable t("dynmask");
+  t.Positional("WS", &o.workspace, "Workspace folder (sparse/, images/, mesh.ply or stereo/)")
+      .Dir();
+  t.Integer("--max-width", &o.max_width,
+            "Working resolution: images wider than W pixels are scaled down to W (64..16384)")
+      .Range(64, 16384)
+      .Alternative("1241");
+  t.Integer("--neighbours", &o.neighbours, "Photos of the same drive each photo is checked against")
+      .Range(1, 16)
+      .Alternative("2");
+  t.Integer("--partners", &o.partners,
+            "Photos of the other drives of the road each photo is also checked against: a "
+            "vehicle parked in one drive only (0: its own drive only)")
+      .Range(0, 16)
+      .Alternative("0");
+  t.Integer("--partners-ahead", &o.partners_ahead,
+            "Photos of the other drives farther along the road, at N depths up to the photo's "
+            "far surfaces: they see the far road in front of a vehicle driving ahead of their "
+            "camera; compared at the pixels beyond them only (0: none)")
+      .Range(0, 8)
+      .Alternative("0");
+  t.Integer("--ahead", &o.ahead,
+            "Photos of the same drive farther along the road, at N depths up to the photo's far "
+            "surfaces: they see the road in front of a vehicle driving ahead at the camera's "
+            "speed; compared at the pixels beyond them only (0: none)")
+      .Range(0, 8)
+      .Alternative("0");
+  t.Real("--min-baseline", &o.min_baseline,
+         "Nearest neighbour allowed, in median camera spacings (larger: more parallax)")
+      .Range(0, 10)
+      .Alternative("1.5");
+  DeclareStandingOptions(t, o);
+  t.Integer("--passes", &o.passes,
+            "2: a second pass leaves out the neighbours' and partners' pixels inside their own "
+            "first pass's blobs (the road a vehicle covers there); 1: one pass")
+      .Range(1, 2);
+  t.Choice("--depth", &o.depth,
+           {{DepthSource::kAuto, "auto"},
+            {DepthSource::kMesh, "mesh"},
+            {DepthSource::kStereo, "stereo"}},
+           "Static depth: the mesh ray-cast, densify's maps, or auto (the mesh, else the maps)");
+  DeclareEvidenceOptions(t, o);
   DeclareMaskOptions(t, o);
   DeclareWorkOptions(t, o, "images", "in name order",
                      "Recompute probability maps and masks even when they are up to date");
@@ -263,7 +280,8 @@ struct OtherDrives {
 // drive's photos cannot see it move); a photo of that drive taken nearer to that far road, at
 // one of several distances, sees it in front of the vehicle.
 std::vector<std::pair<size_t, double>> PartnersAhead(const Scene& s, size_t i,
-                                                     const OtherDrives& others, int count) {
+                                                     const OtherDrives& others, int count,
+                                                     double min_share = 0) {
   std::vector<std::pair<size_t, double>> out;
   if (count <= 0) return out;
   const ImageRecord& im = *s.images[i];
@@ -291,7 +309,9 @@ std::vector<std::pair<size_t, double>> PartnersAhead(const Scene& s, size_t i,
         *std::min_element(ahead.begin(), ahead.end(), [&](const auto& a, const auto& b) {
           return std::abs(a.first - want) < std::abs(b.first - want);
         });
-    out.emplace_back(j, zj);
+    if (zj < min_share * want) continue;
+    if (std::none_of(out.begin(), out.end(), [&](const auto& o) { return o.first == j; }))
+      out.emplace_back(j, zj);
   }
   return out;
 }
@@ -339,6 +359,39 @@ Partners ChoosePartners(const Scene& s, int count, int ahead) {
       for (const auto& [j, z] : PartnersAhead(s, i, od, ahead))
         if (std::find(out[i].begin(), out[i].end(), j) == out[i].end())
           out[i].push_back(j), p.beyond[i].push_back(z);
+    }
+  }
+  return p;
+}
+
+// A photo of the drive farther along is compared at the pixels whose static depth is at least
+// this many times its own centre's: nearer ones it sees from too close, where a small error of
+// the static depth moves them far in it (KITTI 01 from its photos: a band along the far road's
+// edge masked with 1; CamVid 0016E5's cyclists found as well with 1.5, half as well with 2).
+constexpr double kAheadReach = 1.5;
+
+// Photos of each image's own drive farther along the road (PartnersAhead over the drive's own
+// photos), each at least half as far as the depth it stands for: a vehicle driving ahead of the
+// camera at its speed keeps its place in the photos (its neighbours cannot see it move), but a
+// photo taken metres farther along sees the road it covered. Only for images without partners
+// of another drive (a road of one drive, or a stretch only one drive took): another drive's
+// photos are the better witnesses (this drive's own traffic is not in them), and its own photos
+// farther along carry that traffic onto the far road (mkroad, four seeds: IoU 0.01-0.04 lower).
+Partners ChooseAhead(const Scene& s, int count, const Partners& partners) {
+  Partners p{std::vector<std::vector<size_t>>(s.images.size()),
+             std::vector<std::vector<double>>(s.images.size())};
+  if (count <= 0) return p;
+  for (const auto& [name, idx] : s.drives) {
+    OtherDrives own;
+    for (size_t j : idx) {
+      const Rigid3d& w2c = s.images[j]->world_to_camera;
+      own.images.push_back(j), own.centre.push_back(w2c.Centre());
+      own.way.push_back(w2c.ViewDirection());
+    }
+    for (size_t i : idx) {
+      if (!partners.images[i].empty()) continue;
+      for (const auto& [j, z] : PartnersAhead(s, i, own, count, 0.5))
+        if (j != i) p.images[i].push_back(j), p.beyond[i].push_back(kAheadReach * z);
     }
   }
   return p;
@@ -534,6 +587,7 @@ struct Job {
 struct Pairing {
   std::vector<std::vector<size_t>> neighbours;
   Partners partner;
+  Partners ahead;  // own drive, farther along
 };
 
 // The selected images whose probability map is stale.
@@ -558,6 +612,7 @@ std::vector<Job> StaleMaps(const DynmaskOptions& o, const Workspace& ws, const S
     const fs::path own = ws.StereoDepthPath(s.images[i]->name);  // --seen-tolerance reads it
     if (o.seen_tolerance > 0 && d.UsesMesh() && fs::exists(own)) job.in.push_back(own);
     for (size_t j : nbs[i]) view(j);
+    for (size_t j : pair.ahead.images[i]) view(j);
     for (size_t j : pair.partner.images[i]) {
       view(j);
       const fs::path seen = ws.StereoDepthPath(s.images[j]->name);
@@ -603,9 +658,13 @@ void ComputeMaps(const DynmaskOptions& o, const Workspace& ws, const Scene& s, c
     const std::vector<DynamicView> nv = views_of(pair.neighbours[job.i], false);
     std::vector<DynamicView> pv = views_of(pair.partner.images[job.i], true);
     for (size_t k = 0; k < pv.size(); ++k) pv[k].beyond = pair.partner.beyond[job.i][k];
-    DynamicEvidence e = EstimateDynamic(cache.Get(job.i), pointers(nv), ev, pointers(pv));
-    if (e.neighbours + e.partners == 0) ++rep.no_neighbours;
+    std::vector<DynamicView> av = views_of(pair.ahead.images[job.i], false);
+    for (size_t k = 0; k < av.size(); ++k) av[k].beyond = pair.ahead.beyond[job.i][k];
+    DynamicEvidence e =
+        EstimateDynamic(cache.Get(job.i), pointers(nv), ev, pointers(pv), pointers(av));
+    if (e.neighbours + e.partners + e.ahead == 0) ++rep.no_neighbours;
     if (e.partners > 0) ++rep.with_partners;
+    if (e.ahead > 0) ++rep.with_ahead;
     if (o.grounded > 0)
       rep.floating += size_t(
           KeepGrounded(cache.Get(job.i), s.up, o.mask.probability, o.grounded, e.probability));
@@ -782,8 +841,10 @@ DynmaskReport RunDynmask(const DynmaskOptions& o) {
   ws.Require("dynmask", {WsItem::kSparse, WsItem::kImages});
   const DepthProvider depth(ws, o.depth);
   const Scene s = LoadScene(ws, o.max_width);
-  const Pairing pair{ChooseNeighbours(s, o.neighbours, o.min_baseline),
-                     ChoosePartners(s, o.partners, o.partners_ahead)};
+  Pairing pair{ChooseNeighbours(s, o.neighbours, o.min_baseline),
+               ChoosePartners(s, o.partners, o.partners_ahead),
+               {}};
+  pair.ahead = ChooseAhead(s, o.ahead, pair.partner);
   DynmaskReport rep;
   rep.images = s.images.size();
   rep.depth_source = depth.Name();

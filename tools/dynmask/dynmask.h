@@ -24,6 +24,7 @@ struct DynmaskOptions : WorkOptions {
   int neighbours = 4;          // photos of the same drive each photo is checked against
   int partners = 2;            // photos of other drives each photo is also checked against
   int partners_ahead = 4;      // ... and photos of other drives farther along the road
+  int ahead = 2;               // photos of the same drive farther along the road
   double min_baseline = 0.25;  // nearest neighbour allowed, in median camera spacings
   DepthSource depth = DepthSource::kAuto;  // auto: the mesh, else densify's maps
   bool no_flow = false;                    // --no-flow: photometric evidence only
@@ -58,6 +59,7 @@ struct DynmaskReport {
   size_t images = 0, written = 0, skipped = 0;  // probability maps
   size_t no_neighbours = 0;  // images that no neighbour and no partner saw any pixel of
   size_t with_partners = 0;  // images checked against another drive's photos too
+  size_t with_ahead = 0;     // images checked against their drive's photos farther along too
   size_t floating = 0;       // blobs removed: not standing on the ground
   size_t lying = 0;          // blobs removed: flat in the road (wet patches, shadows)
   size_t surface = 0;        // blobs removed: on the static surface, hiding nothing

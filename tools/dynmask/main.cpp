@@ -23,6 +23,8 @@ int RunAndReport(mvtm::DynmaskOptions& o) {
   if (r.written) std::fprintf(stderr, " (%.0f ms per image)", r.ms_per_image);
   if (r.with_partners)
     std::fprintf(stderr, "; %zu checked against other drives too", r.with_partners);
+  if (r.with_ahead)
+    std::fprintf(stderr, "; %zu checked against their drive's photos farther along", r.with_ahead);
   if (r.floating) std::fprintf(stderr, "; %zu blobs off the ground left out", r.floating);
   if (r.lying) std::fprintf(stderr, "; %zu blobs lying in the road left out", r.lying);
   if (r.surface)

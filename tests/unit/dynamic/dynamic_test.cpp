@@ -137,6 +137,73 @@ TEST(Dynamic, VehicleAtTheCamerasSpeedIsFound) {
   EXPECT_LE(fp, 0.01);
 }
 
+TEST(Dynamic, VehicleAtTheCamerasSpeedFoundByPhotosFartherAlong) {
+  // A slow drive (photos 0.2 m apart, as a 15 Hz dashcam in town): the static depth behind a
+  // box keeping its pixels moves it by under 3 pixels between neighbours, within the noise.
+  // Photos of the drive 2 and 4 m farther along see the road the box covers in the target below
+  // the box's image in theirs (a road point d m ahead is d - 2 m from the first; its lowest row
+  // sees 2.8 m ahead), compared at the pixels at least 1.5 times their depth (dynmask's reach):
+  // 3 and 6 m.
+  const Box box{100, 65, 40, 25};  // static depth 5.0 m (row 89) to 12.8 m (row 65)
+  const DynamicView t = MakeView(10, &box);
+  const DynamicView n1 = MakeView(9.8, &box), n2 = MakeView(10.2, &box), n3 = MakeView(9.6, &box),
+                    n4 = MakeView(10.4, &box);
+  DynamicView a1 = MakeView(12, &box), a2 = MakeView(14, &box);
+  a1.beyond = 3, a2.beyond = 6;
+  const std::vector<const DynamicView*> nbs{&n1, &n2, &n3, &n4};
+  double recall, fp;
+  const DynamicEvidence near = EstimateDynamic(t, nbs, DynamicOptions());
+  Score(MaskFromProbability(near.probability, MaskOptions()), box, recall, fp);
+  EXPECT_LE(recall, 0.2);  // the neighbours alone miss it (0.007)
+  const DynamicEvidence e = EstimateDynamic(t, nbs, DynamicOptions(), {}, {&a1, &a2});
+  EXPECT_EQ(e.ahead, 2);
+  EXPECT_TRUE(std::isnan(e.ahead_photo.at<float>(115, 120)));  // 2.6 m: nearer than 3 m
+  const cv::Mat m = MaskFromProbability(e.probability, MaskOptions());
+  Score(m, box, recall, fp);
+  EXPECT_GE(recall, 0.8);
+  Score(m(cv::Rect(0, 0, kW, box.y0 + box.h)).clone(), box, recall, fp);
+  EXPECT_LE(fp, 0.01);
+  // The same drive without the box: the photos farther along agree with the road.
+  const DynamicView s = MakeView(10, nullptr), s1 = MakeView(9.8, nullptr),
+                    s2 = MakeView(10.2, nullptr);
+  DynamicView b1 = MakeView(12, nullptr), b2 = MakeView(14, nullptr);
+  b1.beyond = 3, b2.beyond = 6;
+  const DynamicEvidence still = EstimateDynamic(s, {&s1, &s2}, DynamicOptions(), {}, {&b1, &b2});
+  EXPECT_EQ(cv::countNonZero(MaskFromProbability(still.probability, MaskOptions())), 0);
+}
+
+// A moving vehicle whose top stands against the sky: rows 40-80, the horizon at row 50 (cy), so
+// its rows 40-49 have no static depth (the sky behind). Its windscreen, rows 44-59, is one dark
+// region, three quarters of it with depth.
+DynamicView TallVehicleView(double z, int x0) {
+  const Box box{x0, 40, 40, 41};
+  DynamicView v = MakeView(z, &box);
+  for (int y = 44; y < 60; ++y)
+    for (int x = x0 + 4; x < x0 + 36; ++x) v.grey.at<float>(y, x) = 0.1f;
+  return v;
+}
+
+TEST(Dynamic, DepthlessPixelsTakeTheirRegionsProbability) {
+  const DynamicView t = TallVehicleView(10, 100);
+  const DynamicView n1 = TallVehicleView(8, 60), n2 = TallVehicleView(12, 140),
+                    n3 = TallVehicleView(6, 20), n4 = TallVehicleView(14, 170);
+  const cv::Rect top(104, 46, 32, 4);  // the windscreen's rows without depth (bar its top edge)
+  for (double share : {0.5, 0.8}) {
+    DynamicOptions o;
+    o.region_depth = share;
+    const DynamicEvidence e = EstimateDynamic(t, {&n1, &n2, &n3, &n4}, o);
+    const cv::Mat m = MaskFromProbability(e.probability, MaskOptions());
+    const double masked = cv::countNonZero(m(top)) / double(top.area());
+    if (share < 0.75)
+      EXPECT_GE(masked, 0.9) << share;  // 0.75 of the region has depth
+    else
+      EXPECT_LE(masked, 0.1) << share;
+    // The sky beside it stays unmasked (no depth, a region of its own).
+    EXPECT_EQ(cv::countNonZero(m(cv::Rect(0, 0, 90, 50))), 0) << share;
+    EXPECT_EQ(cv::countNonZero(m(cv::Rect(150, 0, 90, 50))), 0) << share;
+  }
+}
+
 TEST(Dynamic, PartnerOfAnotherDriveFindsAVehicleParkedInThisDriveOnly) {
   // A second drive of the road, 1.5 m to the left and 0.5 m on: the vehicle the target's drive
   // photographed (at the target's speed, so its own neighbours could not see it move) is not
