@@ -39,7 +39,8 @@
 // target's regions (Felzenszwalb–Huttenlocher graph segmentation of the colour image, OpenCV
 // ximgproc, k = `segments`): a region's probability is the texture-weighted mean of its pixels'
 // when their weight sums to at least 5 % of its area, and each pixel with depth takes
-// weight·own + (1 − weight)·region's. Pixels without depth stay at 0 whatever their region.
+// weight·own + (1 − weight)·region's. A pixel without depth takes its region's probability when
+// more than `region_depth` of the region has depth (a vehicle's roof against the sky), else 0.
 //
 // Conventions: cameras are undistorted (PINHOLE), of the image's size; poses COLMAP's
 // world-to-camera; luma float 0..1; depth float linear camera-space z, +inf/NaN/≤0 = none.
@@ -115,6 +116,13 @@ struct DynamicEvidence {
 // (what it photographed, the parked vehicle included) hides the road point behind it, so give
 // partners their own depth maps where they exist. A pixel seen by no partner has no evidence from
 // them.
+//
+// Photos farther along (optional, `ahead`) are photos of the target's own drive taken metres
+// farther along the road, each with its `beyond` set: a vehicle keeping its distance ahead of
+// the camera keeps its pixels in the neighbours, but a photo taken metres ahead sees the road it
+// covers in the target below the vehicle's image in its own. Their photometric residuals are
+// reduced apart (the same quantile), one more cue; no flow (metres apart, the near road's warp
+// is too distorted).
 DynamicEvidence EstimateDynamic(const DynamicView& target,
                                 const std::vector<const DynamicView*>& neighbours,
                                 const DynamicOptions& options,

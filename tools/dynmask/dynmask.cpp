@@ -165,9 +165,10 @@ OptionTable DeclareOptions(DynmaskOptions& o) {
       .Range(0, 8)
       .Alternative("0");
   t.Integer("--ahead", &o.ahead,
-            "Photos of the same drive farther along the road, at N depths up to the photo's far "
-            "surfaces: they see the road in front of a vehicle driving ahead at the camera's "
-            "speed; compared at the pixels beyond them only (0: none)")
+            "Photos without partners of another drive: photos of the same drive farther along "
+            "the road, at N depths up to the photo's far surfaces: they see the road in front of "
+            "a vehicle driving ahead at the camera's speed; compared at the pixels at least 1.5 "
+            "times their depth only (0: none)")
       .Range(0, 8)
       .Alternative("0");
   t.Real("--min-baseline", &o.min_baseline,
@@ -278,7 +279,9 @@ struct OtherDrives {
 // only (nearer ones are behind it). A vehicle driving ahead of the other drive's camera, at its
 // speed, hides a cone of the far road in the nearest partners of every photo (and its own
 // drive's photos cannot see it move); a photo of that drive taken nearer to that far road, at
-// one of several distances, sees it in front of the vehicle.
+// one of several distances, sees it in front of the vehicle. A pick nearer than `min_share` of
+// the depth it stands for is left out (the drive ends before it); a photo picked for two depths
+// is taken once.
 std::vector<std::pair<size_t, double>> PartnersAhead(const Scene& s, size_t i,
                                                      const OtherDrives& others, int count,
                                                      double min_share = 0) {

@@ -57,7 +57,7 @@ OptionTable DeclareOptions(DynmaskOptions& o);
 
 struct DynmaskReport {
   size_t images = 0, written = 0, skipped = 0;  // probability maps
-  size_t no_neighbours = 0;  // images that no neighbour and no partner saw any pixel of
+  size_t no_neighbours = 0;  // images no neighbour, partner or photo farther along saw a pixel of
   size_t with_partners = 0;  // images checked against another drive's photos too
   size_t with_ahead = 0;     // images checked against their drive's photos farther along too
   size_t floating = 0;       // blobs removed: not standing on the ground
