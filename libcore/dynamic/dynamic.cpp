@@ -334,19 +334,16 @@ DynamicEvidence EstimateDynamic(const DynamicView& t,
   CheckView(t, "target view");
   DynamicEvidence ev;
   ev.neighbours = ReducedResiduals(t, neighbours, o, "neighbour view", ev.photometric, ev.flow);
-  if (!partners.empty()) {
-    DynamicOptions photometric_only = o;  // another drive: other light, another lane
-    photometric_only.flow = false;
-    cv::Mat no_flow;
+  // Partners and photos farther along give photometric evidence only: another drive has other
+  // light and another lane; a photo metres ahead warps the near road too distorted.
+  DynamicOptions photometric_only = o;
+  photometric_only.flow = false;
+  cv::Mat no_flow;
+  if (!partners.empty())
     ev.partners =
         ReducedResiduals(t, partners, photometric_only, "partner view", ev.across, no_flow);
-  }
-  if (!ahead.empty()) {
-    DynamicOptions photometric_only = o;  // metres apart: the near road's warp is too distorted
-    photometric_only.flow = false;
-    cv::Mat no_flow;
+  if (!ahead.empty())
     ev.ahead = ReducedResiduals(t, ahead, photometric_only, "ahead view", ev.ahead_photo, no_flow);
-  }
   ev.probability.create(t.grey.size(), CV_32F);
   for (int y = 0; y < t.grey.rows; ++y)
     for (int x = 0; x < t.grey.cols; ++x)

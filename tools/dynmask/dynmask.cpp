@@ -270,6 +270,11 @@ struct OtherDrives {
   std::vector<size_t> images;           // indices into s.images
   std::vector<Eigen::Vector3d> centre;  // their camera centres
   std::vector<Eigen::Vector3d> way;     // their viewing directions
+
+  void Add(const Scene& s, size_t j) {
+    const Rigid3d& w2c = s.images[j]->world_to_camera;
+    images.push_back(j), centre.push_back(w2c.Centre()), way.push_back(w2c.ViewDirection());
+  }
 };
 
 // Partners farther along the road (`count` of them): for k = 1..count, the photo of another
@@ -349,11 +354,7 @@ Partners ChoosePartners(const Scene& s, int count, int ahead) {
     OtherDrives od;
     for (const auto& [other, jdx] : s.drives)
       if (other != name)
-        for (size_t j : jdx) {
-          const Rigid3d& w2c = s.images[j]->world_to_camera;
-          others.push_back(w2c), od.images.push_back(j);
-          od.centre.push_back(w2c.Centre()), od.way.push_back(w2c.ViewDirection());
-        }
+        for (size_t j : jdx) others.push_back(s.images[j]->world_to_camera), od.Add(s, j);
     const double reach = 3 * std::max(spacing.at(name), road);
     for (size_t i : idx) {
       for (const Candidate& c : SelectViews(s.images[i]->world_to_camera, others, vo))
@@ -386,11 +387,7 @@ Partners ChooseAhead(const Scene& s, int count, const Partners& partners) {
   if (count <= 0) return p;
   for (const auto& [name, idx] : s.drives) {
     OtherDrives own;
-    for (size_t j : idx) {
-      const Rigid3d& w2c = s.images[j]->world_to_camera;
-      own.images.push_back(j), own.centre.push_back(w2c.Centre());
-      own.way.push_back(w2c.ViewDirection());
-    }
+    for (size_t j : idx) own.Add(s, j);
     for (size_t i : idx) {
       if (!partners.images[i].empty()) continue;
       for (const auto& [j, z] : PartnersAhead(s, i, own, count, 0.5))
@@ -651,6 +648,12 @@ void ComputeMaps(const DynmaskOptions& o, const Workspace& ws, const Scene& s, c
     }
     return v;
   };
+  // ... the views of `p`'s photos of image i, each with its `beyond`.
+  const auto views_beyond = [&](const Partners& p, size_t i, bool seen) {
+    std::vector<DynamicView> v = views_of(p.images[i], seen);
+    for (size_t k = 0; k < v.size(); ++k) v[k].beyond = p.beyond[i][k];
+    return v;
+  };
   const auto pointers = [](const std::vector<DynamicView>& v) {
     std::vector<const DynamicView*> p;
     for (const DynamicView& x : v) p.push_back(&x);
@@ -659,10 +662,8 @@ void ComputeMaps(const DynmaskOptions& o, const Workspace& ws, const Scene& s, c
   for (const Job& job : todo) {
     cache.Next();
     const std::vector<DynamicView> nv = views_of(pair.neighbours[job.i], false);
-    std::vector<DynamicView> pv = views_of(pair.partner.images[job.i], true);
-    for (size_t k = 0; k < pv.size(); ++k) pv[k].beyond = pair.partner.beyond[job.i][k];
-    std::vector<DynamicView> av = views_of(pair.ahead.images[job.i], false);
-    for (size_t k = 0; k < av.size(); ++k) av[k].beyond = pair.ahead.beyond[job.i][k];
+    const std::vector<DynamicView> pv = views_beyond(pair.partner, job.i, true);
+    const std::vector<DynamicView> av = views_beyond(pair.ahead, job.i, false);
     DynamicEvidence e =
         EstimateDynamic(cache.Get(job.i), pointers(nv), ev, pointers(pv), pointers(av));
     if (e.neighbours + e.partners + e.ahead == 0) ++rep.no_neighbours;
