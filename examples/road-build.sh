@@ -156,6 +156,29 @@ if [ "$poses" = - ]; then
       read -r best_n best <<< "$(largest "$1")"
       return "$kept"
     }
+    # The initial pair for a forward drive: the middle image of those mapped (name order: frame
+    # order; all, or the --image_list_path given) and the image farthest from it in that order
+    # that shares at least 100 verified matches with it (a wider baseline for the same view),
+    # as "ID1 ID2" of the database; nothing when none does.
+    wide_pair() {  # [mapper options...]
+      local list=
+      while [ $# -gt 0 ]; do
+        [ "$1" = --image_list_path ] && list=$2
+        shift
+      done
+      local values
+      values=$(if [ -n "$list" ]; then cat "$list"; else LC_ALL=C ls "$images"; fi |
+        awk 'NF { gsub(/\x27/, "\x27\x27"); printf "%s(\x27%s\x27, %d)", n ? ", " : "", $0, n; n++ }')
+      [ -n "$values" ] || return 0
+      sqlite3 -separator ' ' "$out/db.db" "
+        WITH o(name, k) AS (VALUES $values),
+             i AS (SELECT images.image_id AS id, o.k AS k FROM images JOIN o USING (name)),
+             m AS (SELECT id, k FROM i WHERE k = (SELECT COUNT(*) FROM i) / 2)
+        SELECT m.id, i.id FROM m, i, two_view_geometries g
+        WHERE g.pair_id = MIN(m.id, i.id) * 2147483647 + MAX(m.id, i.id)
+          AND g.config >= 2 AND g.rows >= 100 AND i.k <> m.k
+        ORDER BY ABS(i.k - m.k) DESC, i.k > m.k DESC LIMIT 1;" 2> /dev/null || true
+    }
     # The mapper on one set of images (all, or one stretch's list): COLMAP's defaults, and when
     # they register under half the images, again as forward motion; the largest model is kept.
     # Sets best_n and best (count, path); several models when the chain of matches breaks: each
@@ -174,10 +197,26 @@ if [ "$poses" = - ]; then
       # and distortion from a pair with a small baseline), after which no further image registers
       # (CamVid 0016E5: 0 of 60 both times on two runs). Then the mapper runs with the camera
       # held at its starting guess, and one bundle adjustment of the whole model refines it
-      # (CamVid, COLMAP's initial-pair defaults: 60 of 60, 0.65 px, then focal 576 -> 471).
+      # Its first two images set the model's shape: a pair a few frames apart (the mapper's own
+      # choice) bends a forward drive mapped at a wrong focal length (CamVid: 40-47 degrees over
+      # 60 frames, 0.63-0.65 px, the ground 16 degrees from the cameras' up, and a nonsense k1 of
+      # 0.5-0.8 refined from it); so the mapper starts from wide_pair's: straight at the same
+      # guess (5 degrees, 0.37 px), then focal 544 px, k1 -0.08, the road's up 0.5 degrees
+      # from the cameras'. Without such a pair, or when it fails, the mapper chooses.
       if [ "$best_n" -lt $(( (want + 1) / 2 )) ] && [ "$self_calibrating" = 1 ]; then
         echo "SfM registered $best_n of $want images: again with the camera held, refined afterwards" >&2
-        map_run "${d}_held" "$@" --Mapper.ba_refine_focal_length 0 --Mapper.ba_refine_extra_params 0
+        local held=(--Mapper.ba_refine_focal_length 0 --Mapper.ba_refine_extra_params 0) pair n p1 p2
+        pair=$(wide_pair "$@")
+        if [ -n "$pair" ]; then
+          read -r p1 p2 <<< "$pair"
+          map_run "${d}_held" "$@" "${held[@]}" --Mapper.init_image_id1 "$p1" \
+            --Mapper.init_image_id2 "$p2" --Mapper.init_min_tri_angle 1 \
+            --Mapper.init_min_num_inliers 50 --Mapper.init_max_forward_motion 1.0
+          read -r n m <<< "$(largest "${d}_held")"
+          [ "$n" -ge $(( (want + 1) / 2 )) ] || map_run "${d}_held" "$@" "${held[@]}"
+        else
+          map_run "${d}_held" "$@" "${held[@]}"
+        fi
         if adopt_if_more "$d" "${d}_held"; then
           colmap bundle_adjuster --input_path "$best" --output_path "$best" \
             --BundleAdjustment.refine_focal_length 1 --BundleAdjustment.refine_extra_params 1 \
