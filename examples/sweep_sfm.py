@@ -7,13 +7,14 @@ usage: /usr/bin/python3 examples/sweep_sfm.py [--bin build/bin] [--out out/sweep
 
 For each setting, the sequence's left photos go through COLMAP feature_extractor (one shared
 PINHOLE camera from calib.txt), sequential_matcher and mapper (intrinsics fixed, COLMAP's default
-4 px outlier threshold where road-build.sh uses 2; as road-build.sh, again as forward motion when
-the defaults register under half the images), then georef
+4 px outlier threshold where road-build.sh uses 2; as road-build.sh, from a wide initial pair, and
+again from COLMAP's own and as forward motion while under half the images register), then georef
 --camera-height 1.65 --compare poses.txt: registered images, the trajectory's RMS error after a
 similarity fit as a share of the path length, and the scale error of the camera-height metric,
 against the whole SfM's wall-clock seconds per frame (2 cores; run it on an idle machine).
 
-Knobs: matching overlap (5, 10, 20), SIFT image size (--SiftExtraction.max_image_size 1241 = full,
+Knobs: the initial pair (road-build.sh's wide pair, COLMAP's own choice; the default setting,
+wide pair with overlap 10, is the row of both), matching overlap (5, 10, 20), SIFT image size (--SiftExtraction.max_image_size 1241 = full,
 800, 500), frame spacing (every 1st, 2nd, 3rd photo: what frames --spacing chooses on a
 faster drive), and mapping in stretches joined by sfmjoin (road-build.sh's SFM_CHUNK: 21 images
 sharing 6, 30 sharing 8). Writes OUT/sfm.csv, OUT/sfm.png and OUT/index.html.
@@ -22,6 +23,7 @@ import argparse
 import os
 import re
 import shutil
+import sqlite3
 import subprocess
 import sys
 import time
@@ -57,13 +59,48 @@ def registered(model):
     return int(m.group(1)) if m else 0
 
 
-def map_best(d, name, db, imgs, log, want, opts):
-    """COLMAP's mapper with its defaults, again as forward motion when they register under half
-    of `want` images: (the largest model, its registered images)."""
+def wide_pair(db, names):
+    """road-build.sh's wide_pair: the middle of `names` (name order) and the one farthest from it
+    in that order sharing at least 100 verified matches with it, the one ahead on a tie; the
+    database's image ids, or None."""
+    con = sqlite3.connect(db)
+    ids = dict(con.execute("SELECT name, image_id FROM images"))
+    order = [ids[n] for n in sorted(names) if n in ids]
+    con_rows = {}
+    for pid, n, cfg in con.execute("SELECT pair_id, rows, config FROM two_view_geometries"):
+        con_rows[pid] = n if cfg >= 2 else 0
+    con.close()
+    if not order:
+        return None
+    mk = len(order) // 2
+    m = order[mk]
+    best = None
+    for k, i in enumerate(order):
+        if k == mk or con_rows.get(min(m, i) * 2147483647 + max(m, i), 0) < 100:
+            continue
+        key = (abs(k - mk), k > mk)
+        if best is None or key > best[0]:
+            best = (key, i)
+    return (m, best[1]) if best else None
+
+
+FORWARD = ["--Mapper.init_min_tri_angle", "1", "--Mapper.init_min_num_inliers", "50",
+           "--Mapper.init_max_forward_motion", "1.0"]
+
+
+def map_best(d, name, db, imgs, log, want, opts, names, wide=True):
+    """As road-build.sh: from wide_pair's initial pair (with `wide`), else or when under half of
+    `want` images register, COLMAP's own choice, then as forward motion: (the largest model, its
+    registered images)."""
     best, best_n = None, 0
-    for extra in ([], ["--Mapper.init_min_tri_angle", "1", "--Mapper.init_min_num_inliers", "50",
-                      "--Mapper.init_max_forward_motion", "1.0"]):
-        sdir = os.path.join(d, name if not extra else name + "_forward")
+    pair = wide_pair(db, names) if wide else None
+    tries = []
+    if pair:
+        tries.append(("_wide", ["--Mapper.init_image_id1", str(pair[0]),
+                                "--Mapper.init_image_id2", str(pair[1])] + FORWARD))
+    tries += [("", []), ("_forward", FORWARD)]
+    for suffix, extra in tries:
+        sdir = os.path.join(d, name + suffix)
         os.makedirs(sdir)
         run(["colmap", "mapper", "--database_path", db, "--image_path", imgs, "--output_path", sdir,
              "--Mapper.ba_refine_focal_length", "0", "--Mapper.ba_refine_extra_params", "0",
@@ -77,7 +114,7 @@ def map_best(d, name, db, imgs, log, want, opts):
     return best, best_n
 
 
-def sfm(name, every=1, overlap=10, max_size=1241, chunk=0, chunk_overlap=8):
+def sfm(name, every=1, overlap=10, max_size=1241, chunk=0, chunk_overlap=8, wide=True):
     d = os.path.join(work, name)
     shutil.rmtree(d, ignore_errors=True)
     imgs = os.path.join(d, "images")
@@ -104,7 +141,8 @@ def sfm(name, every=1, overlap=10, max_size=1241, chunk=0, chunk_overlap=8):
             e0 = (k + 1) * (len(names) - chunk_overlap) // parts + chunk_overlap
             lst = os.path.join(d, f"list{k}.txt")
             open(lst, "w").write("\n".join(names[s0:e0]) + "\n")
-            m, _ = map_best(d, f"part{k}", db, imgs, log, e0 - s0, ["--image_list_path", lst])
+            m, _ = map_best(d, f"part{k}", db, imgs, log, e0 - s0, ["--image_list_path", lst],
+                            names[s0:e0], wide)
             if m:
                 models.append(m)
         best = os.path.join(d, "joined")
@@ -112,7 +150,7 @@ def sfm(name, every=1, overlap=10, max_size=1241, chunk=0, chunk_overlap=8):
             best = None
         best_n = registered(best) if best else 0
     else:
-        best, best_n = map_best(d, "sfm", db, imgs, log, len(names), [])
+        best, best_n = map_best(d, "sfm", db, imgs, log, len(names), [], names, wide)
     secs = time.time() - t0
     row = {"group": "", "setting": name, "registered": best_n, "frames": len(names),
            "s_per_frame": round(secs / len(names), 2)}
@@ -129,9 +167,13 @@ def sfm(name, every=1, overlap=10, max_size=1241, chunk=0, chunk_overlap=8):
 
 
 rows = []
-for ov in (5, 10, 20):
+for wide in (True, False):
+    r = sfm("wide pair" if wide else "COLMAP's own pair", wide=wide)
+    r["group"], r["default"] = "initial pair", wide
+    rows.append(r)
+for ov in (5, 20):
     r = sfm(f"overlap {ov}", overlap=ov)
-    r["group"], r["default"] = "matching overlap", ov == 10
+    r["group"] = "matching overlap"
     rows.append(r)
 for size in (800, 500):
     r = sfm(f"SIFT size {size}", max_size=size)
