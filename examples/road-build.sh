@@ -128,10 +128,10 @@ if [ "$poses" = - ]; then
     if [ $# -ge 1 ]; then
       self_calibrating=0; fixed+=(--Mapper.ba_refine_focal_length 0 --Mapper.ba_refine_extra_params 0)
     fi
-    # Forward motion gives small triangulation angles: when COLMAP's defaults find no initial
-    # pair (or register under half the images), the mapper runs again as for a dashcam (initial
-    # pairs from 1 degree and 50 inliers, forward-moving pairs allowed; KITTI 06 and CamVid need
-    # it) and the better run is kept.
+    # Forward motion gives small triangulation angles: the mapper starts from a wide initial
+    # pair (wide_pair, below) with the dashcam's initial-pair settings (from 1 degree and 50
+    # inliers, forward-moving pairs allowed; KITTI 06 and CamVid need them), and while under half
+    # the images register, runs again (map_best); the largest model is kept.
     map_run() {  # OUTDIR [mapper options...]; succeeds even when the mapper fails
       rm -rf "$1"; mkdir -p "$1"; local d=$1; shift
       colmap mapper --database_path "$out/db.db" --image_path "$images" --output_path "$d" \
@@ -163,21 +163,25 @@ if [ "$poses" = - ]; then
     wide_pair() {  # [mapper options...]
       local list=
       while [ $# -gt 0 ]; do
-        [ "$1" = --image_list_path ] && list=$2
+        [ "$1" = --image_list_path ] && list=${2-}
         shift
       done
       local values
       values=$(if [ -n "$list" ]; then cat "$list"; else LC_ALL=C ls "$images"; fi |
         awk 'NF { gsub(/\x27/, "\x27\x27"); printf "%s(\x27%s\x27, %d)", n ? ", " : "", $0, n; n++ }')
       [ -n "$values" ] || return 0
-      sqlite3 -separator ' ' "$out/db.db" "
-        WITH o(name, k) AS (VALUES $values),
-             i AS (SELECT images.image_id AS id, o.k AS k FROM images JOIN o USING (name)),
-             m AS (SELECT id, k FROM i WHERE k = (SELECT COUNT(*) FROM i) / 2)
-        SELECT m.id, i.id FROM m, i, two_view_geometries g
-        WHERE g.pair_id = MIN(m.id, i.id) * 2147483647 + MAX(m.id, i.id)
-          AND g.config >= 2 AND g.rows >= 100 AND i.k <> m.k
-        ORDER BY ABS(i.k - m.k) DESC, i.k > m.k DESC LIMIT 1;" 2> /dev/null || true
+      # The SQL on standard input (a long drive's list exceeds one argument's limit); no user
+      # settings (~/.sqliterc). The middle and the order are over the names the database holds.
+      sqlite3 -init /dev/null -batch -noheader -list -separator ' ' "$out/db.db" <<SQL 2> /dev/null || true
+WITH o(name, k) AS (VALUES $values),
+     i AS (SELECT images.image_id AS id, ROW_NUMBER() OVER (ORDER BY o.k) - 1 AS k
+           FROM images JOIN o USING (name)),
+     m AS (SELECT id, k FROM i WHERE k = (SELECT COUNT(*) FROM i) / 2)
+SELECT m.id, i.id FROM m, i, two_view_geometries g
+WHERE g.pair_id = MIN(m.id, i.id) * 2147483647 + MAX(m.id, i.id)
+  AND g.config >= 2 AND g.rows >= 100 AND i.k <> m.k
+ORDER BY ABS(i.k - m.k) DESC, i.k > m.k DESC LIMIT 1;
+SQL
     }
     # The mapper on one set of images (all, or one stretch's list): from wide_pair's initial
     # pair (COLMAP's own choice when there is none), and while under half the images register,
@@ -197,9 +201,14 @@ if [ "$poses" = - ]; then
       # the camera held at the guess 576 px) 42-47 degrees of false turn over its straight
       # street, 0.63-0.65 px, the ground 16 degrees off and a nonsense k1 of 0.5-0.8 refined
       # from it; from the wide pair 5 degrees, 0.37 px, then 561 px and k1 -0.07.
+      command -v sqlite3 > /dev/null ||
+        echo "warning: no sqlite3 shell: the mapper chooses its own initial pair" >&2
       pair=$(wide_pair "$@")
-      if [ -n "$pair" ]; then
-        read -r p1 p2 <<< "$pair"
+      read -r p1 p2 <<< "$pair"
+      if [[ "${p1:-}" =~ ^[0-9]+$ && "${p2:-}" =~ ^[0-9]+$ ]]; then
+        # (COLMAP may start further models from the same pair for the images left over; the
+        # largest is kept. With --Mapper.multiple_models 0 a self-calibrating CamVid run stopped
+        # at 9 of 60 where one without registered 60.)
         start=(--Mapper.init_image_id1 "$p1" --Mapper.init_image_id2 "$p2" "${forward[@]}")
         map_run "$d" "$@" "${start[@]}"
         read -r best_n best <<< "$(largest "$d")"
@@ -226,7 +235,12 @@ if [ "$poses" = - ]; then
         echo "SfM registered $best_n of $want images: again with the camera held, refined afterwards" >&2
         map_run "${d}_held" "$@" "${held[@]}" "${start[@]}"
         read -r n m <<< "$(largest "${d}_held")"
-        [ "$n" -ge "$half" ] || [ -z "$pair" ] || map_run "${d}_held" "$@" "${held[@]}"
+        if [ "$n" -lt "$half" ] && [ ${#start[@]} -gt 0 ]; then  # from the mapper's own pair
+          map_run "${d}_held2" "$@" "${held[@]}"
+          read -r k m <<< "$(largest "${d}_held2")"
+          if [ "$k" -gt "$n" ]; then rm -rf "${d}_held"; mv "${d}_held2" "${d}_held"; fi
+          rm -rf "${d}_held2"
+        fi
         if adopt_if_more "$d" "${d}_held"; then
           colmap bundle_adjuster --input_path "$best" --output_path "$best" \
             --BundleAdjustment.refine_focal_length 1 --BundleAdjustment.refine_extra_params 1 \
