@@ -14,10 +14,11 @@ similarity fit as a share of the path length, and the scale error of the camera-
 against the whole SfM's wall-clock seconds per frame (2 cores; run it on an idle machine).
 
 Knobs: the initial pair (road-build.sh's wide pair, COLMAP's own choice), matching overlap (5,
-20; 10, the default, is the initial-pair group's "wide pair" row), SIFT image size (--SiftExtraction.max_image_size 1241 = full,
-800, 500), frame spacing (every 1st, 2nd, 3rd photo: what frames --spacing chooses on a
-faster drive), and mapping in stretches joined by sfmjoin (road-build.sh's SFM_CHUNK: 21 images
-sharing 6, 30 sharing 8). Writes OUT/sfm.csv, OUT/sfm.png and OUT/index.html.
+20; 10, the default, is the initial-pair group's "wide pair" row), SIFT image size
+(--SiftExtraction.max_image_size 1241 = full, 800, 500), frame spacing (every 1st, 2nd, 3rd
+photo: what frames --spacing chooses on a faster drive), and mapping in stretches joined by
+sfmjoin (road-build.sh's SFM_CHUNK: 21 images sharing 6, 30 sharing 8). Writes OUT/sfm.csv,
+OUT/sfm.png and OUT/index.html.
 """
 import argparse
 import os
