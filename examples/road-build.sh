@@ -190,7 +190,7 @@ SQL
     # Sets best_n and best (count, path); several models when the chain of matches breaks: each
     # is reported.
     map_best() {  # OUTDIR COUNT [mapper options...]
-      local d=$1 want=$2 m k n p1 p2 pair; shift 2
+      local d=$1 want=$2 m k p1 p2 pair; shift 2
       local half=$(( (want + 1) / 2 )) start=() forward=(--Mapper.init_min_tri_angle 1
         --Mapper.init_min_num_inliers 50 --Mapper.init_max_forward_motion 1.0)
       local held=(--Mapper.ba_refine_focal_length 0 --Mapper.ba_refine_extra_params 0)
@@ -203,6 +203,14 @@ SQL
       # from it; from the wide pair 5 degrees, 0.37 px, then 561 px and k1 -0.07.
       command -v sqlite3 > /dev/null ||
         echo "warning: no sqlite3 shell: the mapper chooses its own initial pair" >&2
+      # Every attempt maps into ${d}_NAME and is kept in $d when it registered more (adopt_if_more).
+      local args=("$@")
+      attempt() {  # NAME [mapper options...]; returns 0 when its model was kept
+        local name=$1; shift
+        map_run "${d}_$name" "${args[@]}" "$@"
+        adopt_if_more "$d" "${d}_$name"
+      }
+      rm -rf "$d"; best_n=0; best=
       pair=$(wide_pair "$@")
       read -r p1 p2 <<< "$pair"
       if [[ "${p1:-}" =~ ^[0-9]+$ && "${p2:-}" =~ ^[0-9]+$ ]]; then
@@ -210,38 +218,31 @@ SQL
         # largest is kept. With --Mapper.multiple_models 0 a self-calibrating CamVid run stopped
         # at 9 of 60 where one without registered 60.)
         start=(--Mapper.init_image_id1 "$p1" --Mapper.init_image_id2 "$p2" "${forward[@]}")
-        map_run "$d" "$@" "${start[@]}"
-        read -r best_n best <<< "$(largest "$d")"
+        attempt wide "${start[@]}" || true
         if [ "$best_n" -lt "$half" ]; then
           echo "SfM from the wide initial pair registered $best_n of $want images: again from COLMAP's own" >&2
-          map_run "${d}_own" "$@"
-          adopt_if_more "$d" "${d}_own" || true
+          attempt own || true
         fi
       else
-        map_run "$d" "$@"
-        read -r best_n best <<< "$(largest "$d")"
+        attempt own || true
       fi
       if [ "$best_n" -lt "$half" ]; then
         echo "SfM registered $best_n of $want images: again as forward motion" >&2
-        map_run "${d}_forward" "$@" "${forward[@]}"
-        adopt_if_more "$d" "${d}_forward" || true
+        attempt forward "${forward[@]}" || true
       fi
       # Self-calibrating, a two-view start can refine the one camera into nonsense (focal length
       # and distortion from a pair with a small baseline), after which no further image registers
       # (CamVid 0016E5: 0 of 60 on some runs). Then the mapper runs with the camera held at its
-      # starting guess (from the wide pair, else its own choice), and one bundle adjustment of
-      # the whole model refines it.
+      # starting guess (from the wide pair, then from its own choice while under half), and one
+      # bundle adjustment of the whole model refines it when such a model was kept.
       if [ "$best_n" -lt "$half" ] && [ "$self_calibrating" = 1 ]; then
         echo "SfM registered $best_n of $want images: again with the camera held, refined afterwards" >&2
-        map_run "${d}_held" "$@" "${held[@]}" "${start[@]}"
-        read -r n m <<< "$(largest "${d}_held")"
-        if [ "$n" -lt "$half" ] && [ ${#start[@]} -gt 0 ]; then  # from the mapper's own pair
-          map_run "${d}_held2" "$@" "${held[@]}"
-          read -r k m <<< "$(largest "${d}_held2")"
-          if [ "$k" -gt "$n" ]; then rm -rf "${d}_held"; mv "${d}_held2" "${d}_held"; fi
-          rm -rf "${d}_held2"
+        local refine=0
+        attempt held "${held[@]}" "${start[@]}" && refine=1
+        if [ "$best_n" -lt "$half" ] && [ ${#start[@]} -gt 0 ]; then
+          attempt held_own "${held[@]}" && refine=1
         fi
-        if adopt_if_more "$d" "${d}_held"; then
+        if [ "$refine" = 1 ]; then
           colmap bundle_adjuster --input_path "$best" --output_path "$best" \
             --BundleAdjustment.refine_focal_length 1 --BundleAdjustment.refine_extra_params 1 \
             >> "$out/colmap.log" 2>&1 ||
