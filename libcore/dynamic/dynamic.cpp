@@ -37,6 +37,8 @@ void CheckView(const DynamicView& v, const char* what) {
                 ": the first-pass probability must be float of the luma's size");
   if (!v.seen.empty() && !ok(v.seen))
     throw Error(std::string(what) + ": the seen depth must be float of the luma's size");
+  if (!v.guessed.empty() && (v.guessed.type() != CV_8U || v.guessed.size() != v.grey.size()))
+    throw Error(std::string(what) + ": the guessed-depth mask must be 8-bit of the luma's size");
 }
 
 // Where each target pixel lands in `nb` (map_x, map_y; NaN when not valid there).
@@ -542,11 +544,50 @@ cv::Mat MaskFromProbability(const cv::Mat& probability, const MaskOptions& o) {
   return m;
 }
 
+namespace {
+
+// For each label 1..n-1 of `labels` (CV_32S), the share of its pixels where `flags` (CV_8U) is
+// non-zero; 0 for a label with no pixel.
+std::vector<double> BlobShares(const cv::Mat& labels, int n, const cv::Mat& flags) {
+  std::vector<double> on(size_t(n), 0), all(size_t(n), 0);
+  for (int y = 0; y < labels.rows; ++y)
+    for (int x = 0; x < labels.cols; ++x) {
+      const int b = labels.at<int>(y, x);
+      if (b <= 0) continue;
+      all[size_t(b)] += 1;
+      on[size_t(b)] += flags.at<uint8_t>(y, x) != 0;
+    }
+  for (size_t b = 0; b < size_t(n); ++b) on[b] = all[b] > 0 ? on[b] / all[b] : 0;
+  return on;
+}
+
+// The blobs of the mask `mask` makes of `probability` more than `max_share` of whose pixels are
+// on `guessed`: probability 0 at those pixels. The count of such blobs.
+int ClearGuessed(const cv::Mat& guessed, const MaskOptions& mask, double max_share,
+                 cv::Mat& probability) {
+  cv::Mat labels;
+  const int n = cv::connectedComponents(MaskFromProbability(probability, mask), labels, 8, CV_32S);
+  const std::vector<double> share = BlobShares(labels, n, guessed);
+  int cleared = 0;
+  for (int b = 1; b < n; ++b) cleared += share[size_t(b)] > max_share;
+  if (cleared == 0) return 0;
+  for (int y = 0; y < labels.rows; ++y)
+    for (int x = 0; x < labels.cols; ++x) {
+      const int b = labels.at<int>(y, x);
+      if (b > 0 && share[size_t(b)] > max_share && guessed.at<uint8_t>(y, x) != 0)
+        probability.at<float>(y, x) = 0;
+    }
+  return cleared;
+}
+
+}  // namespace
+
 BlobTestCounts KeepStandingUnexplained(const DynamicView& t, const Eigen::Vector3d& up,
                                        const MaskOptions& mask, const BlobTestOptions& o,
                                        cv::Mat& probability) {
   if (!(o.min_height >= 0) || !(o.seen_tolerance >= 0 && o.seen_tolerance < 1) ||
-      !(o.occludes >= 0 && o.occludes <= 1) || !(o.occlusion_gap > 0))
+      !(o.occludes >= 0 && o.occludes <= 1) || !(o.occlusion_gap > 0) ||
+      !(o.max_guessed >= 0 && o.max_guessed <= 1))
     throw Error("KeepStandingUnexplained: options out of range");
   CheckView(t, "target view");
   if (probability.type() != CV_32F || probability.size() != t.depth.size())
@@ -556,6 +597,8 @@ BlobTestCounts KeepStandingUnexplained(const DynamicView& t, const Eigen::Vector
     counts.explained = ClearExplained(t, o.seen_tolerance, mask.probability, probability);
   const Eigen::Vector3d up_cam = t.world_to_camera.R() * up.normalized();
   const double ground = GroundBelow(t, up_cam);
+  if (o.max_guessed < 1 && !t.guessed.empty())
+    counts.guessed = ClearGuessed(t.guessed, mask, o.max_guessed, probability);
   const bool rise_test = o.min_height > 0 && std::isfinite(ground);
   if (!rise_test && !(o.occludes > 0)) return counts;
   cv::Mat labels;

@@ -70,6 +70,8 @@ struct DynamicView {
                       // hidden in this view like one behind its static depth
   double beyond = 0;  // as a neighbour or partner: compared with the target's pixels whose
                       // static depth is at least this only (0: all)
+  cv::Mat guessed;    // CV_8U, non-zero where the static depth is a guessed surface (a corridor
+                      // wall closing a hole of the fused facades), or empty
 };
 
 struct DynamicOptions {
@@ -184,17 +186,28 @@ cv::Mat MaskFromProbability(const cv::Mat& probability, const MaskOptions& optio
 //    column, those above the middle between its top and lowest pixel) have a static depth over
 //    (1 + `occlusion_gap`) × the foot's (the column's lowest pixel's or the one below's), or
 //    none. Needs no ground; a blob without a column whose foot has depth is kept.
-// seen_tolerance 0, min_height 0 or occludes 0 turns a test off.
+//  * blobs on a guessed surface: where `target.guessed` marks the static depth as a guess (a
+//    corridor wall that roadmesh --dense puts behind a hole of the fused facades: an alley, a gap
+//    between buildings, a near corner no second photo saw), a neighbour warped through it
+//    disagrees with the photo by the parallax of the guess although nothing moved. In a blob
+//    more than `max_guessed` of whose pixels are there, those pixels get probability 0 (before
+//    the two tests above, which then judge what is left: a vehicle merged with such a blob keeps
+//    its body on the road). A vehicle stands on the road, which is measured or the corridor's
+//    ground (not a guess of this kind), and hides a wall's hole with its upper part only.
+//    Without `guessed`, nothing is cleared.
+// seen_tolerance 0, min_height 0, occludes 0 or max_guessed 1 turns a test off.
 struct BlobTestOptions {
   double min_height = 0.5;       // × the camera's height above the ground, >= 0; 0 off
   double seen_tolerance = 0.05;  // relative, in [0, 1); 0 off
   double occludes = 0.2;         // share of a blob's upper pixels, in [0, 1]; 0 off
   double occlusion_gap = 0.25;   // relative depth beyond the foot that counts as behind, > 0
+  double max_guessed = 0.5;      // share of a blob's pixels on guessed depth, [0, 1]; 1 off
 };
 struct BlobTestCounts {
   size_t explained = 0;  // pixels at or above mask.probability cleared: the seen static surface
   int lying = 0;         // blobs left out: flat in the road
   int surface = 0;       // blobs left out: on the static surface, hiding nothing behind them
+  int guessed = 0;       // blobs cleared where the static depth is a guess (mostly there)
 };
 BlobTestCounts KeepStandingUnexplained(const DynamicView& target, const Eigen::Vector3d& up,
                                        const MaskOptions& mask, const BlobTestOptions& options,

@@ -303,12 +303,20 @@ void ReadPlyVertices(PlyBodyReader& r, const PlyElement& e, Mesh& m, const std::
 void ReadPlyFaces(PlyBodyReader& r, const PlyElement& e, Mesh& m) {
   double nv = static_cast<double>(m.vertices.size());
   m.faces.reserve(e.count);
+  bool kinds = false;
+  for (const auto& p : e.props) kinds |= !p.is_list && p.name == "mvtm_fill";
+  if (kinds) m.face_kinds.reserve(e.count);
   std::vector<uint32_t> idx;
   for (size_t i = 0; i < e.count; ++i) {
+    const size_t before = m.faces.size();
+    uint8_t kind = kFaceObserved;
     for (const auto& p : e.props) {
       bool indices = p.is_list && (p.name == "vertex_indices" || p.name == "vertex_index");
       if (!p.is_list) {
-        r.Value(p.type);
+        if (p.name == "mvtm_fill")
+          kind = static_cast<uint8_t>(r.Index(p.type, kFaceKindCount, "mvtm_fill"));
+        else
+          r.Value(p.type);
         continue;
       }
       uint32_t cnt = r.Index(p.count_type, 1 << 16, "list length");
@@ -317,6 +325,7 @@ void ReadPlyFaces(PlyBodyReader& r, const PlyElement& e, Mesh& m) {
       if (indices)
         for (size_t k = 2; k < cnt; ++k) m.faces.push_back({idx[0], idx[k - 1], idx[k]});
     }
+    if (kinds) m.face_kinds.insert(m.face_kinds.end(), m.faces.size() - before, kind);
   }
 }
 
@@ -414,6 +423,7 @@ void WriteMesh(const std::string& path, const Mesh& mesh, bool ascii) {
   mesh.Bounds(t.lo, t.hi);
   t.normals = mesh.has_normals();
   t.colours = mesh.has_colors();
+  t.face_kinds = mesh.has_face_kinds();
   WriteMeshParts(
       path, t, [&](bool, const MeshPartEmitter& emit) { emit(mesh); }, ascii);
 }
@@ -430,7 +440,9 @@ void WriteMeshParts(const std::string& path, const MeshTotals& t,
     o << "property " << pt << " x\nproperty " << pt << " y\nproperty " << pt << " z\n";
     if (t.normals) o << "property float nx\nproperty float ny\nproperty float nz\n";
     if (t.colours) o << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
-    o << "element face " << t.faces << "\nproperty list uchar int vertex_indices\nend_header\n";
+    o << "element face " << t.faces << "\nproperty list uchar int vertex_indices\n";
+    if (t.face_kinds) o << "property uchar mvtm_fill\n";
+    o << "end_header\n";
     auto put = [&](auto v) { o.write(reinterpret_cast<const char*>(&v), sizeof v); };
     size_t vertices = 0;
     parts(false, [&](const Mesh& mesh) {
@@ -465,16 +477,22 @@ void WriteMeshParts(const std::string& path, const MeshTotals& t,
     });
     size_t faces = 0, base = 0;
     parts(true, [&](const Mesh& mesh) {
-      for (const auto& f : mesh.faces) {
+      if (t.face_kinds && !mesh.faces.empty() && !mesh.has_face_kinds())
+        throw Error(path, 0, "a part lacks the face kinds the totals announce");
+      for (size_t j = 0; j < mesh.faces.size(); ++j) {
+        const auto& f = mesh.faces[j];
         for (uint32_t i : f)
           if (i >= mesh.vertices.size())
             throw Error(path, 0, "face index " + std::to_string(base + i) + " out of range");
         if (ascii) {
-          o << "3 " << base + f[0] << ' ' << base + f[1] << ' ' << base + f[2] << '\n';
+          o << "3 " << base + f[0] << ' ' << base + f[1] << ' ' << base + f[2];
+          if (t.face_kinds) o << ' ' << int(mesh.face_kinds[j]);
+          o << '\n';
           continue;
         }
         put(uint8_t{3});
         for (uint32_t i : f) put(static_cast<int32_t>(base + i));
+        if (t.face_kinds) put(mesh.face_kinds[j]);
       }
       base += mesh.vertices.size();
       faces += mesh.faces.size();

@@ -9,7 +9,10 @@
 //    loop forever on some malformed headers. Every count is checked against the file's size
 //    before anything is allocated; indices, list lengths and colours must be integers in range.
 //  * Colours are 8-bit RGB, normals unit float vectors; faces are triangles (polygons are
-//    triangulated on read).
+//    triangulated on read, each triangle with its polygon's kind).
+//  * Mesh::face_kinds is the face property "uchar mvtm_fill" (scene/mesh.h FaceKind, 0..2),
+//    written when the mesh has one per face; readers that do not know it skip it (PLY allows
+//    any property), a value outside 0..2 is an error.
 //  * ReadMesh() reports what the file lacks (normals, colours, faces) in Mesh::missing rather
 //    than failing; a tool that needs an attribute throws with that list.
 #pragma once
@@ -37,7 +40,7 @@ void WriteMesh(const std::string& path, const Mesh& mesh, bool ascii = false);
 struct MeshTotals {
   size_t vertices = 0, faces = 0;
   Eigen::Vector3d lo = Eigen::Vector3d::Zero(), hi = Eigen::Vector3d::Zero();  // vertex bounds
-  bool normals = false, colours = false;
+  bool normals = false, colours = false, face_kinds = false;  // face_kinds: "mvtm_fill"
 };
 using MeshPartEmitter = std::function<void(const Mesh&)>;
 void WriteMeshParts(const std::string& path, const MeshTotals& totals,

@@ -237,6 +237,8 @@ Mesh MergeProxyBehind(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3
   Mesh out;
   out.vertices = dense.vertices;
   out.faces = dense.faces;
+  out.face_kinds = dense.has_face_kinds() ? dense.face_kinds
+                                          : std::vector<uint8_t>(dense.faces.size(), kFaceObserved);
   std::map<uint32_t, uint32_t> index;  // proxy vertex → output vertex (shared within a part)
   auto vertex = [&](uint32_t v, bool ground) {
     auto it = index.find(v);
@@ -260,6 +262,7 @@ Mesh MergeProxyBehind(const Mesh& dense, const Mesh& proxy, const Eigen::Vector3
     const bool ground = kind[i] == 2;
     if (!ground && walls_behind < 0) continue;
     out.faces.push_back({vertex(f[0], ground), vertex(f[1], ground), vertex(f[2], ground)});
+    out.face_kinds.push_back(ground ? kFaceFillGround : kFaceFillWall);
     ++(ground ? r.ground_faces : r.wall_faces);
   }
   out.ComputeNormals();

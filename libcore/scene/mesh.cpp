@@ -43,6 +43,7 @@ Mesh SubMesh(const Mesh& m, const std::vector<uint32_t>& faces) {
       t[static_cast<size_t>(k)] = static_cast<uint32_t>(remap[v]);
     }
     out.faces.push_back(t);
+    if (m.has_face_kinds()) out.face_kinds.push_back(m.face_kinds[f]);
   }
   return out;
 }

@@ -94,6 +94,11 @@ void DeclareStandingOptions(OptionTable& t, DynmaskOptions& o) {
          "counts as behind the blob")
       .Range(0, 10, true, false)
       .Alternative("0.5");
+  t.Real("--max-fill", &o.max_fill,
+         "Leave out blobs more than S of whose pixels see a corridor wall that roadmesh --dense "
+         "put behind a hole of the fused facades (a guessed depth) (1: off)")
+      .Range(0, 1)
+      .Alternative("1");
 }
 
 // The evidence's options (libcore/dynamic's DynamicOptions).
@@ -405,7 +410,16 @@ class DepthProvider {
     use_mesh_ = src == DepthSource::kMesh || (src == DepthSource::kAuto && mesh);
     if (use_mesh_) {
       ws.Require("dynmask", {WsItem::kMesh});
-      caster_ = std::make_unique<MeshRaycaster>(ReadMesh(ws.MeshPath().string()));
+      Mesh m = ReadMesh(ws.MeshPath().string());
+      // The corridor walls behind the fused facades' holes are a backdrop at a guessed depth.
+      if (m.has_face_kinds()) {
+        wall_.resize(m.faces.size());
+        for (size_t f = 0; f < m.faces.size(); ++f) {
+          wall_[f] = m.face_kinds[f] == kFaceFillWall;
+          walls_ += wall_[f];
+        }
+      }
+      caster_ = std::make_unique<MeshRaycaster>(m);
       return;
     }
     if (src == DepthSource::kAuto && !stereo)
@@ -413,16 +427,25 @@ class DepthProvider {
                   ": no static depth: neither a mesh (run roadmesh) nor stereo/ (run densify)");
     ws.Require("dynmask", {WsItem::kStereo});
   }
-  std::string Name() const { return use_mesh_ ? "mesh (ray-cast)" : "stereo/ (densify)"; }
+  std::string Name() const {
+    if (!use_mesh_) return "stereo/ (densify)";
+    if (walls_ == 0) return "mesh (ray-cast)";
+    return "mesh (ray-cast; " + std::to_string(walls_) + " of its faces corridor walls)";
+  }
   bool UsesMesh() const { return use_mesh_; }
   fs::path Input(const std::string& name) const {
     return use_mesh_ ? ws_.MeshPath() : ws_.StereoDepthPath(name);
   }
-  cv::Mat Depth(const Camera& cam, const Rigid3d& w2c, const std::string& name) const;
+  // `guessed` (when given): CV_8U, 255 where the ray meets a corridor wall, else 0; empty when
+  // the static depth says nothing of guesses (densify's maps, a mesh without face kinds).
+  cv::Mat Depth(const Camera& cam, const Rigid3d& w2c, const std::string& name,
+                cv::Mat* guessed = nullptr) const;
 
  private:
   const Workspace& ws_;
   bool use_mesh_ = false;
+  std::vector<uint8_t> wall_;  // per face: a corridor wall (empty: the mesh says nothing)
+  size_t walls_ = 0;
   std::unique_ptr<MeshRaycaster> caster_;
 };
 
@@ -438,9 +461,13 @@ cv::Mat StereoDepth(const Workspace& ws, const Camera& cam, const std::string& n
   return z;
 }
 
-cv::Mat DepthProvider::Depth(const Camera& cam, const Rigid3d& w2c, const std::string& name) const {
+cv::Mat DepthProvider::Depth(const Camera& cam, const Rigid3d& w2c, const std::string& name,
+                             cv::Mat* guessed) const {
   const int w = int(cam.width), h = int(cam.height);
   cv::Mat z(h, w, CV_32F, std::numeric_limits<float>::infinity());
+  cv::Mat g;
+  if (guessed) *guessed = cv::Mat();
+  if (guessed && use_mesh_ && walls_ > 0) g = *guessed = cv::Mat::zeros(h, w, CV_8U);
   if (!use_mesh_) {
     cv::Mat m = StereoDepth(ws_, cam, name);
     return m.empty() ? z : m;  // densify made no map for it: no evidence
@@ -452,7 +479,10 @@ cv::Mat DepthProvider::Depth(const Camera& cam, const Rigid3d& w2c, const std::s
       for (int x = 0; x < w; ++x) {
         const Eigen::Vector3d dir = Rt * Eigen::Vector3d((x + 0.5 - cam.cx()) / cam.fx(),
                                                          (y + 0.5 - cam.cy()) / cam.fy(), 1);
-        if (auto hit = caster_->Closest(c, dir)) z.at<float>(y, x) = float(hit->t);  // t = z
+        if (auto hit = caster_->Closest(c, dir)) {
+          z.at<float>(y, x) = float(hit->t);  // t = z
+          if (!g.empty() && wall_[hit->triangle]) g.at<uint8_t>(y, x) = 255;
+        }
       }
   });
   return z;
@@ -492,7 +522,7 @@ class ViewCache {
     DynamicView v;
     v.camera = s_.work[i];
     v.world_to_camera = s_.images[i]->world_to_camera;
-    v.depth = d_.Depth(s_.work[i], s_.images[i]->world_to_camera, name);
+    v.depth = d_.Depth(s_.work[i], s_.images[i]->world_to_camera, name, &v.guessed);
     LoadPhoto(ws_.ImagePath(name), s_.full[i], s_.work[i], v.grey, v.colour);
     return Used(views_.emplace(i, Entry<DynamicView>{std::move(v), 0}).first->second);
   }
@@ -672,17 +702,19 @@ void ComputeMaps(const DynmaskOptions& o, const Workspace& ws, const Scene& s, c
     if (o.grounded > 0)
       rep.floating += size_t(
           KeepGrounded(cache.Get(job.i), s.up, o.mask.probability, o.grounded, e.probability));
-    if (o.min_height > 0 || o.seen_tolerance > 0 || o.occludes > 0) {
+    if (o.min_height > 0 || o.seen_tolerance > 0 || o.occludes > 0 || o.max_fill < 1) {
       DynamicView t = cache.Get(job.i);
       // The photo's own map against the mesh's depth; with densify's maps as the static depth
       // they are one map and explain nothing, and a vehicle parked in this drive is in that
       // "static" depth, hiding nothing behind it: the occlusion test needs the mesh too.
       if (d.UsesMesh()) t.seen = cache.Seen(job.i);
-      const BlobTestCounts c = KeepStandingUnexplained(
-          t, s.up, o.mask,
-          {o.min_height, o.seen_tolerance, d.UsesMesh() ? o.occludes : 0, o.occlusion_gap},
-          e.probability);
+      const BlobTestCounts c =
+          KeepStandingUnexplained(t, s.up, o.mask,
+                                  {o.min_height, o.seen_tolerance, d.UsesMesh() ? o.occludes : 0,
+                                   o.occlusion_gap, o.max_fill},
+                                  e.probability);
       rep.lying += size_t(c.lying), rep.surface += size_t(c.surface);
+      rep.guessed += size_t(c.guessed);
       rep.explained += c.explained;
     }
     const fs::path out = ws.DynamicPath(s.images[job.i]->name);

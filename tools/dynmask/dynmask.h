@@ -34,6 +34,7 @@ struct DynmaskOptions : WorkOptions {
   double seen_tolerance = 0.05;  // pixels where densify's depth is the static one: static; 0 off
   double occludes = 0.2;         // blobs must hide something behind them (share); 0: off
   double occlusion_gap = 0.25;   // ... beyond their foot's depth by this (relative)
+  double max_fill = 0.5;         // blobs with more of their pixels on corridor walls go; 1 off
   DynamicOptions evidence;       // --threshold, --flow/--no-flow, --quantile, ...
   MaskOptions mask;              // --probability, --open, --close, --min-area
   TrackOptions track;            // segtrack's tracking options (defaults: the constructor)
@@ -63,6 +64,7 @@ struct DynmaskReport {
   size_t floating = 0;       // blobs removed: not standing on the ground
   size_t lying = 0;          // blobs removed: flat in the road (wet patches, shadows)
   size_t surface = 0;        // blobs removed: on the static surface, hiding nothing
+  size_t guessed = 0;        // blobs removed: mostly on a corridor wall (a guessed depth)
   size_t explained = 0;      // pixels cleared: the photo's own depth is the static depth there
   bool masked = false;       // masks and tracks.tsv were (re)made
   size_t masks_written = 0;

@@ -29,6 +29,9 @@ int RunAndReport(mvtm::DynmaskOptions& o) {
   if (r.lying) std::fprintf(stderr, "; %zu blobs lying in the road left out", r.lying);
   if (r.surface)
     std::fprintf(stderr, "; %zu blobs on the static surface (hiding nothing) left out", r.surface);
+  if (r.guessed)
+    std::fprintf(stderr, "; %zu blobs mostly on corridor walls (a guessed depth) cleared there",
+                 r.guessed);
   if (r.explained)
     std::fprintf(stderr, "; %zu pixels the photo's own depth explains cleared", r.explained);
   if (r.no_neighbours)

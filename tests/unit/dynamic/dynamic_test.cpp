@@ -477,6 +477,39 @@ TEST(Dynamic, PixelsThePhotosOwnDepthExplainsAreCleared) {
   EXPECT_THROW(KeepStandingUnexplained(t, up, ExactBlobs(), {0.5, 1}, p), Error);
 }
 
+// Where the static depth is a guess (a corridor wall roadmesh --dense puts behind a hole of the
+// fused facades), a blob mostly there is cleared there: the patch wholly on a guess goes, the
+// vehicle whose top third hides a guessed wall keeps its body; shares from the rectangles' sizes.
+TEST(Dynamic, BlobsMostlyOnAGuessedDepthAreClearedThere) {
+  DynamicView t = MakeView(10, nullptr);
+  const Eigen::Vector3d up(0, -1, 0);
+  t.guessed = cv::Mat::zeros(kH, kW, CV_8U);
+  t.guessed(kPatch).setTo(255);
+  t.guessed(cv::Rect(kVehicle.x, kVehicle.y, kVehicle.width, kVehicle.height / 3)).setTo(255);
+  cv::Mat p = BlobTestProbability();
+  EXPECT_EQ(KeepStandingUnexplained(t, up, ExactBlobs(), {0, 0, 0, 0.25, 0.5}, p).guessed, 1);
+  EXPECT_EQ(cv::countNonZero(p(kPatch) > 0), 0);
+  EXPECT_EQ(cv::countNonZero(p(kVehicle) > 0), kVehicle.area());
+  // The patch's left 20 of 41 columns on a guess (0.488): kept at 0.5; at 0.4 cleared there
+  // only, its other columns kept. 1 turns the test off; without the mask nothing is judged.
+  t.guessed.setTo(0);
+  t.guessed(cv::Rect(kPatch.x, kPatch.y, 20, kPatch.height)).setTo(255);
+  for (double s : {0.5, 0.4, 1.0}) {
+    cv::Mat q = BlobTestProbability();
+    const int n = KeepStandingUnexplained(t, up, ExactBlobs(), {0, 0, 0, 0.25, s}, q).guessed;
+    const bool cleared = s == 0.4;
+    EXPECT_EQ(n, cleared ? 1 : 0) << s;
+    EXPECT_EQ(cv::countNonZero(q(kPatch) > 0), cleared ? 21 * kPatch.height : kPatch.area()) << s;
+  }
+  DynamicView none = MakeView(10, nullptr);
+  cv::Mat q = BlobTestProbability();
+  EXPECT_EQ(KeepStandingUnexplained(none, up, ExactBlobs(), {0, 0, 0, 0.25, 0}, q).guessed, 0);
+  EXPECT_EQ(cv::countNonZero(q > 0), kPatch.area() + kVehicle.area());
+  EXPECT_THROW(KeepStandingUnexplained(t, up, ExactBlobs(), {0, 0, 0, 0.25, 1.5}, q), Error);
+  t.guessed = cv::Mat::zeros(kH, kW, CV_32F);  // not 8-bit
+  EXPECT_THROW(KeepStandingUnexplained(t, up, ExactBlobs(), {0, 0, 0, 0.25, 0.5}, q), Error);
+}
+
 TEST(Dynamic, BadInputs) {
   DynamicView t = MakeView(10, nullptr);
   t.depth = cv::Mat(10, 10, CV_32F, 1.f);

@@ -85,6 +85,46 @@ TEST(MeshIo, PartsReadBackAsTheJoinedMesh) {
   EXPECT_FALSE(std::filesystem::exists(d / "wrong.ply"));
 }
 
+// roadmesh --dense marks its corridor faces (FaceKind) as the face property "mvtm_fill": it reads
+// back in both encodings, a polygon's triangles take its kind, a mesh without one kind per face
+// writes none, and a kind out of range is an error naming the file.
+TEST(MeshIo, FaceKindsRoundTripAsAFaceProperty) {
+  auto d = test::FreshDir("mesh-kinds");
+  for (bool ascii : {false, true}) {
+    Mesh m = Quad({0.5, 0.25, 2});
+    m.face_kinds = {kFaceObserved, kFaceFillWall};
+    WriteMesh((d / "m.ply").string(), m, ascii);
+    const Mesh r = ReadMesh((d / "m.ply").string());
+    EXPECT_EQ(r.face_kinds, m.face_kinds);
+    EXPECT_EQ(r.faces, m.faces);
+    EXPECT_EQ(r.colors, m.colors);
+    m.face_kinds = {kFaceFillGround};  // not one per face: left out
+    WriteMesh((d / "m.ply").string(), m, ascii);
+    EXPECT_TRUE(ReadMesh((d / "m.ply").string()).face_kinds.empty());
+  }
+  // A quad (one polygon, kind 1) between two properties the reader does not know.
+  test::WriteFile(d / "poly.ply",
+                  "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                  "property float z\nelement face 2\nproperty float area\n"
+                  "property list uchar int vertex_indices\nproperty uchar mvtm_fill\n"
+                  "property list uchar float uv\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n"
+                  "1 4 0 1 2 3 1 2 0 0\n0.5 3 0 2 3 2 0\n");
+  const Mesh r = ReadMesh((d / "poly.ply").string());
+  ASSERT_EQ(r.faces.size(), 3u);
+  EXPECT_EQ(r.face_kinds, (std::vector<uint8_t>{kFaceFillGround, kFaceFillGround, kFaceFillWall}));
+  test::WriteFile(d / "bad.ply",
+                  "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                  "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                  "property uchar mvtm_fill\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 3\n");
+  try {
+    ReadMesh((d / "bad.ply").string());
+    ADD_FAILURE() << "a kind of 3 was read";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.ply"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("mvtm_fill"), std::string::npos) << e.what();
+  }
+}
+
 TEST(MeshIo, ReportsWhatIsMissing) {
   auto d = test::FreshDir("mesh-missing");
   test::WriteFile(d / "p.ply",

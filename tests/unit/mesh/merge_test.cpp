@@ -40,6 +40,14 @@ TEST(Merge, GroundLoweredWallsMovedBackDenseKept) {
   for (uint32_t v : {7u, 8u, 9u, 10u})
     EXPECT_NEAR(m.vertices[v].y(), 7.0, 1e-6);  // wall, 5 + 2 back
   EXPECT_TRUE(m.has_normals());
+  // Each face says what it is: the dense face measured, then the proxy's in order (its ground
+  // faces at z = 0 and its wall faces at y = 5, see Proxy()).
+  ASSERT_TRUE(m.has_face_kinds());
+  EXPECT_EQ(m.face_kinds[0], kFaceObserved);
+  for (size_t f = 1; f < m.faces.size(); ++f) {
+    const bool wall = m.vertices[m.faces[f][0]].y() > 6;
+    EXPECT_EQ(m.face_kinds[f], wall ? kFaceFillWall : kFaceFillGround) << f;
+  }
 }
 
 TEST(Merge, AWallMovedBackTakesItsFootDownSoNoGapOpensAtTheGroundsEdge) {
