@@ -17,7 +17,8 @@ tool and OUT/index.html, the page to read before choosing settings. Work folders
              --probability, --grounded, --min-height,
              --occludes, --occlusion-gap, --min-ratio, --max-gap
              (no labels; the fixture's true mesh, no densify maps, so --seen-tolerance has nothing
-             to compare: its rows are the road build's, issue 21's note): mask IoU against truth/masks and
+             to compare: its rows are the road build's, issue 21's note), and --max-fill on a mesh
+             densify + roadmesh --dense make of the same photos: mask IoU against truth/masks and
              the share of drive B masked, against whole-process milliseconds per image
   inpaint3d  --method 3d|telea|ns|patch2d, --partners, --dilate: SSIM inside the vehicle masks
              against truth/background, against whole-process milliseconds per inpainted image
@@ -512,22 +513,38 @@ def sweep_dynmask(c):
                 "--min-baseline": 0.25, "--passes": 2, "--occludes": 0.2, "--occlusion-gap": 0.25,
                 "--segments": 300,
                 "--probability": 0.4, "--grounded": 0.25, "--min-height": 0.5,
-                "--min-ratio": 0.4, "--max-gap": 3}
+                "--min-ratio": 0.4, "--max-gap": 3, "--max-fill": 0.5}
     rows = []
+
+    def measure(group, opt, v, args, where):
+        (_, _, wall), slow = c.tools.best_wall(c.repeat, "dynmask", "-q", "--force", *args, where)
+        masks = [imageio.imread(os.path.join(where, "masks", n)) > 0 for n in a_names]
+        b_share = np.mean([(imageio.imread(os.path.join(where, "masks", n)) > 0).mean()
+                           for n in names if n.startswith("B_")])
+        rows.append({"group": group, "setting": f"{group}={v}", "default": v == defaults[opt],
+                     "iou": round(iou(masks, truths), 4), "pass_b_masked": round(b_share, 4),
+                     "ms_per_image": round(1000 * wall / len(names), 1),
+                     "slowest_ms_per_image": round(1000 * slow / len(names), 1)})
+        sl.log("dynmask", rows[-1]["setting"], f"IoU {rows[-1]['iou']:.4f}  pass B "
+               f"{100 * b_share:.2f} %  {rows[-1]['ms_per_image']:7.1f} ms/image")
+
     for group, opt, values, *extra in knobs:
         for v in values:
             args = ([opt] if v is True else []) if opt == "--no-flow" else [opt, v]
-            args += extra[0] if extra else []
-            (_, _, wall), slow = c.tools.best_wall(c.repeat, "dynmask", "-q", "--force", *args, ws)
-            masks = [imageio.imread(os.path.join(ws, "masks", n)) > 0 for n in a_names]
-            b_share = np.mean([(imageio.imread(os.path.join(ws, "masks", n)) > 0).mean()
-                               for n in names if n.startswith("B_")])
-            rows.append({"group": group, "setting": f"{group}={v}", "default": v == defaults[opt],
-                         "iou": round(iou(masks, truths), 4), "pass_b_masked": round(b_share, 4),
-                         "ms_per_image": round(1000 * wall / len(names), 1),
-                         "slowest_ms_per_image": round(1000 * slow / len(names), 1)})
-            sl.log("dynmask", rows[-1]["setting"], f"IoU {rows[-1]['iou']:.4f}  pass B "
-                   f"{100 * b_share:.2f} %  {rows[-1]['ms_per_image']:7.1f} ms/image")
+            measure(group, opt, v, args + (extra[0] if extra else []), ws)
+    # --max-fill judges blobs on the corridor walls of a mesh built from the photos (densify,
+    # roadmesh --dense: the walls close the fused facades' holes); the true mesh has none.
+    photo = sl.copy_workspace(ws, os.path.join(folder, "photo"))
+    for name in ("mesh.ply", "masks", "dynamic", "tracks.tsv"):
+        target = os.path.join(photo, name)
+        if os.path.isdir(target):
+            shutil.rmtree(target)
+        elif os.path.exists(target):
+            os.remove(target)
+    c.tools.run("densify", "--quiet", photo)
+    c.tools.run("roadmesh", "--quiet", "--dense", "--metric", photo)
+    for v in (0.5, 1) if c.short else (0.3, 0.5, 1):
+        measure("max-fill (photo-built mesh)", "--max-fill", v, ["--max-fill", v], photo)
     best_default = max(r["iou"] for r in rows if r["default"])
     c.checks(best_default > 0.2, f"dynmask defaults: IoU {best_default:.4f} above 0.2")
     s = sl.Section(
@@ -545,7 +562,10 @@ def sweep_dynmask(c):
         f"<code>--probability</code>, <code>--grounded</code>, <code>--min-height</code> "
         f"(blobs must stand that share of the camera's height), <code>--occludes</code>, "
         f"<code>--occlusion-gap</code> (blobs must hide something behind them; on this true "
-        f"mesh there are no facade errors for them to remove), <code>--min-ratio</code>, "
+        f"mesh there are no facade errors for them to remove), <code>--max-fill</code> (blobs "
+        f"mostly on the corridor walls that close the holes of a mesh fused from the photos; "
+        f"measured on such a mesh, densify + roadmesh --dense of the same photos), "
+        f"<code>--min-ratio</code>, "
         f"<code>--max-gap</code> (tracking). Each varied alone on the "
         f"fixture's photos and true mesh ({len(a_names)} frames per drive, 640x192). "
         f"<b>Accuracy:</b> IoU of drive A's masks against truth/masks, pooled (the column "
