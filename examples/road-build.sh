@@ -203,7 +203,9 @@ SQL
       # from it; from the wide pair 5 degrees, 0.37 px, then 561 px and k1 -0.07.
       command -v sqlite3 > /dev/null ||
         echo "warning: no sqlite3 shell: the mapper chooses its own initial pair" >&2
-      # Every attempt maps into ${d}_NAME and is kept in $d when it registered more (adopt_if_more).
+      # Every attempt maps into ${d}_NAME and is kept in $d when it registered more (adopt_if_more);
+      # it runs under || or && (errexit off inside it): a step of it that fails leaves an attempt
+      # that registered nothing, and the next one runs.
       local args=("$@")
       attempt() {  # NAME [mapper options...]; returns 0 when its model was kept
         local name=$1; shift

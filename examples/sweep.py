@@ -542,7 +542,7 @@ def sweep_dynmask(c):
         elif os.path.exists(target):
             os.remove(target)
     c.tools.run("densify", "--quiet", photo)
-    c.tools.run("roadmesh", "--quiet", "--dense", "--metric", photo)
+    c.tools.run("roadmesh", "--quiet", "--dense", "--metric", "--no-colours", photo)
     for v in (0.5, 1) if c.short else (0.3, 0.5, 1):
         measure("max-fill (photo-built mesh)", "--max-fill", v, ["--max-fill", v], photo)
     best_default = max(r["iou"] for r in rows if r["default"])

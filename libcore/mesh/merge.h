@@ -16,8 +16,8 @@
 // No face is dropped by a proximity test, so fragments of dense surface never punch holes.
 // Lengths in the model's own unit. Normals are recomputed; colours dropped (bake them
 // afterwards). The result's face_kinds say which faces are the proxy's (kFaceFillGround,
-// kFaceFillWall; the dense faces keep theirs, else kFaceObserved): dynmask warps photos only
-// through what they measured. Thread safety: pure function.
+// kFaceFillWall; the dense faces keep theirs, else kFaceObserved): dynmask clears what it finds
+// mostly where a pixel's ray meets a wall first (a guessed depth). Thread safety: pure function.
 #pragma once
 
 #include <Eigen/Core>

@@ -95,8 +95,8 @@ void DeclareStandingOptions(OptionTable& t, DynmaskOptions& o) {
       .Range(0, 10, true, false)
       .Alternative("0.5");
   t.Real("--max-fill", &o.max_fill,
-         "Leave out blobs more than S of whose pixels see a corridor wall that roadmesh --dense "
-         "put behind a hole of the fused facades (a guessed depth) (1: off)")
+         "In a blob more than S of whose pixels see a corridor wall that roadmesh --dense put "
+         "behind a hole of the fused facades (a guessed depth), those pixels are cleared (1: off)")
       .Range(0, 1)
       .Alternative("1");
 }
@@ -405,7 +405,9 @@ Partners ChooseAhead(const Scene& s, int count, const Partners& partners) {
 // Static depth of one image at its working size.
 class DepthProvider {
  public:
-  DepthProvider(const Workspace& ws, DepthSource src) : ws_(ws) {
+  // mark_walls: Depth() marks the pixels whose ray meets a corridor wall (for --max-fill).
+  DepthProvider(const Workspace& ws, DepthSource src, bool mark_walls)
+      : ws_(ws), mark_walls_(mark_walls) {
     const bool mesh = fs::exists(ws.MeshPath()), stereo = fs::is_directory(ws.StereoDir());
     use_mesh_ = src == DepthSource::kMesh || (src == DepthSource::kAuto && mesh);
     if (use_mesh_) {
@@ -443,6 +445,7 @@ class DepthProvider {
 
  private:
   const Workspace& ws_;
+  bool mark_walls_ = false;
   bool use_mesh_ = false;
   std::vector<uint8_t> wall_;  // per face: a corridor wall (empty: the mesh says nothing)
   size_t walls_ = 0;
@@ -467,7 +470,7 @@ cv::Mat DepthProvider::Depth(const Camera& cam, const Rigid3d& w2c, const std::s
   cv::Mat z(h, w, CV_32F, std::numeric_limits<float>::infinity());
   cv::Mat g;
   if (guessed) *guessed = cv::Mat();
-  if (guessed && use_mesh_ && walls_ > 0) g = *guessed = cv::Mat::zeros(h, w, CV_8U);
+  if (guessed && mark_walls_ && use_mesh_ && walls_ > 0) g = *guessed = cv::Mat::zeros(h, w, CV_8U);
   if (!use_mesh_) {
     cv::Mat m = StereoDepth(ws_, cam, name);
     return m.empty() ? z : m;  // densify made no map for it: no evidence
@@ -875,7 +878,7 @@ DynmaskReport RunDynmask(const DynmaskOptions& o) {
   o.Check();
   const Workspace ws(o.workspace);
   ws.Require("dynmask", {WsItem::kSparse, WsItem::kImages});
-  const DepthProvider depth(ws, o.depth);
+  const DepthProvider depth(ws, o.depth, o.max_fill < 1);
   const Scene s = LoadScene(ws, o.max_width);
   Pairing pair{ChooseNeighbours(s, o.neighbours, o.min_baseline),
                ChoosePartners(s, o.partners, o.partners_ahead),

@@ -34,12 +34,12 @@ struct DynmaskOptions : WorkOptions {
   double seen_tolerance = 0.05;  // pixels where densify's depth is the static one: static; 0 off
   double occludes = 0.2;         // blobs must hide something behind them (share); 0: off
   double occlusion_gap = 0.25;   // ... beyond their foot's depth by this (relative)
-  double max_fill = 0.5;         // blobs with more of their pixels on corridor walls go; 1 off
-  DynamicOptions evidence;       // --threshold, --flow/--no-flow, --quantile, ...
-  MaskOptions mask;              // --probability, --open, --close, --min-area
-  TrackOptions track;            // segtrack's tracking options (defaults: the constructor)
-  std::string also;              // folder of masks OR-ed into the output (e.g. a video overlay)
-  std::string labels;            // folder of label images: blobs confirmed or rejected by geometry
+  double max_fill = 0.5;  // blobs with more of their pixels on corridor walls: cleared there; 1 off
+  DynamicOptions evidence;  // --threshold, --flow/--no-flow, --quantile, ...
+  MaskOptions mask;         // --probability, --open, --close, --min-area
+  TrackOptions track;       // segtrack's tracking options (defaults: the constructor)
+  std::string also;         // folder of masks OR-ed into the output (e.g. a video overlay)
+  std::string labels;       // folder of label images: blobs confirmed or rejected by geometry
   std::string classes = "8,9,10";  // their classes (CamVid: car, pedestrian, cyclist)
   double confirm = 0.25;           // a label blob whose mean probability reaches this is masked
 
