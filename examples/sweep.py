@@ -13,7 +13,8 @@ tool and OUT/index.html, the page to read before choosing settings. Work folders
   segtrack   --smooth, --max-gap, --min-life on damaged labels: mask IoU against truth/masks,
              against whole-process milliseconds per frame
   dynmask    --threshold, --flow-threshold, --no-flow, --neighbours, --partners, --min-baseline,
-             --partners-ahead, --ahead (with --partners 0), --passes, --segments, --region-depth,
+             --partners-ahead, --ahead-veto, --ahead (with --partners 0), --passes, --segments,
+             --region-depth,
              --probability, --grounded, --min-height,
              --occludes, --occlusion-gap, --min-ratio, --max-gap
              (no labels; the fixture's true mesh, no densify maps, so --seen-tolerance has nothing
@@ -492,6 +493,7 @@ def sweep_dynmask(c):
                  ("neighbours", "--neighbours", (2, 4, 6, 8)),
                  ("partners", "--partners", (0, 1, 2, 4)),
                  ("partners-ahead", "--partners-ahead", (0, 2, 4, 6)),
+                 ("ahead-veto", "--ahead-veto", (0, 0.5, 1)),
                  # photos of the same drive farther along act only without partners: drive A as
                  # a road of one drive
                  ("ahead (--partners 0)", "--ahead", (0, 2, 4), ["--partners", 0]),
@@ -509,6 +511,7 @@ def sweep_dynmask(c):
     defaults = {"--threshold": 0.05, "--flow-threshold": 2.5, "--no-flow": False,
                 "--flow-relative": 0,
                 "--neighbours": 4, "--partners": 2, "--partners-ahead": 4, "--ahead": 2,
+                "--ahead-veto": 0.5,
                 "--region-depth": 0.5,
                 "--min-baseline": 0.25, "--passes": 2, "--occludes": 0.2, "--occlusion-gap": 0.25,
                 "--segments": 300,
@@ -555,6 +558,8 @@ def sweep_dynmask(c):
         f"<code>--flow-threshold</code> (flow residual in pixels), <code>--no-flow</code>, "
         f"<code>--neighbours</code>, <code>--partners</code> (photos of the other drive), "
         f"<code>--partners-ahead</code> (photos of the other drive farther along the road), "
+        f"<code>--ahead-veto</code> (this drive's photos farther along veto the other drive's "
+        f"evidence where they saw the road as the photo does), "
         f"<code>--ahead</code> (photos of the same drive farther along; only without partners, "
         f"so measured with <code>--partners 0</code>), <code>--region-depth</code>, "
         f"<code>--min-baseline</code>, <code>--passes</code>, "

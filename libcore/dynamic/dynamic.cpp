@@ -266,6 +266,8 @@ void DynamicOptions::Check() const {
     throw UsageError("--flow-threshold must be above 0, got " + std::to_string(flow_threshold));
   if (!(quantile >= 0 && quantile <= 1))
     throw UsageError("--quantile must be in [0, 1], got " + std::to_string(quantile));
+  if (!(ahead_veto >= 0 && ahead_veto <= 10))
+    throw UsageError("--ahead-veto must be in [0, 10], got " + std::to_string(ahead_veto));
   if (!(depth_tolerance > 0 && depth_tolerance < 1))
     throw UsageError("--depth-tolerance must be in (0, 1), got " + std::to_string(depth_tolerance));
   if (slack < 0 || slack > 5)
@@ -346,6 +348,17 @@ DynamicEvidence EstimateDynamic(const DynamicView& t,
         ReducedResiduals(t, partners, photometric_only, "partner view", ev.across, no_flow);
   if (!ahead.empty())
     ev.ahead = ReducedResiduals(t, ahead, photometric_only, "ahead view", ev.ahead_photo, no_flow);
+  cv::Mat ahead_cue = ev.ahead_photo;
+  if (o.ahead_veto > 0 && !ev.across.empty() && !ev.ahead_photo.empty()) {
+    // The photo's own drive, farther along, saw these pixels as they are: what another drive's
+    // photos disagree with there is that drive's own traffic.
+    for (int y = 0; y < t.grey.rows; ++y)
+      for (int x = 0; x < t.grey.cols; ++x) {
+        const float a = ev.ahead_photo.at<float>(y, x);
+        if (std::isfinite(a) && a < o.ahead_veto * o.threshold) ev.across.at<float>(y, x) = kNaN;
+      }
+    ahead_cue = cv::Mat();
+  }
   ev.probability.create(t.grey.size(), CV_32F);
   for (int y = 0; y < t.grey.rows; ++y)
     for (int x = 0; x < t.grey.cols; ++x)
@@ -354,7 +367,7 @@ DynamicEvidence EstimateDynamic(const DynamicView& t,
                                                           {&ev.photometric, o.threshold},
                                                           {&ev.flow, o.flow_threshold},
                                                           {&ev.across, o.threshold},
-                                                          {&ev.ahead_photo, o.threshold},
+                                                          {&ahead_cue, o.threshold},
                                                       });
   if (o.segments > 0 && ev.neighbours + ev.partners + ev.ahead > 0) {
     const cv::Mat has_depth = (t.depth > 0) & (t.depth < std::numeric_limits<float>::infinity());

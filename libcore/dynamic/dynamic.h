@@ -87,6 +87,8 @@ struct DynamicOptions {
   double texture = 0.02;          // luma gradient (per pixel) at which a pixel's evidence is full
   double region_depth = 0.5;      // a pixel without depth takes its region's probability when
                                   // more than this share of the region has depth, [0, 1]; 1 never
+  double ahead_veto = 0.5;        // with partners: the photos farther along veto the partners'
+                                  // residual where theirs is under this × threshold; 0 off
 
   void Check() const;  // throws UsageError naming the option
 };
@@ -124,7 +126,13 @@ struct DynamicEvidence {
 // the camera keeps its pixels in the neighbours, but a photo taken metres ahead sees the road it
 // covers in the target below the vehicle's image in its own. Their photometric residuals are
 // reduced apart (the same quantile), one more cue; no flow (metres apart, the near road's warp
-// is too distorted).
+// is too distorted). With partners too and `ahead_veto` > 0 they are not a cue but a veto: where
+// their residual is under ahead_veto × threshold, the target's own drive saw that static point
+// as the target does, and what the partners disagree with there is their drive's own traffic (a
+// vehicle keeping its place ahead of the other drive's camera, which that drive's own first pass
+// cannot see move): the partners' residual is dropped there. Give them their `seen` maps then: a
+// vehicle parked in the target's drive hides from them the road its pixels warp to (its uniform
+// paint would otherwise agree with itself, seen nearer and larger).
 DynamicEvidence EstimateDynamic(const DynamicView& target,
                                 const std::vector<const DynamicView*>& neighbours,
                                 const DynamicOptions& options,

@@ -137,6 +137,12 @@ void DeclareEvidenceOptions(OptionTable& t, DynmaskOptions& o) {
   t.Real("--texture", &o.evidence.texture,
          "Luma gradient per pixel at which a pixel's own evidence counts fully")
       .Above(0);
+  t.Real("--ahead-veto", &o.evidence.ahead_veto,
+         "Photos with partners also get --ahead photos of their own drive farther along: where "
+         "they saw the pixel's static point as the photo does (residual under F x --threshold), "
+         "the partners' evidence there is the other drive's own traffic and is dropped (0: off)")
+      .Range(0, 10)
+      .Alternative("0");
   t.Real("--region-depth", &o.evidence.region_depth,
          "A pixel without static depth (sky, or beyond the reconstruction) takes its region's "
          "probability when more than this share of the region has depth: a vehicle's top "
@@ -386,7 +392,7 @@ constexpr double kAheadReach = 1.5;
 // of another drive (a road of one drive, or a stretch only one drive took): another drive's
 // photos are the better witnesses (this drive's own traffic is not in them), and its own photos
 // farther along carry that traffic onto the far road (mkroad, four seeds: IoU 0.01-0.04 lower).
-Partners ChooseAhead(const Scene& s, int count, const Partners& partners) {
+Partners ChooseAhead(const Scene& s, int count, const Partners& partners, bool all) {
   Partners p{std::vector<std::vector<size_t>>(s.images.size()),
              std::vector<std::vector<double>>(s.images.size())};
   if (count <= 0) return p;
@@ -394,7 +400,7 @@ Partners ChooseAhead(const Scene& s, int count, const Partners& partners) {
     OtherDrives own;
     for (size_t j : idx) own.Add(s, j);
     for (size_t i : idx) {
-      if (!partners.images[i].empty()) continue;
+      if (!partners.images[i].empty() && !all) continue;
       for (const auto& [j, z] : PartnersAhead(s, i, own, count, 0.5))
         if (j != i) p.images[i].push_back(j), p.beyond[i].push_back(kAheadReach * z);
     }
@@ -696,12 +702,15 @@ void ComputeMaps(const DynmaskOptions& o, const Workspace& ws, const Scene& s, c
     cache.Next();
     const std::vector<DynamicView> nv = views_of(pair.neighbours[job.i], false);
     const std::vector<DynamicView> pv = views_beyond(pair.partner, job.i, true);
-    const std::vector<DynamicView> av = views_beyond(pair.ahead, job.i, false);
+    // As a veto of the partners' evidence, the photos farther along with what they saw: a
+    // vehicle parked in this drive hides the road its pixels warp to from them.
+    const bool veto = o.evidence.ahead_veto > 0 && !pair.partner.images[job.i].empty();
+    const std::vector<DynamicView> av = views_beyond(pair.ahead, job.i, veto);
     DynamicEvidence e =
         EstimateDynamic(cache.Get(job.i), pointers(nv), ev, pointers(pv), pointers(av));
     if (e.neighbours + e.partners + e.ahead == 0) ++rep.no_neighbours;
     if (e.partners > 0) ++rep.with_partners;
-    if (e.ahead > 0) ++rep.with_ahead;
+    if (e.ahead > 0) ++(veto ? rep.with_veto : rep.with_ahead);
     if (o.grounded > 0)
       rep.floating += size_t(
           KeepGrounded(cache.Get(job.i), s.up, o.mask.probability, o.grounded, e.probability));
@@ -883,7 +892,7 @@ DynmaskReport RunDynmask(const DynmaskOptions& o) {
   Pairing pair{ChooseNeighbours(s, o.neighbours, o.min_baseline),
                ChoosePartners(s, o.partners, o.partners_ahead),
                {}};
-  pair.ahead = ChooseAhead(s, o.ahead, pair.partner);
+  pair.ahead = ChooseAhead(s, o.ahead, pair.partner, o.evidence.ahead_veto > 0);
   DynmaskReport rep;
   rep.images = s.images.size();
   rep.depth_source = depth.Name();

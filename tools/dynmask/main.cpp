@@ -25,6 +25,10 @@ int RunAndReport(mvtm::DynmaskOptions& o) {
     std::fprintf(stderr, "; %zu checked against other drives too", r.with_partners);
   if (r.with_ahead)
     std::fprintf(stderr, "; %zu checked against their drive's photos farther along", r.with_ahead);
+  if (r.with_veto)
+    std::fprintf(stderr,
+                 "; %zu whose other drives' evidence their drive's photos farther along veto",
+                 r.with_veto);
   if (r.floating) std::fprintf(stderr, "; %zu blobs off the ground left out", r.floating);
   if (r.lying) std::fprintf(stderr, "; %zu blobs lying in the road left out", r.lying);
   if (r.surface)

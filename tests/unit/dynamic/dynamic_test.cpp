@@ -268,6 +268,80 @@ TEST(Dynamic, AVehicleParkedInThePartnersDriveDoesNotMaskTheRoad) {
   EXPECT_LE(with, 0.001) << "without the partner's depth " << without;
 }
 
+// A world-fixed box (a vehicle parked in the target's drive only) seen from a camera `d` m
+// farther along: its face at depth `z_face` m in the target's view (pixels `box` there) scales
+// by z_face / (z_face - d) about the principal point, its paint with it.
+DynamicView ParkedView(double z, double d, const Box& box, double z_face) {
+  DynamicView v = MakeView(z + d, nullptr);
+  const Camera& c = v.camera;
+  const double k = z_face / (z_face - d);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const double bx = (x + 0.5 - c.cx()) / k + c.cx() - box.x0;  // in the target's pixels
+      const double by = (y + 0.5 - c.cy()) / k + c.cy() - box.y0;
+      if (bx >= 0 && bx < box.w && by >= 0 && by < box.h)
+        v.grey.at<float>(y, x) = float(VehicleTexture(int(bx) / 4, int(by) / 4));
+    }
+  return v;
+}
+
+TEST(Dynamic, PhotosFartherAlongVetoTheOtherDrivesTrafficNotThisDrives) {
+  // Drive A's lead car keeps its pixels (a box at the camera's speed); drive B saw the road bare.
+  // B's photo against A's partner: the car painted on B's road (a ghost: A's own neighbours
+  // cannot see it move, so A's first pass does not leave it out). B's own photos 2 and 4 m
+  // farther along see that road as it is: with the veto, the ghost goes. A's photo against B's
+  // partner: A's own photos farther along see the road the car covers (below the car in theirs):
+  // no veto, the car stays. A car parked in A only (world-fixed, its face 8 m ahead): A's photos
+  // farther along see it nearer and larger, not the road its pixels warp to: it stays too.
+  const Box box{100, 65, 40, 25};  // static depth 5.0 m (row 89) to 12.8 m (row 65)
+  const DynamicView b = MakeView(10, nullptr), a = MakeView(10.5, &box, 1.0, -1.5);
+  DynamicView b1 = MakeView(12, nullptr), b2 = MakeView(14, nullptr);
+  b1.beyond = 3, b2.beyond = 6;
+  DynamicOptions off, on;
+  off.ahead_veto = 0, on.ahead_veto = 0.5;
+  const auto masked = [](const DynamicEvidence& e) {
+    const cv::Mat m = MaskFromProbability(e.probability, MaskOptions());
+    return double(cv::countNonZero(m)) / double(m.total());
+  };
+  const double ghost = masked(EstimateDynamic(b, {}, off, {&a}, {&b1, &b2}));
+  const double vetoed = masked(EstimateDynamic(b, {}, on, {&a}, {&b1, &b2}));
+  EXPECT_GE(ghost, 0.008);  // a third of the box's 1000 pixels of 28800
+  EXPECT_LE(vetoed, 0.1 * ghost) << "without the veto " << ghost;
+  // Drive A's photo: the lead car found against B's partner, not vetoed.
+  const DynamicView t = MakeView(10, &box), other = MakeView(10.5, nullptr, 1.1, -1.5);
+  DynamicView a1 = MakeView(12, &box), a2 = MakeView(14, &box);
+  a1.beyond = 3, a2.beyond = 6;
+  double recall, fp;
+  const DynamicEvidence lead = EstimateDynamic(t, {}, on, {&other}, {&a1, &a2});
+  Score(MaskFromProbability(lead.probability, MaskOptions()), box, recall, fp);
+  EXPECT_GE(recall, 0.85);
+  // A car parked in A only, its face 8 m ahead (its pixels' static depth: the road from 5.0 to
+  // 12.8 m); A's photos 2 and 4 m farther along, which see it nearer and larger: by their own
+  // depth maps it hides the road its pixels warp to, so they do not veto it. (Without those
+  // maps its uniform or repeating paint can agree with itself: measured 0.44 of it found.)
+  const DynamicView parked = ParkedView(10, 0, box, 8);
+  DynamicView p1 = ParkedView(10, 2, box, 8), p2 = ParkedView(10, 4, box, 8);
+  p1.beyond = 3, p2.beyond = 6;
+  // What they saw (densify's maps): the car's face 6 and 4 m ahead of them, over its pixels.
+  for (auto [v, d] : {std::pair<DynamicView*, double>{&p1, 2}, {&p2, 4}}) {
+    v->seen = v->depth.clone();
+    const double k = 8 / (8 - d);
+    const Camera& c = v->camera;
+    const cv::Rect r(int(std::floor(c.cx() + (box.x0 - c.cx()) * k)),
+                     int(std::floor(c.cy() + (box.y0 - c.cy()) * k)), int(std::ceil(box.w * k)),
+                     int(std::ceil(box.h * k)));
+    v->seen(r & cv::Rect(0, 0, kW, kH)).setTo(float(8 - d));
+  }
+  const DynamicEvidence kept = EstimateDynamic(parked, {}, on, {&other}, {&p1, &p2});
+  Score(MaskFromProbability(kept.probability, MaskOptions()), box, recall, fp);
+  double recall_off;
+  Score(MaskFromProbability(EstimateDynamic(parked, {}, off, {&other}).probability, MaskOptions()),
+        box, recall_off, fp);
+  EXPECT_GE(recall, 0.85) << "without the veto " << recall_off;
+  // 0 turns the veto off: the photos farther along are then a cue of their own (no partners).
+  EXPECT_EQ(masked(EstimateDynamic(b, {}, off, {}, {&b1, &b2})), 0);
+}
+
 TEST(Dynamic, ExposureChangeIsNotMotion) {
   const DynamicView t = MakeView(10, nullptr);
   const DynamicView n1 = MakeView(9, nullptr, 1.25), n2 = MakeView(11, nullptr, 0.75);
