@@ -494,8 +494,8 @@ def sweep_dynmask(c):
                  ("partners", "--partners", (0, 1, 2, 4)),
                  ("partners-ahead", "--partners-ahead", (0, 2, 4, 6)),
                  ("ahead-veto", "--ahead-veto", (0, 0.5, 1)),
-                 # photos of the same drive farther along act only without partners: drive A as
-                 # a road of one drive
+                 # photos of the same drive farther along are a cue only without partners (with
+                 # them, a veto: --ahead-veto above): drive A as a road of one drive
                  ("ahead (--partners 0)", "--ahead", (0, 2, 4), ["--partners", 0]),
                  ("min-baseline", "--min-baseline", (0.25, 1.5, 2.5)),
                  ("passes", "--passes", (1, 2)),

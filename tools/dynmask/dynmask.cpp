@@ -629,6 +629,12 @@ struct Pairing {
   Partners ahead;  // own drive, farther along
 };
 
+// Whether image i's photos farther along veto its partners' evidence (--ahead-veto), rather than
+// being a cue: then they are compared with what they saw (their densify maps), as partners are.
+bool AheadVetoes(const DynmaskOptions& o, const Pairing& pair, size_t i) {
+  return o.evidence.ahead_veto > 0 && !pair.partner.images[i].empty();
+}
+
 // The selected images whose probability map is stale.
 std::vector<Job> StaleMaps(const DynmaskOptions& o, const Workspace& ws, const Scene& s,
                            const Pairing& pair, const DepthProvider& d, Ledger& ledger,
@@ -650,12 +656,18 @@ std::vector<Job> StaleMaps(const DynmaskOptions& o, const Workspace& ws, const S
     job.in.push_back(d.Input(s.images[i]->name));
     const fs::path own = ws.StereoDepthPath(s.images[i]->name);  // --seen-tolerance reads it
     if (o.seen_tolerance > 0 && d.UsesMesh() && fs::exists(own)) job.in.push_back(own);
+    const auto seen = [&](size_t j) {  // a partner's or a vetoing photo's densify map
+      const fs::path p = ws.StereoDepthPath(s.images[j]->name);
+      if (fs::exists(p)) job.in.push_back(p);
+    };
     for (size_t j : nbs[i]) view(j);
-    for (size_t j : pair.ahead.images[i]) view(j);
+    for (size_t j : pair.ahead.images[i]) {
+      view(j);
+      if (AheadVetoes(o, pair, i)) seen(j);
+    }
     for (size_t j : pair.partner.images[i]) {
       view(j);
-      const fs::path seen = ws.StereoDepthPath(s.images[j]->name);
-      if (fs::exists(seen)) job.in.push_back(seen);
+      seen(j);
     }
     std::sort(job.in.begin(), job.in.end());
     job.in.erase(std::unique(job.in.begin(), job.in.end()), job.in.end());
@@ -704,7 +716,7 @@ void ComputeMaps(const DynmaskOptions& o, const Workspace& ws, const Scene& s, c
     const std::vector<DynamicView> pv = views_beyond(pair.partner, job.i, true);
     // As a veto of the partners' evidence, the photos farther along with what they saw: a
     // vehicle parked in this drive hides the road its pixels warp to from them.
-    const bool veto = o.evidence.ahead_veto > 0 && !pair.partner.images[job.i].empty();
+    const bool veto = AheadVetoes(o, pair, job.i);
     const std::vector<DynamicView> av = views_beyond(pair.ahead, job.i, veto);
     DynamicEvidence e =
         EstimateDynamic(cache.Get(job.i), pointers(nv), ev, pointers(pv), pointers(av));
