@@ -191,13 +191,19 @@ std::vector<Sight> Sights(const std::vector<DepthView>& views) {
 // The fused surface of the stereo depth maps, closed by the corridor's ground where it has holes.
 Mesh DenseMesh(const Workspace& ws, const Reconstruction& rec, const RoadMeshOptions& o,
                const Mesh& corridor, RoadMeshReport& rep) {
-  const std::vector<DepthView> views = LoadStereoViews(ws, rec);
+  std::vector<DepthView> views = LoadStereoViews(ws, rec);
   FusionOptions fo;
   fo.consistency.min_agree = o.min_agree;
   fo.consistency.witnessed = !o.strict_agree;
   fo.consistency.relative_tolerance = o.agree_tolerance;
   fo.tsdf.voxel_per_spacing = o.voxel;
   fo.tsdf.max_depth_spacings = o.max_depth;
+  // The depths other photos confirm, once: what fusion integrates and the sights of the seen
+  // walls below (a depth one photo alone claims is as often the sweep's error, a facade's
+  // repeated windows matched a plane too far, as scenery seen through a hole).
+  std::vector<Image> confirmed = FilterConsistentDepth(views, fo.consistency);
+  for (size_t i = 0; i < views.size(); ++i) views[i].depth = std::move(confirmed[i]);
+  fo.filter = false;
   const Mesh dense = FuseDepthViews(views, fo);
   std::vector<Rigid3d> w2c;
   for (const auto& v : views) w2c.push_back(v.world_to_camera);
@@ -229,9 +235,9 @@ Mesh DenseMesh(const Workspace& ws, const Reconstruction& rec, const RoadMeshOpt
   }
   if (!o.no_seen_walls && o.walls_behind >= 0) {
     // Each stretch of wall where the photos saw through it: the median distance behind it of
-    // the sights that meet it within --walls-reach along and half that up or down through holes
-    // of the fused surface, at most --max-depth behind, and at least as far as most of the fused
-    // surface they meet behind it.
+    // the sights (confirmed depths) that meet it within --walls-reach along and half that up or
+    // down through holes of the fused surface, at most --max-depth behind, and at least as far as
+    // most of the fused surface they meet behind it.
     SeenWallSearch ss;
     ss.reach = o.walls_reach * unit;
     ss.rise = o.walls_reach / 2 * unit;
