@@ -11,7 +11,7 @@ of the truth's surface pixels that get such a depth ("good coverage"). Time is d
 milliseconds per image. --short runs three settings.
 
 Knobs: --planes (16, 32, 48, 96), --window (5, 7, 11), --neighbours (2, 4, 6), --best-k (1, 2, 3),
---scale (0.25, 0.5, 1), --min-score (0.3, 0.5, 0.7), --refine (0, 2, 4, 8), sweep directions
+--scale (0.25, 0.5, 1; the default is 0: from --map-focal), --map-focal (180, 360, 720), --min-score (0.3, 0.5, 0.7), --refine (0, 2, 4, 8), sweep directions
 (fronto only, no facade), and the fused mesh of the default setting (roadmesh --dense, baked
 back with bakedepth; also with --strict-agree, --agree-tolerance 0.02, --walls-gap 1, --no-seen-walls and --walls-reach 8) beside the corridor proxy
 alone (in the CSV and the page's table; they have no time of their own).
@@ -71,8 +71,10 @@ def sweep(c):
             add("neighbours", f"neighbours={n}", ["--neighbours", n])
         for k in (1, 3):
             add("best-k", f"best-k={k}", ["--best-k", k])
-        for s in (0.25, 1.0):
+        for s in (0.25, 0.5, 1.0):
             add("scale", f"scale={s}", ["--scale", s])
+        for f in (180, 720):  # the default, 360, is the defaults row (scale 0.971 here)
+            add("map-focal", f"map-focal={f}", ["--map-focal", f])
         for s in (0.3, 0.7):
             add("min-score", f"min-score={s}", ["--min-score", s])
         for r in (0, 2, 8):
@@ -99,7 +101,8 @@ def sweep(c):
         ["group", "setting", "default", "within2", "good_coverage", "ms_per_image"],
         f"<b>Knobs:</b> <code>--planes</code> (planes per sweep family), <code>--window</code> "
         f"(ZNCC window), <code>--neighbours</code>, <code>--best-k</code>, <code>--scale</code> "
-        f"(depth map size), <code>--min-score</code> (confidence cut), <code>--refine</code> "
+        f"(depth map size; by default from <code>--map-focal</code>, the maps' focal length in "
+        f"pixels), <code>--map-focal</code>, <code>--min-score</code> (confidence cut), <code>--refine</code> "
         f"(per-pixel refinement sub-steps), the sweep families "
         f"(<code>--no-ground</code>, <code>--no-facade</code>); each varied alone. A static "
         f"mkroad road ({frames} frames per drive at {size}, no vehicles). <b>Accuracy:</b> "

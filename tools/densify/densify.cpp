@@ -1,5 +1,6 @@
 #include "densify.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
@@ -17,8 +18,14 @@ namespace mvtm {
 OptionTable DeclareOptions(DensifyOptions& o) {
   OptionTable t("densify");
   t.Positional("WS", &o.workspace, "Workspace folder (sparse/ with points, images/)").Dir();
-  t.Real("--scale", &o.scale, "Depth map size relative to the image (0 < F <= 1)")
-      .Range(0, 1, true);
+  t.Real("--scale", &o.scale,
+         "Depth map size relative to the image (0 < F <= 1); 0: from --map-focal")
+      .Range(0, 1)
+      .Alternative("0.5");
+  t.Real("--map-focal", &o.map_focal,
+         "With --scale 0: each map's focal length in pixels, at most its image's (a 7-pixel "
+         "window then spans 0.16 m at 8 m)")
+      .Range(16, 100000);
   t.Integer("--planes", &o.planes, "Planes per sweep direction (2..512)").Range(2, 512);
   t.Flag("--no-ground", &o.no_ground, "Leave out the ground-parallel sweep");
   t.Flag("--no-facade", &o.no_facade, "Leave out the facade-parallel sweep");
@@ -82,8 +89,12 @@ cv::Mat LoadGrey(const fs::path& path, const Camera& full, const Camera& cam) {
   return g;
 }
 
-Camera ScaledCamera(const Camera& c, double scale) {
+// The camera of an image's maps: --scale, or with --scale 0 the scale that gives the maps a
+// focal length of --map-focal pixels (the larger of fx and fy), never above the image's size.
+Camera ScaledCamera(const Camera& c, const DensifyOptions& o) {
   c.RequireUndistorted();
+  const double scale =
+      o.scale > 0 ? o.scale : std::min(1.0, o.map_focal / std::max(c.fx(), c.fy()));
   if (scale == 1.0) return c;
   return c.Scaled(std::max<uint64_t>(1, uint64_t(std::lround(double(c.width) * scale))),
                   std::max<uint64_t>(1, uint64_t(std::lround(double(c.height) * scale))));
@@ -101,17 +112,17 @@ struct DenseScene {
   Reconstruction rec;
   std::vector<const ImageRecord*> images;
   std::vector<Rigid3d> w2c;
-  std::vector<Camera> cameras;  // at --scale
+  std::vector<Camera> cameras;  // of the maps (ScaledCamera)
   Eigen::Vector3d down, side;
 };
 
-DenseScene LoadDenseScene(const Workspace& ws, double scale) {
+DenseScene LoadDenseScene(const Workspace& ws, const DensifyOptions& o) {
   DenseScene s;
   s.rec = ReadColmapModel(ws.SparseDir().string());
   s.images = s.rec.ImagesByName();
   for (const auto* im : s.images) {
     s.w2c.push_back(im->world_to_camera);
-    s.cameras.push_back(ScaledCamera(s.rec.cameras.at(im->camera_id), scale));
+    s.cameras.push_back(ScaledCamera(s.rec.cameras.at(im->camera_id), o));
   }
   DriveAxes(s.w2c, s.down, s.side);
   return s;
@@ -195,7 +206,7 @@ DensifyReport RunDensify(const DensifyOptions& o) {
   o.Check();
   Workspace ws(o.workspace);
   ws.Require("densify", {WsItem::kSparse, WsItem::kImages});
-  const DenseScene s = LoadDenseScene(ws, o.scale);
+  const DenseScene s = LoadDenseScene(ws, o);
   const std::vector<size_t> chosen = o.Select().Apply(s.images.size());
   DensifyReport rep;
   rep.selected = chosen.size();

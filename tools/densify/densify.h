@@ -14,8 +14,9 @@ namespace mvtm {
 // Work items: the workspace's images sorted by name (--frames/--shard select among them).
 struct DensifyOptions : WorkOptions {
   std::string workspace;
-  double scale = 0.5;  // depth map size relative to the image (0 < F <= 1)
-  int planes = 48;     // planes per sweep direction (2..512)
+  double scale = 0;        // depth map size relative to the image (0 < F <= 1); 0: map_focal
+  double map_focal = 360;  // with scale 0: the maps' focal length, pixels (at most the image's)
+  int planes = 48;         // planes per sweep direction (2..512)
   bool no_ground = false, no_facade = false, no_fronto = false;  // sweep directions left out
   NeighbourOptions neighbours;  // --neighbours, --min-baseline, --max-angle, --min-coverage
   PlaneSweepOptions sweep;      // --window, --best-k, --min-score, --min-texture
