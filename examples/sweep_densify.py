@@ -6,12 +6,13 @@ OUT/densify.csv and OUT/densify.png and the section of OUT/index.html.
 Builds a static mkroad road (no vehicles: stereo has no answer for moving objects; 640x192,
 12 frames per drive; --short: 320x96, 4 frames), runs densify with every setting below, and scores
 each depth map against the fixture's CPU ray-traced depth (truth/depth/NAME.exr, sampled at the
-map's pixel centres when --scale < 1): the share of depths within 2 % of the truth, and the share
+map's pixel centres when the maps are smaller than the image): the share of depths within 2 % of the truth, and the share
 of the truth's surface pixels that get such a depth ("good coverage"). Time is densify's own
 milliseconds per image. --short runs three settings.
 
 Knobs: --planes (16, 32, 48, 96), --window (5, 7, 11), --neighbours (2, 4, 6), --best-k (1, 2, 3),
---scale (0.25, 0.5, 1; the default is 0: from --map-focal), --map-focal (180, 360, 720), --min-score (0.3, 0.5, 0.7), --refine (0, 2, 4, 8), sweep directions
+--scale (0.25, 0.5, 1; the default is 0: from --map-focal), --map-focal (180, 360, 720),
+--min-score (0.3, 0.5, 0.7), --refine (0, 2, 4, 8), sweep directions
 (fronto only, no facade), and the fused mesh of the default setting (roadmesh --dense, baked
 back with bakedepth; also with --strict-agree, --agree-tolerance 0.02, --walls-gap 1, --no-seen-walls and --walls-reach 8) beside the corridor proxy
 alone (in the CSV and the page's table; they have no time of their own).

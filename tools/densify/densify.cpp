@@ -18,13 +18,12 @@ namespace mvtm {
 OptionTable DeclareOptions(DensifyOptions& o) {
   OptionTable t("densify");
   t.Positional("WS", &o.workspace, "Workspace folder (sparse/ with points, images/)").Dir();
-  t.Real("--scale", &o.scale,
-         "Depth map size relative to the image (0 < F <= 1); 0: from --map-focal")
+  t.Real("--scale", &o.scale, "Depth map size relative to the image (0..1; 0: from --map-focal)")
       .Range(0, 1)
       .Alternative("0.5");
   t.Real("--map-focal", &o.map_focal,
-         "With --scale 0: each map's focal length in pixels, at most its image's (a 7-pixel "
-         "window then spans 0.16 m at 8 m)")
+         "With --scale 0: each map's focal length in pixels (16..100000), at most its image's "
+         "(360: a 7-pixel window spans 0.16 m at 8 m); ignored when --scale is given")
       .Range(16, 100000);
   t.Integer("--planes", &o.planes, "Planes per sweep direction (2..512)").Range(2, 512);
   t.Flag("--no-ground", &o.no_ground, "Leave out the ground-parallel sweep");
