@@ -537,13 +537,8 @@ def sweep_dynmask(c):
             measure(group, opt, v, args + (extra[0] if extra else []), ws)
     # --max-fill judges blobs on the corridor walls of a mesh built from the photos (densify,
     # roadmesh --dense: the walls close the fused facades' holes); the true mesh has none.
-    photo = sl.copy_workspace(ws, os.path.join(folder, "photo"))
-    for name in ("mesh.ply", "masks", "dynamic", "tracks.tsv"):
-        target = os.path.join(photo, name)
-        if os.path.isdir(target):
-            shutil.rmtree(target)
-        elif os.path.exists(target):
-            os.remove(target)
+    photo = sl.copy_workspace(ws, os.path.join(folder, "photo"),
+                              leave_out=("mesh.ply", "masks", "dynamic", "tracks.tsv"))
     c.tools.run("densify", "--quiet", photo)
     c.tools.run("roadmesh", "--quiet", "--dense", "--metric", "--no-colours", photo)
     for v in (0.5, 1) if c.short else (0.3, 0.5, 1):

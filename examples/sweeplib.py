@@ -69,12 +69,15 @@ class Tools:
         raise SystemExit(f"sweep: error: no mean in ssim's table for {a}")
 
 
-def copy_workspace(src, dst, skip=("truth",)):
-    """A private copy of a workspace (truth/ is linked, not copied: the sweeps only read it)."""
+def copy_workspace(src, dst, skip=("truth",), leave_out=()):
+    """A private copy of a workspace (truth/ is linked, not copied: the sweeps only read it;
+    the names in leave_out are not copied at all)."""
     shutil.rmtree(dst, ignore_errors=True)
     os.makedirs(dst)
     for name in os.listdir(src):
         s, d = os.path.join(src, name), os.path.join(dst, name)
+        if name in leave_out:
+            continue
         if name in skip:
             os.symlink(os.path.abspath(s), d)
         elif os.path.isdir(s):

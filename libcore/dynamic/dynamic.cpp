@@ -574,12 +574,10 @@ std::vector<double> BlobShares(const cv::Mat& labels, int n, const cv::Mat& flag
   return on;
 }
 
-// The blobs of the mask `mask` makes of `probability` more than `max_share` of whose pixels are
-// on `guessed`: probability 0 at those pixels. The count of such blobs.
-int ClearGuessed(const cv::Mat& guessed, const MaskOptions& mask, double max_share,
+// The blobs (`labels`, 1..n-1, of the mask made of `probability`) more than `max_share` of whose
+// pixels are on `guessed`: probability 0 at those pixels. The count of such blobs.
+int ClearGuessed(const cv::Mat& guessed, const cv::Mat& labels, int n, double max_share,
                  cv::Mat& probability) {
-  cv::Mat labels;
-  const int n = cv::connectedComponents(MaskFromProbability(probability, mask), labels, 8, CV_32S);
   const std::vector<double> share = BlobShares(labels, n, guessed);
   int cleared = 0;
   for (int b = 1; b < n; ++b) cleared += share[size_t(b)] > max_share;
@@ -610,12 +608,20 @@ BlobTestCounts KeepStandingUnexplained(const DynamicView& t, const Eigen::Vector
     counts.explained = ClearExplained(t, o.seen_tolerance, mask.probability, probability);
   const Eigen::Vector3d up_cam = t.world_to_camera.R() * up.normalized();
   const double ground = GroundBelow(t, up_cam);
-  if (o.max_guessed < 1 && !t.guessed.empty())
-    counts.guessed = ClearGuessed(t.guessed, mask, o.max_guessed, probability);
+  // The blobs of the mask the probability makes; made again only when it changed.
+  cv::Mat labels;
+  int n = 0;
+  const auto label = [&] {
+    n = cv::connectedComponents(MaskFromProbability(probability, mask), labels, 8, CV_32S);
+  };
+  if (o.max_guessed < 1 && !t.guessed.empty()) {
+    label();
+    counts.guessed = ClearGuessed(t.guessed, labels, n, o.max_guessed, probability);
+    if (counts.guessed > 0) n = 0;
+  }
   const bool rise_test = o.min_height > 0 && std::isfinite(ground);
   if (!rise_test && !(o.occludes > 0)) return counts;
-  cv::Mat labels;
-  const int n = cv::connectedComponents(MaskFromProbability(probability, mask), labels, 8, CV_32S);
+  if (n == 0) label();
   std::vector<double> rise(size_t(n), std::numeric_limits<double>::quiet_NaN()), behind = rise;
   if (rise_test) rise = BlobRises(t, up_cam, labels, n, -ground);
   if (o.occludes > 0) behind = BlobOcclusions(t, labels, n, o.occlusion_gap);

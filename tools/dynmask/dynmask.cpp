@@ -421,11 +421,8 @@ class DepthProvider {
       Mesh m = ReadMesh(ws.MeshPath().string());
       // The corridor walls behind the fused facades' holes are a backdrop at a guessed depth.
       if (m.has_face_kinds()) {
-        wall_.resize(m.faces.size());
-        for (size_t f = 0; f < m.faces.size(); ++f) {
-          wall_[f] = m.face_kinds[f] == kFaceFillWall;
-          walls_ += wall_[f];
-        }
+        walls_ = size_t(std::count(m.face_kinds.begin(), m.face_kinds.end(), kFaceFillWall));
+        kinds_ = std::move(m.face_kinds);
       }
       caster_ = std::make_unique<MeshRaycaster>(m);
       return;
@@ -453,8 +450,8 @@ class DepthProvider {
   const Workspace& ws_;
   bool mark_walls_ = false;
   bool use_mesh_ = false;
-  std::vector<uint8_t> wall_;  // per face: a corridor wall (empty: the mesh says nothing)
-  size_t walls_ = 0;
+  std::vector<uint8_t> kinds_;  // the mesh's face kinds (empty: the mesh says nothing)
+  size_t walls_ = 0;            // its faces of kind kFaceFillWall
   std::unique_ptr<MeshRaycaster> caster_;
 };
 
@@ -490,7 +487,7 @@ cv::Mat DepthProvider::Depth(const Camera& cam, const Rigid3d& w2c, const std::s
                                                          (y + 0.5 - cam.cy()) / cam.fy(), 1);
         if (auto hit = caster_->Closest(c, dir)) {
           z.at<float>(y, x) = float(hit->t);  // t = z
-          if (!g.empty() && wall_[hit->triangle]) g.at<uint8_t>(y, x) = 255;
+          if (!g.empty() && kinds_[hit->triangle] == kFaceFillWall) g.at<uint8_t>(y, x) = 255;
         }
       }
   });
