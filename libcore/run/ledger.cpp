@@ -54,6 +54,7 @@ Ledger::Ledger(fs::path root, std::string record, const OptionTable& table,
       tool_(table.tool()),
       table_(table),
       options_key_(table.OutputJson()),
+      build_(ProgramChecksum()),
       kept_runs_(nlohmann::json::object()) {
   std::sort(inputs.begin(), inputs.end());
   inputs.erase(std::unique(inputs.begin(), inputs.end()), inputs.end());
@@ -118,7 +119,7 @@ bool Ledger::Unchanged(const std::string& name, const fs::path& path, const nloh
 // runs anywhere share it. Computed on first need: a run with everything up to date reads no input.
 const std::string& Ledger::RunId() {
   if (run_id_.empty()) {
-    std::string id = options_key_.dump();
+    std::string id = options_key_.dump() + "\nbuild " + build_;
     for (const auto& [name, path] : inputs_)
       id += "\n" + name + " " + Current(name, path, true).fnv1a64;
     run_id_ = Hex64(Fnv1a64(id.data(), id.size()));
@@ -151,6 +152,7 @@ std::string Ledger::CompareRun(const nlohmann::json& run) {
     if (!same) changed += (changed.empty() ? "" : ", ") + table_.FlagOf(k);
   }
   if (!changed.empty()) return changed + " changed";
+  if (run.value("build", std::string("none")) != build_) return "another build of " + tool_;
   const nlohmann::json& ins = run["inputs"];
   if (!ins.is_object()) return "no record";
   for (const auto& [name, path] : inputs_)
@@ -258,7 +260,8 @@ void Ledger::MaybeFlush() {
 
 void Ledger::Write(const nlohmann::json& extra) {
   std::lock_guard<std::recursive_mutex> lock(mutex_);
-  nlohmann::json run = {{"options", options_key_}, {"inputs", nlohmann::json::object()}};
+  nlohmann::json run = {
+      {"options", options_key_}, {"build", build_}, {"inputs", nlohmann::json::object()}};
   nlohmann::json list = nlohmann::json::array();
   for (const auto& [name, path] : inputs_) {
     run["inputs"][name] = StampJson(name, path);

@@ -1,15 +1,16 @@
 // mvtm — outputs that know what made them.
 //
-// An output is up to date only when it exists, the inputs it was made from are unchanged and the
-// options that change it (OptionTable::OutputJson) are those it was written with. A Ledger keeps
-// that record for one output root (a tool's output folder, or the workspace for outputs inside
-// it) in ROOT/provenance/RECORD.json, RECORD being the tool's name ("ptmrender") or, for a shard
-// of a job array, "TOOL-shard-I", so shards never overwrite each other's record. The file is the
-// tool's provenance too: tool, version, time, every option --help shows, the inputs with their
-// checksums — and, per output, the stamp it was written with and which run made it:
+// An output is up to date only when it exists, the inputs it was made from are unchanged, the
+// options that change it (OptionTable::OutputJson) are those it was written with and the tool is
+// the same build (ProgramChecksum: an upgraded or rebuilt tool redoes what the old one made). A
+// Ledger keeps that record for one output root (a tool's output folder, or the workspace for
+// outputs inside it) in ROOT/provenance/RECORD.json, RECORD being the tool's name ("ptmrender") or,
+// for a shard of a job array, "TOOL-shard-I", so shards never overwrite each other's record. The
+// file is the tool's provenance too: tool, version, time, every option --help shows, the inputs
+// with their checksums — and, per output, the stamp it was written with and which run made it:
 //
 //   { "tool", "version", "time", "options": {...all...}, "inputs": [{path, bytes, fnv1a64}],
-//     "runs": { "ID": { "options": {...changing output...}, "inputs": { PATH: STAMP } } },
+//     "runs": { "ID": { "options": {...changing output...}, "build", "inputs": { PATH: STAMP } } },
 //     "outputs": { "REL/PATH": { "run": "ID", "bytes", "mtime_ns", "fnv1a64", "in": {PATH: STAMP}}
 //     } }
 //
@@ -17,10 +18,11 @@
 // output file as it is now (size and modification time, else size and content checksum) made it.
 // None matches: the output was made by another run or edited since ("no record"). Its run's
 // options are compared with this run's (the flags that differ are named: "--lateral changed"),
-// then its inputs: an input is unchanged when its size and modification time are, else when its
-// content checksum is (so `touch` or a copy redo nothing, a rewrite with new content does).
-// Measured choice: stat first, checksum only on a changed time — the up-to-date check of 10,000
-// outputs with unchanged inputs costs one stat each (bench_ledger).
+// then the build of the tool ("another build of TOOL"), then its inputs: an input is unchanged when
+// its size and modification time are, else when its content checksum is (so `touch` or a copy redo
+// nothing, a rewrite with new content does). Measured choice: stat first, checksum only on a
+// changed time — the up-to-date check of 10,000 outputs with unchanged inputs costs one stat each
+// (bench_ledger).
 //
 // Robustness. The record is written atomically (temporary + rename) at the end of the run and
 // every 10 s during it, so kill -9 loses at most the last seconds' entries (those outputs are
@@ -66,7 +68,8 @@ class Ledger {
 
   // Why `output` must be (re)made, or "" when it is up to date. `item_inputs` are the files this
   // output alone depends on (a projector's image, a mask). Reasons: "new", "--force",
-  // "--lateral changed", "input changed: mesh.ply", "no record" (made by another run, or edited).
+  // "--lateral changed", "another build of ptmrender", "input changed: mesh.ply",
+  // "no record" (made by another run, or edited).
   std::string Stale(const fs::path& output, const std::vector<fs::path>& item_inputs = {},
                     bool force = false);
   // True when any of `outputs` must be (re)made, all from the same `item_inputs`: a tool whose
@@ -107,6 +110,7 @@ class Ledger {
   std::string record_, tool_;
   const OptionTable& table_;
   nlohmann::json options_key_;
+  std::string build_;  // ProgramChecksum(): outputs of another build of the tool are redone
   std::vector<std::pair<std::string, fs::path>> inputs_;
   std::vector<Record> records_;                      // this tool's records in ROOT/provenance
   std::map<std::string, std::string> run_verdicts_;  // record run id → "" or a reason

@@ -6,8 +6,10 @@
 #include <unistd.h>
 
 #include <fstream>
+#include <nlohmann/json.hpp>
 
 #include "base/error.h"
+#include "base/file_stamp.h"
 
 namespace mvtm {
 namespace {
@@ -111,6 +113,31 @@ TEST_F(LedgerTest, AnOutputEditedOrMadeElsewhereHasNoRecord) {
   EXPECT_EQ(Run({}, {"f0.png"}), (V{"no record"}));
   fs::remove_all(dir_ / "out/provenance");
   EXPECT_EQ(Run({}, {"f0.png"}), (V{"no record"}));
+}
+
+// The record as another build of the tool (or an mvtm before builds were recorded) left it.
+void SetRecordedBuild(const fs::path& record, const char* build) {
+  nlohmann::json j = nlohmann::json::parse(std::ifstream(record));
+  for (auto& [id, run] : j["runs"].items()) {
+    if (build)
+      run["build"] = build;
+    else
+      run.erase("build");
+  }
+  std::ofstream(record) << j.dump(1);
+}
+
+TEST_F(LedgerTest, OutputsOfAnotherBuildOfTheToolAreRedone) {
+  ASSERT_FALSE(ProgramChecksum().empty());
+  ASSERT_EQ(ProgramChecksum(), FileChecksum("/proc/self/exe"));
+  Run({}, {"f0.png", "f1.png"});
+  const fs::path record = dir_ / "out/provenance/demo.json";
+  SetRecordedBuild(record, "0123456789abcdef");
+  EXPECT_EQ(Run({}, {"f0.png", "f1.png"}), (V{"another build of demo", "another build of demo"}));
+  EXPECT_EQ(summary_, "2 redone: another build of demo");
+  EXPECT_EQ(Run({}, {"f0.png", "f1.png"}), (V{"", ""}));
+  SetRecordedBuild(record, nullptr);
+  EXPECT_EQ(Run({}, {"f0.png"}), (V{"another build of demo"}));
 }
 
 TEST_F(LedgerTest, AnyStaleAsksAboutEveryOutput) {
