@@ -18,8 +18,9 @@ tool and OUT/index.html, the page to read before choosing settings. Work folders
              --probability, --grounded, --min-height,
              --occludes, --occlusion-gap, --min-ratio, --max-gap
              (no labels; the fixture's true mesh, no densify maps, so --seen-tolerance has nothing
-             to compare: its rows are the road build's, issue 21's note), and --max-fill on a mesh
-             densify + roadmesh --dense make of the same photos: mask IoU against truth/masks and
+             to compare: its rows are the road build's, issue 21's note), and --max-fill and
+             --complete on a mesh densify + roadmesh --dense make of the same photos (with their
+             densify maps): mask IoU against truth/masks and
              the share of drive B masked, against whole-process milliseconds per image
   inpaint3d  --method 3d|telea|ns|patch2d, --partners, --dilate: SSIM inside the vehicle masks
              against truth/background, against whole-process milliseconds per inpainted image
@@ -516,7 +517,7 @@ def sweep_dynmask(c):
                 "--min-baseline": 0.25, "--passes": 2, "--occludes": 0.2, "--occlusion-gap": 0.25,
                 "--segments": 300,
                 "--probability": 0.4, "--grounded": 0.25, "--min-height": 0.5,
-                "--min-ratio": 0.4, "--max-gap": 3, "--max-fill": 0.5}
+                "--min-ratio": 0.4, "--max-gap": 3, "--max-fill": 0.5, "--complete": 3}
     rows = []
 
     def measure(group, opt, v, args, where):
@@ -543,6 +544,9 @@ def sweep_dynmask(c):
     c.tools.run("roadmesh", "--quiet", "--dense", "--metric", "--no-colours", photo)
     for v in (0.5, 1) if c.short else (0.3, 0.5, 1):
         measure("max-fill (photo-built mesh)", "--max-fill", v, ["--max-fill", v], photo)
+    # --complete needs what each photo saw (densify's maps) beside the mesh: the same workspace.
+    for v in (0, 3) if c.short else (0, 1, 3, 10):
+        measure("complete (photo-built mesh)", "--complete", v, ["--complete", v], photo)
     best_default = max(r["iou"] for r in rows if r["default"])
     c.checks(best_default > 0.2, f"dynmask defaults: IoU {best_default:.4f} above 0.2")
     s = sl.Section(
@@ -565,6 +569,9 @@ def sweep_dynmask(c):
         f"mesh there are no facade errors for them to remove), <code>--max-fill</code> (blobs "
         f"mostly on the corridor walls that close the holes of a mesh fused from the photos; "
         f"measured on such a mesh, densify + roadmesh --dense of the same photos), "
+        f"<code>--complete</code> (blobs grown by GrabCut into what the photo's own depth does "
+        f"not explain, at most that many times their area; on the same photo-built workspace: "
+        f"it needs densify's maps), "
         f"<code>--min-ratio</code>, "
         f"<code>--max-gap</code> (tracking). Each varied alone on the "
         f"fixture's photos and true mesh ({len(a_names)} frames per drive, 640x192). "

@@ -636,4 +636,66 @@ BlobTestCounts KeepStandingUnexplained(const DynamicView& t, const Eigen::Vector
   return counts;
 }
 
+int CompleteBlobs(const DynamicView& t, const MaskOptions& mask, const BlobCompletion& o,
+                  cv::Mat& probability) {
+  if (!(o.max_grow >= 0) || !(o.tolerance > 0 && o.tolerance < 1) || o.iterations < 1)
+    throw Error("CompleteBlobs: options out of range");
+  CheckView(t, "target view");
+  if (probability.type() != CV_32F || probability.size() != t.depth.size())
+    throw Error("target view: the probability must be float of the depth's size");
+  if (t.colour.empty() || t.seen.empty() || o.max_grow <= 0) return 0;
+  // Sure background: where the photo's own depth is the static depth (it saw the static surface).
+  cv::Mat fixed(probability.size(), CV_8U, cv::Scalar(0));
+  for (int y = 0; y < fixed.rows; ++y)
+    for (int x = 0; x < fixed.cols; ++x) {
+      const float z = t.depth.at<float>(y, x), sz = t.seen.at<float>(y, x);
+      fixed.at<uint8_t>(y, x) = HasDepth(z) && HasDepth(sz) && std::abs(sz - z) <= o.tolerance * z;
+    }
+  cv::Mat labels, stats, centres;
+  const int n = cv::connectedComponentsWithStats(MaskFromProbability(probability, mask), labels,
+                                                 stats, centres, 8, CV_32S);
+  int completed = 0;
+  cv::Mat add(probability.size(), CV_8U, cv::Scalar(0));
+  for (int b = 1; b < n; ++b) {
+    const cv::Rect box(stats.at<int>(b, cv::CC_STAT_LEFT), stats.at<int>(b, cv::CC_STAT_TOP),
+                       stats.at<int>(b, cv::CC_STAT_WIDTH), stats.at<int>(b, cv::CC_STAT_HEIGHT));
+    // The box widened by half its width on each side and by its height upwards.
+    const cv::Rect roi = cv::Rect(box.x - box.width / 2, box.y - box.height,
+                                  box.width + box.width / 2 * 2, 2 * box.height) &
+                         cv::Rect(0, 0, probability.cols, probability.rows);
+    const cv::Mat blob = labels(roi) == b;
+    cv::Mat core;
+    cv::erode(blob, core, cv::Mat(), cv::Point(-1, -1), 2);
+    if (cv::countNonZero(core) < 5) continue;  // too small to model its colours
+    cv::Mat gc(roi.size(), CV_8U, cv::Scalar(cv::GC_PR_BGD));
+    gc.setTo(cv::GC_BGD, fixed(roi));
+    gc.setTo(cv::GC_PR_FGD, blob);
+    gc.setTo(cv::GC_FGD, core);
+    cv::rectangle(gc, cv::Rect(0, 0, gc.cols, gc.rows), cv::Scalar(cv::GC_BGD), 1);
+    cv::Mat bg, fg;
+    // GrabCut starts its colour models with k-means from OpenCV's thread's generator: seeded per
+    // blob, a blob's completion does not depend on what ran before it on that thread.
+    cv::theRNG() = cv::RNG(0x9e3779b97f4a7c15ULL);
+    cv::grabCut(t.colour(roi), gc, cv::Rect(), bg, fg, o.iterations, cv::GC_INIT_WITH_MASK);
+    const cv::Mat f = (gc == cv::GC_FGD) | (gc == cv::GC_PR_FGD);
+    cv::Mat parts;
+    const int np = cv::connectedComponents(f, parts, 8, CV_32S);
+    cv::Mat keep(f.size(), CV_8U, cv::Scalar(0));
+    for (int c = 1; c < np; ++c) {
+      const cv::Mat part = parts == c;
+      if (cv::countNonZero(part & blob) > 0) keep |= part;
+    }
+    const cv::Mat grown = keep & ~blob;
+    const int area = stats.at<int>(b, cv::CC_STAT_AREA), more = cv::countNonZero(grown);
+    if (more == 0 || more > o.max_grow * area) continue;
+    cv::Mat at = add(roi);
+    cv::bitwise_or(at, grown, at);
+    ++completed;
+  }
+  cv::Mat raised;
+  cv::max(probability, mask.probability, raised);
+  raised.copyTo(probability, add);
+  return completed;
+}
+
 }  // namespace mvtm

@@ -94,6 +94,13 @@ void DeclareStandingOptions(OptionTable& t, DynmaskOptions& o) {
          "counts as behind the blob")
       .Range(0, 10, true, false)
       .Alternative("0.5");
+  t.Real("--complete", &o.complete,
+         "Complete each blob with GrabCut seeded by it (its colours against its surroundings'), "
+         "growing by at most G x its area, never into pixels the photo's own depth explains "
+         "(within --seen-tolerance, else 0.05): a cyclist's body against the far background, a "
+         "car's panels of the road's colour (0: off; needs densify's maps and the mesh)")
+      .Range(0, 100)
+      .Alternative("0");
   t.Real("--max-fill", &o.max_fill,
          "In a blob more than S of whose pixels see a corridor wall that roadmesh --dense put "
          "behind a hole of the fused facades (a guessed depth), those pixels are cleared (1: off)")
@@ -676,6 +683,38 @@ std::vector<Job> StaleMaps(const DynmaskOptions& o, const Workspace& ws, const S
   return todo;
 }
 
+// The tests on the blobs of image i's probability (standing, unexplained: KeepStandingUnexplained)
+// and their completion (--complete), with the photo's own densify map when the mesh is the static
+// depth.
+void JudgeBlobs(const DynmaskOptions& o, const Scene& s, const DepthProvider& d, ViewCache& cache,
+                size_t i, cv::Mat& probability, DynmaskReport& rep) {
+  const bool tests = o.min_height > 0 || o.seen_tolerance > 0 || o.occludes > 0 || o.max_fill < 1;
+  // Completion needs what the photo saw: explained pixels are its sure background.
+  const bool complete = o.complete > 0 && d.UsesMesh();
+  if (!tests && !complete) return;
+  DynamicView t = cache.Get(i);
+  // The photo's own map against the mesh's depth; with densify's maps as the static depth they
+  // are one map and explain nothing, and a vehicle parked in this drive is in that "static"
+  // depth, hiding nothing behind it: the occlusion test needs the mesh too.
+  if (d.UsesMesh()) t.seen = cache.Seen(i);
+  if (tests) {
+    const BlobTestCounts c =
+        KeepStandingUnexplained(t, s.up, o.mask,
+                                {o.min_height, o.seen_tolerance, d.UsesMesh() ? o.occludes : 0,
+                                 o.occlusion_gap, o.max_fill},
+                                probability);
+    rep.lying += size_t(c.lying), rep.surface += size_t(c.surface);
+    rep.guessed += size_t(c.guessed);
+    rep.explained += c.explained;
+  }
+  if (complete) {
+    BlobCompletion bc;
+    bc.max_grow = o.complete;
+    if (o.seen_tolerance > 0) bc.tolerance = o.seen_tolerance;
+    rep.completed += size_t(CompleteBlobs(t, o.mask, bc, probability));
+  }
+}
+
 void ComputeMaps(const DynmaskOptions& o, const Workspace& ws, const Scene& s, const Pairing& pair,
                  const DepthProvider& d, const std::vector<Job>& todo, Ledger& ledger,
                  DynmaskReport& rep) {
@@ -723,21 +762,7 @@ void ComputeMaps(const DynmaskOptions& o, const Workspace& ws, const Scene& s, c
     if (o.grounded > 0)
       rep.floating += size_t(
           KeepGrounded(cache.Get(job.i), s.up, o.mask.probability, o.grounded, e.probability));
-    if (o.min_height > 0 || o.seen_tolerance > 0 || o.occludes > 0 || o.max_fill < 1) {
-      DynamicView t = cache.Get(job.i);
-      // The photo's own map against the mesh's depth; with densify's maps as the static depth
-      // they are one map and explain nothing, and a vehicle parked in this drive is in that
-      // "static" depth, hiding nothing behind it: the occlusion test needs the mesh too.
-      if (d.UsesMesh()) t.seen = cache.Seen(job.i);
-      const BlobTestCounts c =
-          KeepStandingUnexplained(t, s.up, o.mask,
-                                  {o.min_height, o.seen_tolerance, d.UsesMesh() ? o.occludes : 0,
-                                   o.occlusion_gap, o.max_fill},
-                                  e.probability);
-      rep.lying += size_t(c.lying), rep.surface += size_t(c.surface);
-      rep.guessed += size_t(c.guessed);
-      rep.explained += c.explained;
-    }
+    JudgeBlobs(o, s, d, cache, job.i, e.probability, rep);
     const fs::path out = ws.DynamicPath(s.images[job.i]->name);
     CreateFolder(out.parent_path());
     WriteProbability(out, e.probability);

@@ -35,6 +35,7 @@ struct DynmaskOptions : WorkOptions {
   double occludes = 0.2;         // blobs must hide something behind them (share); 0: off
   double occlusion_gap = 0.25;   // ... beyond their foot's depth by this (relative)
   double max_fill = 0.5;  // blobs with more of their pixels on corridor walls: cleared there; 1 off
+  double complete = 3;    // blobs completed by GrabCut, growing at most this × their area; 0 off
   DynamicOptions evidence;  // --threshold, --flow/--no-flow, --quantile, ...
   MaskOptions mask;         // --probability, --open, --close, --min-area
   TrackOptions track;       // segtrack's tracking options (defaults: the constructor)
@@ -67,6 +68,7 @@ struct DynmaskReport {
   size_t surface = 0;        // blobs removed: on the static surface, hiding nothing
   size_t guessed = 0;        // blobs removed: mostly on a corridor wall (a guessed depth)
   size_t explained = 0;      // pixels cleared: the photo's own depth is the static depth there
+  size_t completed = 0;      // blobs grown by GrabCut (--complete)
   bool masked = false;       // masks and tracks.tsv were (re)made
   size_t masks_written = 0;
   TrackSummary summary;

@@ -38,6 +38,7 @@ int RunAndReport(mvtm::DynmaskOptions& o) {
                  r.guessed);
   if (r.explained)
     std::fprintf(stderr, "; %zu pixels the photo's own depth explains cleared", r.explained);
+  if (r.completed) std::fprintf(stderr, "; %zu blobs completed from their colours", r.completed);
   if (r.no_neighbours)
     std::fprintf(stderr, "; %zu images seen by no other photo (nothing masked)", r.no_neighbours);
   if (r.masked) {

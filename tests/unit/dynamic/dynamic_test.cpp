@@ -584,6 +584,65 @@ TEST(Dynamic, BlobsMostlyOnAGuessedDepthAreClearedThere) {
   EXPECT_THROW(KeepStandingUnexplained(t, up, ExactBlobs(), {0, 0, 0, 0.25, 0.5}, q), Error);
 }
 
+// A red object on a textured green ground: the evidence found its lower part (rows 75-99); its
+// upper part (rows 40-74) shows none. GrabCut seeded with the blob grows it within the box
+// widened by half its width each side and by its height upwards (x 80-159, rows 50-99, its border
+// sure background): O's rows 51-99 exactly (40 x 49 pixels). A red patch touching O (x 140-154,
+// rows 70-94) that the photo's own depth explains stays out; unexplained, it is taken too (15 x
+// 25 more). Masked: at or above the mask's probability (0.4), to which grown pixels are raised.
+TEST(Dynamic, BlobsAreCompletedFromTheirColoursNeverIntoExplainedPixels) {
+  DynamicView t = MakeView(10, nullptr);
+  const cv::Rect object(100, 40, 40, 60), found(100, 75, 40, 25), patch(140, 70, 15, 25);
+  t.colour.create(kH, kW, CV_8UC3);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x)
+      t.colour.at<cv::Vec3b>(y, x) =
+          cv::Vec3b(uchar(40 + (x * 7 + y * 13) % 40), uchar(120 + (x * 3 + y) % 30), 60);
+  for (const cv::Rect& r : {object, patch})
+    for (int y = r.y; y < r.y + r.height; ++y)
+      for (int x = r.x; x < r.x + r.width; ++x)
+        t.colour.at<cv::Vec3b>(y, x) = cv::Vec3b(uchar(195 + (x + 2 * y) % 10), 30, 30);
+  t.seen = t.depth.clone();
+  t.seen(object).setTo(std::numeric_limits<float>::infinity());  // moving: no consistent depth
+  const auto run = [&](const BlobCompletion& o, int& completed) {
+    cv::Mat p = cv::Mat::zeros(kH, kW, CV_32F);
+    p(found).setTo(1);
+    completed = CompleteBlobs(t, ExactBlobs(), o, p);
+    return cv::Mat(p >= ExactBlobs().probability);
+  };
+  int n = 0;
+  cv::Mat m = run({}, n);
+  EXPECT_EQ(n, 1);
+  const cv::Rect reach(100, 51, 40, 49);
+  EXPECT_EQ(cv::countNonZero(m(reach)), reach.area());
+  EXPECT_EQ(cv::countNonZero(m), reach.area());
+  // Nothing explained: the patch of the object's colour joins it.
+  const cv::Mat explained = t.seen.clone();
+  t.seen.setTo(std::numeric_limits<float>::infinity());
+  BlobCompletion loose;
+  loose.max_grow = 100;
+  m = run(loose, n);
+  EXPECT_EQ(cv::countNonZero(m), reach.area() + patch.area()) << n;
+  t.seen = explained;
+  // Growth capped (960 more pixels than the blob's 1000: not at 0.9), off, or without the
+  // photo's depth: the blob as found.
+  BlobCompletion capped;
+  capped.max_grow = 0.9;
+  for (const BlobCompletion& o : {capped, BlobCompletion{0, 0.05, 3}}) {
+    m = run(o, n);
+    EXPECT_EQ(n, 0);
+    EXPECT_EQ(cv::countNonZero(m), found.area());
+  }
+  t.seen = cv::Mat();
+  m = run({}, n);
+  EXPECT_EQ(n, 0);
+  EXPECT_EQ(cv::countNonZero(m), found.area());
+  cv::Mat p = cv::Mat::zeros(kH, kW, CV_32F);
+  EXPECT_THROW(CompleteBlobs(t, ExactBlobs(), {3, 1.5, 3}, p), Error);
+  p = cv::Mat::zeros(kH / 2, kW, CV_32F);
+  EXPECT_THROW(CompleteBlobs(t, ExactBlobs(), {}, p), Error);
+}
+
 TEST(Dynamic, BadInputs) {
   DynamicView t = MakeView(10, nullptr);
   t.depth = cv::Mat(10, 10, CV_32F, 1.f);
