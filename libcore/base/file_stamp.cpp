@@ -46,15 +46,4 @@ std::string FileChecksum(const fs::path& path) {
   return Hex64(h);
 }
 
-const std::string& ProgramChecksum() {
-  static const std::string checksum = [] {
-    try {
-      return FileChecksum("/proc/self/exe");
-    } catch (const Error&) {
-      return std::string();
-    }
-  }();
-  return checksum;
-}
-
 }  // namespace mvtm

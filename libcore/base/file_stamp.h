@@ -32,9 +32,4 @@ std::string Hex64(uint64_t h);
 // 64-bit FNV-1a of a file's bytes, as 16 hex digits. Throws Error when unreadable.
 std::string FileChecksum(const fs::path& path);
 
-// The running program's identity: FileChecksum of its executable (/proc/self/exe; the tools link
-// libcore and their shaders statically, so any change to their code changes it), computed once
-// per process (about 2 ms for a 2 MB tool); "" when it cannot be read. Thread-safe.
-const std::string& ProgramChecksum();
-
 }  // namespace mvtm

@@ -2,11 +2,17 @@
 
 #include <dlfcn.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <mutex>
+#include <set>
 #include <vector>
+
+#include "base/error.h"
+#include "base/file_stamp.h"
+#include "base/version.h"
 
 #ifndef MVTM_PLUGIN_BUILD_DIR
 #define MVTM_PLUGIN_BUILD_DIR ""
@@ -69,6 +75,36 @@ void* PluginEntry(const std::string& module, const std::string& entry, std::stri
   void* sym = dlsym(o.handle, entry.c_str());
   if (!sym) *failure = module + " has no " + entry + " (not this mvtm's module?)";
   return sym;
+}
+
+const std::string& ProgramChecksum() {
+  static const std::string checksum = [] {
+    std::string id;
+    try {
+      id = "exe " + FileChecksum("/proc/self/exe");
+    } catch (const Error&) {
+      return std::string("version ") + kVersion;
+    }
+    std::set<std::string> names;  // the first module of each name, as PluginEntry opens it
+    for (const auto& dir : PluginDirs()) {
+      std::error_code ec;
+      std::vector<std::filesystem::path> files;
+      for (const auto& e : std::filesystem::directory_iterator(dir, ec)) files.push_back(e.path());
+      std::sort(files.begin(), files.end());
+      for (const auto& f : files) {
+        const std::string name = f.filename().string();
+        if (name.rfind("libmvtm_", 0) != 0 || f.extension() != ".so" || !names.insert(name).second)
+          continue;
+        try {
+          id += "\n" + name + " " + FileChecksum(f);
+        } catch (const Error&) {
+          id += "\n" + name + " unreadable";
+        }
+      }
+    }
+    return Hex64(Fnv1a64(id.data(), id.size()));
+  }();
+  return checksum;
 }
 
 }  // namespace mvtm

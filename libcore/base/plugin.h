@@ -32,4 +32,11 @@ const Table* PluginTable(const std::string& module, const std::string& entry, in
   return table;
 }
 
+// The running program's identity: the checksums (base/file_stamp.h's FNV-1a) of its executable
+// (/proc/self/exe: the tools link libcore and their shaders statically) and of every mvtm module
+// (libmvtm_*.so) the folders above offer, the first of each name as PluginEntry would open it,
+// folded into 16 hex digits; computed once per process (a few milliseconds). A change to any of
+// mvtm's code changes it. Without /proc/self/exe, "version " + kVersion. Thread-safe.
+const std::string& ProgramChecksum();
+
 }  // namespace mvtm

@@ -664,19 +664,21 @@ int CompleteBlobs(const DynamicView& t, const MaskOptions& mask, const BlobCompl
                                   box.width + box.width / 2 * 2, 2 * box.height) &
                          cv::Rect(0, 0, probability.cols, probability.rows);
     const cv::Mat blob = labels(roi) == b;
-    cv::Mat core;
-    cv::erode(blob, core, cv::Mat(), cv::Point(-1, -1), 2);
+    cv::Mat core;  // pixels beyond the box count as outside the blob
+    cv::erode(blob, core, cv::Mat(), cv::Point(-1, -1), 2, cv::BORDER_CONSTANT, cv::Scalar(0));
     if (cv::countNonZero(core) < 5) continue;  // too small to model its colours
     cv::Mat gc(roi.size(), CV_8U, cv::Scalar(cv::GC_PR_BGD));
-    gc.setTo(cv::GC_BGD, fixed(roi));
-    gc.setTo(cv::GC_PR_FGD, blob);
-    gc.setTo(cv::GC_FGD, core);
     cv::rectangle(gc, cv::Rect(0, 0, gc.cols, gc.rows), cv::Scalar(cv::GC_BGD), 1);
+    gc.setTo(cv::GC_BGD, fixed(roi));
+    gc.setTo(cv::GC_PR_FGD, blob);  // the blob's own pixels, explained or on the border, too
+    gc.setTo(cv::GC_FGD, core);
     cv::Mat bg, fg;
     // GrabCut starts its colour models with k-means from OpenCV's thread's generator: seeded per
-    // blob, a blob's completion does not depend on what ran before it on that thread.
+    // blob (and put back after), a blob's completion does not depend on what ran before it.
+    const cv::RNG kept = cv::theRNG();
     cv::theRNG() = cv::RNG(0x9e3779b97f4a7c15ULL);
     cv::grabCut(t.colour(roi), gc, cv::Rect(), bg, fg, o.iterations, cv::GC_INIT_WITH_MASK);
+    cv::theRNG() = kept;
     const cv::Mat f = (gc == cv::GC_FGD) | (gc == cv::GC_PR_FGD);
     cv::Mat parts;
     const int np = cv::connectedComponents(f, parts, 8, CV_32S);

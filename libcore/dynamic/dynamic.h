@@ -226,14 +226,15 @@ BlobTestCounts KeepStandingUnexplained(const DynamicView& target, const Eigen::V
 // a vehicle, a cyclist or a pedestrian that move against the static surface behind them; the
 // parts seen against the far background (a cyclist's body, moving with the camera) or against
 // surfaces of their own colour show none. In the blob's box widened by half its width on each
-// side and by its height upwards, the blob is probable foreground (its core, eroded by 2 pixels,
-// sure), the rest probable background; sure background are the box's border and every pixel the
-// photo's own depth explains (`t.seen` within `tolerance` of the static depth: the photo saw the
-// static surface there, so nothing stood in front of it; without this, a car's colour model
-// leaks into a facade of its colour). The foreground connected to the blob is added (probability
-// raised to mask.probability) unless it adds more than max_grow × the blob's area. Returns the
-// number of blobs grown. Without `t.colour` or `t.seen`, or with max_grow 0, nothing changes.
-// Throws Error on options out of range or a probability not float of the depth's size.
+// side and by its height upwards, the box's border and every pixel the photo's own depth explains
+// (`t.seen` within `tolerance` of the static depth: the photo saw the static surface there, so
+// nothing stood in front of it; without this, a car's colour model leaks into a facade of its
+// colour) are sure background, the rest probable background, except the blob's own pixels:
+// probable foreground, its core (eroded by 2 pixels) sure. The foreground connected to the blob is
+// added (probability raised to mask.probability) unless it adds more than max_grow × the blob's
+// area. Returns the number of blobs grown. Without `t.colour` or `t.seen`, or with max_grow 0,
+// nothing changes. Throws Error on options out of range or a probability not float of the depth's
+// size.
 struct BlobCompletion {
   double max_grow = 3;      // largest growth, × the blob's area, >= 0; 0 off
   double tolerance = 0.05;  // relative, in (0, 1): explained pixels are sure background

@@ -9,6 +9,7 @@
 
 #include "base/atomic_file.h"
 #include "base/error.h"
+#include "base/plugin.h"
 #include "base/version.h"
 
 namespace mvtm {
@@ -152,7 +153,9 @@ std::string Ledger::CompareRun(const nlohmann::json& run) {
     if (!same) changed += (changed.empty() ? "" : ", ") + table_.FlagOf(k);
   }
   if (!changed.empty()) return changed + " changed";
-  if (run.value("build", std::string("none")) != build_) return "another build of " + tool_;
+  const auto build = run.find("build");
+  if (build == run.end() || !build->is_string() || build->get<std::string>() != build_)
+    return "another build of " + tool_;
   const nlohmann::json& ins = run["inputs"];
   if (!ins.is_object()) return "no record";
   for (const auto& [name, path] : inputs_)

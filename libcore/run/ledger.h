@@ -110,7 +110,7 @@ class Ledger {
   std::string record_, tool_;
   const OptionTable& table_;
   nlohmann::json options_key_;
-  std::string build_;  // ProgramChecksum(): outputs of another build of the tool are redone
+  std::string build_;  // ProgramChecksum() (base/plugin.h): another build's outputs are redone
   std::vector<std::pair<std::string, fs::path>> inputs_;
   std::vector<Record> records_;                      // this tool's records in ROOT/provenance
   std::map<std::string, std::string> run_verdicts_;  // record run id → "" or a reason

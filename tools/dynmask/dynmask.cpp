@@ -658,8 +658,10 @@ std::vector<Job> StaleMaps(const DynmaskOptions& o, const Workspace& ws, const S
     };
     job.in.push_back(ws.ImagePath(s.images[i]->name));
     job.in.push_back(d.Input(s.images[i]->name));
-    const fs::path own = ws.StereoDepthPath(s.images[i]->name);  // --seen-tolerance reads it
-    if (o.seen_tolerance > 0 && d.UsesMesh() && fs::exists(own)) job.in.push_back(own);
+    // --seen-tolerance and --complete read the photo's own map.
+    const fs::path own = ws.StereoDepthPath(s.images[i]->name);
+    if ((o.seen_tolerance > 0 || o.complete > 0) && d.UsesMesh() && fs::exists(own))
+      job.in.push_back(own);
     const auto seen = [&](size_t j) {  // a partner's or a vetoing photo's densify map
       const fs::path p = ws.StereoDepthPath(s.images[j]->name);
       if (fs::exists(p)) job.in.push_back(p);

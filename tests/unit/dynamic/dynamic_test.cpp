@@ -619,10 +619,11 @@ TEST(Dynamic, BlobsAreCompletedFromTheirColoursNeverIntoExplainedPixels) {
   // Nothing explained: the patch of the object's colour joins it.
   const cv::Mat explained = t.seen.clone();
   t.seen.setTo(std::numeric_limits<float>::infinity());
-  BlobCompletion loose;
-  loose.max_grow = 100;
-  m = run(loose, n);
-  EXPECT_EQ(cv::countNonZero(m), reach.area() + patch.area()) << n;
+  m = run({}, n);
+  EXPECT_EQ(n, 1);
+  EXPECT_EQ(cv::countNonZero(m(reach)), reach.area());
+  EXPECT_EQ(cv::countNonZero(m(patch)), patch.area());
+  EXPECT_EQ(cv::countNonZero(m), reach.area() + patch.area());
   t.seen = explained;
   // Growth capped (960 more pixels than the blob's 1000: not at 0.9), off, or without the
   // photo's depth: the blob as found.

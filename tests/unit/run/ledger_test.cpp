@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "base/error.h"
-#include "base/file_stamp.h"
+#include "base/plugin.h"
 
 namespace mvtm {
 namespace {
@@ -128,8 +128,7 @@ void SetRecordedBuild(const fs::path& record, const char* build) {
 }
 
 TEST_F(LedgerTest, OutputsOfAnotherBuildOfTheToolAreRedone) {
-  ASSERT_FALSE(ProgramChecksum().empty());
-  ASSERT_EQ(ProgramChecksum(), FileChecksum("/proc/self/exe"));
+  ASSERT_EQ(ProgramChecksum().size(), 16u);  // /proc/self/exe read: not "version ..."
   Run({}, {"f0.png", "f1.png"});
   const fs::path record = dir_ / "out/provenance/demo.json";
   SetRecordedBuild(record, "0123456789abcdef");
