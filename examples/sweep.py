@@ -13,7 +13,8 @@ tool and OUT/index.html, the page to read before choosing settings. Work folders
   segtrack   --smooth, --max-gap, --min-life on damaged labels: mask IoU against truth/masks,
              against whole-process milliseconds per frame
   dynmask    --threshold, --flow-threshold, --no-flow, --neighbours, --partners, --min-baseline,
-             --partners-ahead, --ahead-veto, --ahead (with --partners 0), --passes, --segments,
+             --partners-ahead, --ahead-veto, --ahead and --ahead-min-share (with --partners 0),
+             --passes, --segments,
              --region-depth,
              --probability, --grounded, --min-height,
              --occludes, --occlusion-gap, --min-ratio, --max-gap
@@ -498,6 +499,8 @@ def sweep_dynmask(c):
                  # photos of the same drive farther along are a cue only without partners (with
                  # them, a veto: --ahead-veto above): drive A as a road of one drive
                  ("ahead (--partners 0)", "--ahead", (0, 2, 4), ["--partners", 0]),
+                 ("ahead-min-share (--partners 0)", "--ahead-min-share", (0.1, 0.25, 0.5),
+                  ["--partners", 0]),
                  ("min-baseline", "--min-baseline", (0.25, 1.5, 2.5)),
                  ("passes", "--passes", (1, 2)),
                  ("segments", "--segments", (0, 100, 300, 1000)),
@@ -512,7 +515,7 @@ def sweep_dynmask(c):
     defaults = {"--threshold": 0.05, "--flow-threshold": 2.5, "--no-flow": False,
                 "--flow-relative": 0,
                 "--neighbours": 4, "--partners": 2, "--partners-ahead": 4, "--ahead": 2,
-                "--ahead-veto": 0.5,
+                "--ahead-veto": 0.5, "--ahead-min-share": 0.1,
                 "--region-depth": 0.5,
                 "--min-baseline": 0.25, "--passes": 2, "--occludes": 0.2, "--occlusion-gap": 0.25,
                 "--segments": 300,
@@ -560,7 +563,9 @@ def sweep_dynmask(c):
         f"<code>--ahead-veto</code> (this drive's photos farther along veto the other drive's "
         f"evidence where they saw the road as the photo does), "
         f"<code>--ahead</code> (photos of the same drive farther along; only without partners, "
-        f"so measured with <code>--partners 0</code>), <code>--region-depth</code>, "
+        f"so measured with <code>--partners 0</code>; <code>--ahead-min-share</code>: how near "
+        f"a photo farther along may be to stand for its depth, towards a drive's end), "
+        f"<code>--region-depth</code>, "
         f"<code>--min-baseline</code>, <code>--passes</code>, "
         f"<code>--segments</code> (Felzenszwalb's k; 0 = no regions), "
         f"<code>--probability</code>, <code>--grounded</code>, <code>--min-height</code> "

@@ -189,6 +189,12 @@ OptionTable DeclareOptions(DynmaskOptions& o) {
             "times their depth only (0: none)")
       .Range(0, 8)
       .Alternative("0");
+  t.Real("--ahead-min-share", &o.ahead_min_share,
+         "A photo of the same drive farther along stands for a depth (k of N+1 parts of the "
+         "photo's far surfaces); the nearest to it is left out when nearer than F x that depth "
+         "(towards the drive's end: nearer photos see less of the road a vehicle covers)")
+      .Range(0, 1)
+      .Alternative("0.5");
   t.Real("--min-baseline", &o.min_baseline,
          "Nearest neighbour allowed, in median camera spacings (larger: more parallax)")
       .Range(0, 10)
@@ -393,13 +399,16 @@ Partners ChoosePartners(const Scene& s, int count, int ahead) {
 constexpr double kAheadReach = 1.5;
 
 // Photos of each image's own drive farther along the road (PartnersAhead over the drive's own
-// photos), each at least half as far as the depth it stands for: a vehicle driving ahead of the
+// photos), each at least `min_share` as far as the depth it stands for (nearer picks only
+// towards the drive's end: CamVid 0016E5's last 18 photos had none at 0.5, and showed almost no
+// evidence; 0.1 took the drive's last photos for them): a vehicle driving ahead of the
 // camera at its speed keeps its place in the photos (its neighbours cannot see it move), but a
 // photo taken metres farther along sees the road it covered. Only for images without partners
 // of another drive (a road of one drive, or a stretch only one drive took): another drive's
 // photos are the better witnesses (this drive's own traffic is not in them), and its own photos
 // farther along carry that traffic onto the far road (mkroad, four seeds: IoU 0.01-0.04 lower).
-Partners ChooseAhead(const Scene& s, int count, const Partners& partners, bool all) {
+Partners ChooseAhead(const Scene& s, int count, double min_share, const Partners& partners,
+                     bool all) {
   Partners p{std::vector<std::vector<size_t>>(s.images.size()),
              std::vector<std::vector<double>>(s.images.size())};
   if (count <= 0) return p;
@@ -408,7 +417,7 @@ Partners ChooseAhead(const Scene& s, int count, const Partners& partners, bool a
     for (size_t j : idx) own.Add(s, j);
     for (size_t i : idx) {
       if (!partners.images[i].empty() && !all) continue;
-      for (const auto& [j, z] : PartnersAhead(s, i, own, count, 0.5))
+      for (const auto& [j, z] : PartnersAhead(s, i, own, count, min_share))
         if (j != i) p.images[i].push_back(j), p.beyond[i].push_back(kAheadReach * z);
     }
   }
@@ -928,7 +937,7 @@ DynmaskReport RunDynmask(const DynmaskOptions& o) {
   Pairing pair{ChooseNeighbours(s, o.neighbours, o.min_baseline),
                ChoosePartners(s, o.partners, o.partners_ahead),
                {}};
-  pair.ahead = ChooseAhead(s, o.ahead, pair.partner, o.evidence.ahead_veto > 0);
+  pair.ahead = ChooseAhead(s, o.ahead, o.ahead_min_share, pair.partner, o.evidence.ahead_veto > 0);
   DynmaskReport rep;
   rep.images = s.images.size();
   rep.depth_source = depth.Name();

@@ -20,12 +20,13 @@ enum class DepthSource { kAuto, kMesh, kStereo };
 // maps computed; the masks, which tracking couples, are made by a run without them).
 struct DynmaskOptions : WorkOptions {
   std::string workspace;
-  int max_width = 640;         // working resolution: images wider are scaled down to this
-  int neighbours = 4;          // photos of the same drive each photo is checked against
-  int partners = 2;            // photos of other drives each photo is also checked against
-  int partners_ahead = 4;      // ... and photos of other drives farther along the road
-  int ahead = 2;               // photos of the same drive farther along the road
-  double min_baseline = 0.25;  // nearest neighbour allowed, in median camera spacings
+  int max_width = 640;           // working resolution: images wider are scaled down to this
+  int neighbours = 4;            // photos of the same drive each photo is checked against
+  int partners = 2;              // photos of other drives each photo is also checked against
+  int partners_ahead = 4;        // ... and photos of other drives farther along the road
+  int ahead = 2;                 // photos of the same drive farther along the road
+  double ahead_min_share = 0.1;  // ... none nearer than this share of the depth it stands for
+  double min_baseline = 0.25;    // nearest neighbour allowed, in median camera spacings
   DepthSource depth = DepthSource::kAuto;  // auto: the mesh, else densify's maps
   bool no_flow = false;                    // --no-flow: photometric evidence only
   double grounded = 0.25;  // blobs must touch the ground within this × camera height; 0: off
