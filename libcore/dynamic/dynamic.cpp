@@ -477,13 +477,24 @@ std::vector<double> BlobOcclusions(const DynamicView& t, const cv::Mat& labels, 
 
 // Sets to 0 the probability of every pixel where the photo's own depth is the static depth
 // within `tolerance` (relative); the number of pixels so cleared that were at or above `at`.
+// Non-zero where the photo's own depth (`t.seen`) is the static depth within `tolerance`
+// (relative): the photo saw the static surface there.
+cv::Mat ExplainedPixels(const DynamicView& t, double tolerance) {
+  cv::Mat out(t.depth.size(), CV_8U, cv::Scalar(0));
+  for (int y = 0; y < out.rows; ++y)
+    for (int x = 0; x < out.cols; ++x) {
+      const float z = t.depth.at<float>(y, x), s = t.seen.at<float>(y, x);
+      out.at<uint8_t>(y, x) = HasDepth(z) && HasDepth(s) && std::abs(s - z) <= tolerance * z;
+    }
+  return out;
+}
+
 size_t ClearExplained(const DynamicView& t, double tolerance, double at, cv::Mat& probability) {
+  const cv::Mat explained = ExplainedPixels(t, tolerance);
   size_t cleared = 0;
   for (int y = 0; y < probability.rows; ++y)
     for (int x = 0; x < probability.cols; ++x) {
-      const float z = t.depth.at<float>(y, x), s = t.seen.at<float>(y, x);
-      if (!HasDepth(z) || !HasDepth(s)) continue;
-      if (std::abs(s - z) > tolerance * z) continue;
+      if (!explained.at<uint8_t>(y, x)) continue;
       float& p = probability.at<float>(y, x);
       cleared += p >= at;
       p = 0;
@@ -645,12 +656,7 @@ int CompleteBlobs(const DynamicView& t, const MaskOptions& mask, const BlobCompl
     throw Error("target view: the probability must be float of the depth's size");
   if (t.colour.empty() || t.seen.empty() || o.max_grow <= 0) return 0;
   // Sure background: where the photo's own depth is the static depth (it saw the static surface).
-  cv::Mat fixed(probability.size(), CV_8U, cv::Scalar(0));
-  for (int y = 0; y < fixed.rows; ++y)
-    for (int x = 0; x < fixed.cols; ++x) {
-      const float z = t.depth.at<float>(y, x), sz = t.seen.at<float>(y, x);
-      fixed.at<uint8_t>(y, x) = HasDepth(z) && HasDepth(sz) && std::abs(sz - z) <= o.tolerance * z;
-    }
+  const cv::Mat fixed = ExplainedPixels(t, o.tolerance);
   cv::Mat labels, stats, centres;
   const int n = cv::connectedComponentsWithStats(MaskFromProbability(probability, mask), labels,
                                                  stats, centres, 8, CV_32S);
@@ -680,14 +686,20 @@ int CompleteBlobs(const DynamicView& t, const MaskOptions& mask, const BlobCompl
     cv::grabCut(t.colour(roi), gc, cv::Rect(), bg, fg, o.iterations, cv::GC_INIT_WITH_MASK);
     cv::theRNG() = kept;
     const cv::Mat f = (gc == cv::GC_FGD) | (gc == cv::GC_PR_FGD);
+    // The parts of the foreground that touch the blob, less the blob: one pass to find them,
+    // one to keep them.
     cv::Mat parts;
     const int np = cv::connectedComponents(f, parts, 8, CV_32S);
-    cv::Mat keep(f.size(), CV_8U, cv::Scalar(0));
-    for (int c = 1; c < np; ++c) {
-      const cv::Mat part = parts == c;
-      if (cv::countNonZero(part & blob) > 0) keep |= part;
-    }
-    const cv::Mat grown = keep & ~blob;
+    std::vector<uint8_t> touches(size_t(np), 0);
+    for (int y = 0; y < parts.rows; ++y)
+      for (int x = 0; x < parts.cols; ++x)
+        if (blob.at<uint8_t>(y, x)) touches[size_t(parts.at<int>(y, x))] = 1;
+    touches[0] = 0;
+    cv::Mat grown(f.size(), CV_8U, cv::Scalar(0));
+    for (int y = 0; y < parts.rows; ++y)
+      for (int x = 0; x < parts.cols; ++x)
+        if (touches[size_t(parts.at<int>(y, x))] && !blob.at<uint8_t>(y, x))
+          grown.at<uint8_t>(y, x) = 255;
     const int area = stats.at<int>(b, cv::CC_STAT_AREA), more = cv::countNonZero(grown);
     if (more == 0 || more > o.max_grow * area) continue;
     cv::Mat at = add(roi);
