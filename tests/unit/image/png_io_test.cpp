@@ -5,6 +5,7 @@
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <zlib.h>
 
 #include <cstdio>
@@ -185,6 +186,44 @@ TEST_F(PngTest, BrokenFilesAreOneErrorNamingTheFile) {
   expect_error("huge.png", header_only(1000000, 1000000), "");
   expect_error("wide.png", header_only(70000, 2), "");
   expect_error("many.png", header_only(60000, 60000), "beyond mvtm's limits");
+}
+
+// Fuzzing found an 877-byte file whose tEXt chunk claims 1.9 GB: libpng allocated (and touched)
+// the claim before finding the file cut short. Metadata chunks are skipped unread; what they
+// hold never changes the pixels, and a claim beyond the file costs no memory.
+TEST_F(PngTest, MetadataChunksAreSkippedUnreadWhateverTheyClaim) {
+  std::mt19937 rng(11);
+  const std::string plain = MakePng({24, 16, 8, 2, 0, ""}, rng);
+  const std::string head = plain.substr(0, 33);  // signature and IHDR
+  const std::string rest = plain.substr(33);     // IDAT, IEND
+  const std::vector<float> want = ReadImage(Write("plain.png", plain)).data;
+  // Legitimate metadata (200 kB of text, a compressed text, an Exif block) before the pixels.
+  const std::string meta =
+      Chunk("tEXt", "Comment" + std::string(1, '\0') + std::string(200000, 'x')) +
+      Chunk("zTXt", std::string("Title\0\0", 7) + "not deflate") +
+      Chunk("eXIf", std::string("MM\0*garbage", 11));
+  EXPECT_EQ(ReadImage(Write("meta.png", head + meta + rest)).data, want);
+  rusage before{};
+  getrusage(RUSAGE_SELF, &before);
+  // A tEXt chunk claiming 1.9 GB, the file ending 700 bytes later.
+  const std::string claim = Be32(1919247636) + "tEXt" + std::string(700, 'a');
+  for (const std::string name : {"claim.png", "claim_spec.png"}) {
+    const std::string path = Write(name, head + claim);
+    try {
+      if (name == "claim.png") {
+        ReadImage(path);
+      } else {
+        ReadImageSpec(path);
+      }
+      ADD_FAILURE() << name << " was accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(path + ": cannot read image"), std::string::npos)
+          << e.what();
+    }
+  }
+  rusage after{};
+  getrusage(RUSAGE_SELF, &after);
+  EXPECT_LT(after.ru_maxrss - before.ru_maxrss, 256 * 1024) << "kB of peak memory more";
 }
 
 }  // namespace
