@@ -8,6 +8,8 @@
 #include <ImfOutputFile.h>
 #include <ImfStdIO.h>
 #include <ImfStringAttribute.h>
+#include <ImfTileDescription.h>
+#include <ImfTileDescriptionAttribute.h>
 #include <ImfVersion.h>
 
 #include <algorithm>
@@ -126,7 +128,10 @@ bool ReadExr(const std::string& path, bool header_only, Image* img) {
   if (!ReadMagic(path, head)) return false;
   const int version = head[4] | (head[5] << 8) | (head[6] << 16) | (head[7] << 24);
   CheckAttributeSizes(path, Imf::isMultiPart(version));
-  if (Imf::isMultiPart(version) || Imf::isNonImage(version)) return false;
+  // mvtm writes single-part scan-line or tiled images; OpenImageIO would read multi-part and
+  // deep files without the checks below.
+  if (Imf::isMultiPart(version) || Imf::isNonImage(version))
+    throw Error(path, 0, "cannot read image: multi-part and deep OpenEXR files are not supported");
   static std::once_flag limits;
   std::call_once(limits, [] {  // sanityCheck() refuses larger windows and tiles
     Imf::Header::setMaxImageSize(kMaxReadImageSide, kMaxReadImageSide);
@@ -152,6 +157,18 @@ bool ReadExr(const std::string& path, bool header_only, Image* img) {
     // allocation.
     CheckHeaderFitsFile(path, w, hgt, double(w) * double(hgt) * double(listed) * 4, 4096.0,
                         1 << 20);
+    // OpenEXR sizes its tile and line buffers from the tile size (up to 65536 a side), not the
+    // image's: tiles larger than their image are refused like a header larger than its file
+    // (a review: a 65536x1 image of 160x65535 tiles asks for 17 GB).
+    if (Imf::isTiled(version) && h.hasTileDescription()) {
+      const Imf::TileDescription& t = h.tileDescription();
+      const double tile = double(std::max<int64_t>(w, t.xSize)) * double(t.ySize);
+      if (tile > std::max(double(w) * double(hgt), double(1 << 20)))
+        throw Error(path, 0,
+                    "cannot read image: corrupt file: " + std::to_string(t.xSize) + "x" +
+                        std::to_string(t.ySize) + " tiles in a " + std::to_string(w) + "x" +
+                        std::to_string(hgt) + " image");
+    }
     Imf::PixelType type = Imf::FLOAT;
     const std::vector<std::string> names = ChannelOrder(h.channels(), &type);
     if (names.empty()) return false;

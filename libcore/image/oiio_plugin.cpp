@@ -39,8 +39,35 @@ std::string Guard(F&& body) {
   }
 }
 
+// A file is read by the reader its extension names, never by whichever of OpenImageIO's
+// format plugins takes it: several allocate what their headers claim inside open(), before
+// mvtm sees the spec (a review found PSD, SGI, FITS and GIF headers of a few bytes asking for
+// gigabytes, each reachable from a .png or .jpg that the named reader declines).
+void ReadByExtensionOnly() {
+  static const bool once = OIIO::attribute("try_all_readers", 0);
+  (void)once;
+}
+
+// Refuses what mvtm does not read (volumes, deep images) and tiles larger than their image
+// (OpenImageIO sizes its tile buffers from the header), before read_image allocates.
+void CheckLayout(const std::string& path, const OIIO::ImageSpec& spec) {
+  if (spec.depth != 1 || spec.deep)
+    throw Error(path, 0, "cannot read image: volume and deep images are not supported");
+  if (spec.tile_width > 0) {
+    const double tile = double(spec.tile_width) * std::max(spec.tile_height, 1) *
+                        std::max(spec.tile_depth, 1) * spec.nchannels;
+    const double image = double(spec.width) * spec.height * spec.nchannels;
+    if (tile > std::max(image, double(1 << 20)))
+      throw Error(path, 0,
+                  "cannot read image: corrupt file: " + std::to_string(spec.tile_width) + "x" +
+                      std::to_string(spec.tile_height) + " tiles in a " +
+                      std::to_string(spec.width) + "x" + std::to_string(spec.height) + " image");
+  }
+}
+
 std::string Read(const std::string& path, bool header_only, Image* img) {
   return Guard([&]() -> std::string {
+    ReadByExtensionOnly();
     // Keep colour values as stored: no premultiplication by alpha.
     OIIO::ImageSpec config;
     config.attribute("oiio:UnassociatedAlpha", 1);
@@ -48,6 +75,7 @@ std::string Read(const std::string& path, bool header_only, Image* img) {
     if (!in) return "cannot read image: " + LibraryText(OIIO::geterror());
     const OIIO::ImageSpec& spec = in->spec();
     CheckImageDims(path, spec.width, spec.height, spec.nchannels);
+    CheckLayout(path, spec);
     // No image format compresses real pictures beyond a few thousand to one; a header claiming
     // more than that share of the file was forged or cut short (fuzzing: a 30-byte file read as
     // a 7968x15485 WebP took 8 s and 3 GB).

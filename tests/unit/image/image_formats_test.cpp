@@ -7,6 +7,13 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+// jpeglib.h needs size_t and FILE declared first.
+#include <cstddef>
+#include <cstdio>
+// clang-format off
+#include <jpeglib.h>
+// clang-format on
+
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -320,6 +327,115 @@ TEST(ImageFormats, ErrorsNameTheFileOnOneLine) {
       EXPECT_EQ(m.find("OpenEXR"), std::string::npos) << m;
     }
   }
+}
+
+// A progressive grey JPEG of `scans` valid scans: DC, then each AC coefficient k = 1..63 in a
+// scan of its own, first at half precision and (beyond 64 scans) refined.
+std::string ManyScanJpeg(const fs::path& path, int scans) {
+  std::vector<jpeg_scan_info> script;
+  script.push_back({1, {0}, 0, 0, 0, 0});
+  const bool refine = scans > 64;
+  for (int k = 1; k <= 63; ++k) script.push_back({1, {0}, k, k, 0, refine ? 1 : 0});
+  for (int k = 1; refine && k <= 63 && int(script.size()) < scans; ++k)
+    script.push_back({1, {0}, k, k, 1, 0});
+  jpeg_compress_struct c{};
+  jpeg_error_mgr err{};
+  c.err = jpeg_std_error(&err);
+  jpeg_create_compress(&c);
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  jpeg_stdio_dest(&c, f);
+  c.image_width = 16, c.image_height = 16, c.input_components = 1, c.in_color_space = JCS_GRAYSCALE;
+  jpeg_set_defaults(&c);
+  c.scan_info = script.data(), c.num_scans = int(script.size());
+  jpeg_start_compress(&c, TRUE);
+  std::vector<unsigned char> row(16);
+  for (int y = 0; y < 16; ++y) {
+    for (int x = 0; x < 16; ++x) row[size_t(x)] = static_cast<unsigned char>(x * 13 + y * 7);
+    JSAMPROW r = row.data();
+    jpeg_write_scanlines(&c, &r, 1);
+  }
+  jpeg_finish_compress(&c);
+  jpeg_destroy_compress(&c);
+  std::fclose(f);
+  return std::to_string(script.size());
+}
+
+void ExpectRefused(const fs::path& p, const std::string& needle) {
+  try {
+    ReadImage(p.string());
+    ADD_FAILURE() << p << " was read";
+  } catch (const Error& e) {
+    const std::string m = e.what();
+    EXPECT_EQ(e.file(), p.string());
+    EXPECT_NE(m.find(needle), std::string::npos) << m;
+    EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+  }
+}
+
+// What a review of the readers found reachable from a few bytes (the fuzzer's domain): a file
+// is read by the reader its extension names only; tiles larger than their image, multi-part and
+// deep EXR, volumes and over a hundred JPEG scans are refused before anything is allocated.
+// Each file is valid for its own library (OpenImageIO reads it).
+TEST(ImageFormats, WhatOnlyForgedFilesHoldIsRefused) {
+  const Image small = Pattern(16, 16, 3, 8, 4);
+  // A TIFF named .jpg: OpenImageIO's TIFF reader took it when every reader was tried.
+  const fs::path tif = Dir() / "tiff.tif", misnamed = Dir() / "tiff_named.jpg";
+  WriteImage(tif.string(), small);
+  fs::copy_file(tif, misnamed, fs::copy_options::overwrite_existing);
+  ExpectSamePixels(ReadImage(tif.string()), small, "a TIFF named .tif");
+  ExpectRefused(misnamed, "cannot read image");
+  // 4096x4096 tiles in a 16x16 TIFF, and 2048x2048 tiles in a 16x16 EXR.
+  for (const char* ext : {"tif", "exr"}) {
+    const fs::path p = Dir() / (std::string("big_tiles.") + ext);
+    OIIO::ImageSpec spec(16, 16, 3, OIIO::TypeDesc::FLOAT);
+    spec.tile_width = spec.tile_height = std::string(ext) == "tif" ? 4096 : 2048;
+    spec.attribute("compression", "zip");
+    auto out = OIIO::ImageOutput::create(p.string());
+    ASSERT_TRUE(out && out->open(p.string(), spec)) << OIIO::geterror();
+    std::vector<float> px(16 * 16 * 3, 0.5f);
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, px.data()));
+    ASSERT_TRUE(out->close());
+    ASSERT_TRUE(OIIO::ImageInput::open(p.string())) << "OpenImageIO reads " << p;
+    ExpectRefused(p, "tiles in a 16x16 image");
+  }
+  // Two parts in one EXR.
+  const fs::path parts = Dir() / "parts.exr";
+  {
+    OIIO::ImageSpec specs[2] = {OIIO::ImageSpec(8, 8, 1, OIIO::TypeDesc::FLOAT),
+                                OIIO::ImageSpec(8, 8, 1, OIIO::TypeDesc::FLOAT)};
+    auto out = OIIO::ImageOutput::create(parts.string());
+    ASSERT_TRUE(out && out->open(parts.string(), 2, specs)) << OIIO::geterror();
+    std::vector<float> px(64, 0.25f);
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, px.data()));
+    ASSERT_TRUE(out->open(parts.string(), specs[1], OIIO::ImageOutput::AppendSubimage));
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, px.data()));
+    ASSERT_TRUE(out->close());
+  }
+  ExpectRefused(parts, "multi-part");
+  // A volume texture (8x8x4, 24-bit RGB) in a DDS file: read_image would write four slices
+  // into one slice's buffer. Written by hand (OpenImageIO writes no volumes).
+  const fs::path volume = Dir() / "volume.dds";
+  {
+    auto u32 = [](uint32_t v) {
+      return std::string{char(v), char(v >> 8), char(v >> 16), char(v >> 24)};
+    };
+    std::string h = "DDS " + u32(124) + u32(0x1 | 0x2 | 0x4 | 0x1000 | 0x800000) + u32(8) + u32(8) +
+                    u32(24) + u32(4) + u32(0) + std::string(44, '\0');
+    h += u32(32) + u32(0x40) + u32(0) + u32(24) + u32(0xff0000) + u32(0xff00) + u32(0xff) + u32(0);
+    h += u32(0x1000 | 0x8) + u32(0x200000) + u32(0) + u32(0) + u32(0);
+    std::ofstream(volume, std::ios::binary) << h << std::string(8 * 8 * 4 * 3, '\x40');
+  }
+  auto in = OIIO::ImageInput::open(volume.string());
+  ASSERT_TRUE(in) << OIIO::geterror();
+  EXPECT_EQ(in->spec().depth, 4) << "OpenImageIO reads a volume";
+  ExpectRefused(volume, "volume");
+  // Progressive JPEGs: 64 scans read as libjpeg reads them, 126 refused.
+  const fs::path ok = Dir() / "scans64.jpg", many = Dir() / "scans126.jpg";
+  EXPECT_EQ(ManyScanJpeg(ok, 64), "64");
+  EXPECT_EQ(ManyScanJpeg(many, 126), "126");
+  ExpectSamePixels(ReadImage(ok.string()), OiioRead(ok), "a 64-scan progressive JPEG");
+  ASSERT_TRUE(OIIO::ImageInput::open(many.string())) << "OpenImageIO reads the 126-scan JPEG";
+  ExpectRefused(many, "more than 100 scans");
 }
 
 }  // namespace
