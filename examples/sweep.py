@@ -520,7 +520,7 @@ def sweep_dynmask(c):
                 "--min-baseline": 0.25, "--passes": 2, "--occludes": 0.2, "--occlusion-gap": 0.25,
                 "--segments": 300,
                 "--probability": 0.4, "--grounded": 0.25, "--min-height": 0.5,
-                "--min-ratio": 0.4, "--max-gap": 3, "--max-fill": 0.5, "--complete": 3}
+                "--min-ratio": 0.5, "--max-gap": 3, "--max-fill": 0.5, "--complete": 3}
     rows = []
 
     def measure(group, opt, v, args, where):
