@@ -64,6 +64,7 @@ struct DynmaskReport {
   size_t with_partners = 0;  // images checked against another drive's photos too
   size_t with_ahead = 0;     // images checked against their drive's photos farther along too
   size_t with_veto = 0;      // images whose partners' evidence those photos could veto
+  size_t with_behind = 0;    // ... of them at their drive's end: vetoed by the photos behind
   size_t floating = 0;       // blobs removed: not standing on the ground
   size_t lying = 0;          // blobs removed: flat in the road (wet patches, shadows)
   size_t surface = 0;        // blobs removed: on the static surface, hiding nothing

@@ -29,6 +29,8 @@ int RunAndReport(mvtm::DynmaskOptions& o) {
     std::fprintf(stderr,
                  "; %zu whose other drives' evidence their drive's photos farther along veto",
                  r.with_veto);
+  if (r.with_behind)
+    std::fprintf(stderr, " (%zu at their drive's end: the photos just behind)", r.with_behind);
   if (r.floating) std::fprintf(stderr, "; %zu blobs off the ground left out", r.floating);
   if (r.lying) std::fprintf(stderr, "; %zu blobs lying in the road left out", r.lying);
   if (r.surface)
