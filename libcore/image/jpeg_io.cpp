@@ -106,6 +106,27 @@ bool Decode(jpeg_decompress_struct* cinfo, ErrorManager* e, JSAMPROW* rows) {
   return true;
 }
 
+// The scans (SOS markers) of a JPEG file, counted by walking its marker segments (a segment's
+// payload is skipped by its length; entropy-coded data ends at the first 0xFF not followed by 0
+// or a restart marker). For the files OpenImageIO reads (CMYK, YCCK, unusual component counts):
+// its reader takes in every scan inside open(), with no progress monitor to stop it.
+int ScansInFile(std::FILE* f) {
+  std::rewind(f);
+  int scans = 0, c = 0;
+  if (std::fgetc(f) != 0xFF || std::fgetc(f) != 0xD8) return 0;
+  for (;;) {
+    while ((c = std::fgetc(f)) != EOF && c != 0xFF) {
+    }
+    while (c == 0xFF) c = std::fgetc(f);  // fill bytes
+    if (c == EOF || c == 0xD9) return scans;
+    if (c == 0x00 || c == 0x01 || (c >= 0xD0 && c <= 0xD7)) continue;  // stuffed byte, RSTn
+    const int hi = std::fgetc(f), lo = std::fgetc(f);
+    if (hi == EOF || lo == EOF || ((hi << 8) | lo) < 2) return scans;  // cut short, corrupt
+    if (c == 0xDA && ++scans > kMaxScans) return scans;
+    if (std::fseek(f, long((hi << 8) | lo) - 2, SEEK_CUR) != 0) return scans;
+  }
+}
+
 [[noreturn]] void Fail(const std::string& path, const ErrorManager& e) {
   throw Error(path, 0, std::string("cannot read image: ") + (e.message[0] ? e.message : "?"));
 }
@@ -116,13 +137,25 @@ bool ReadJpeg(const std::string& path, bool header_only, Image* img) {
   f.f = std::fopen(path.c_str(), "rb");
   if (!f.f) throw Error(path, 0, "cannot open");
   ErrorManager errors;
+  jpeg_progress_mgr progress{};  // outlives d: d.cinfo points at it
   Decompress d;
   d.cinfo.err = jpeg_std_error(&errors.mgr);
   errors.mgr.error_exit = OnError;
   errors.mgr.emit_message = OnMessage;
   bool leave_to_oiio = false;
   if (!ReadHeader(&d.cinfo, &errors, f.f, &d.created, &leave_to_oiio)) Fail(path, errors);
-  if (leave_to_oiio) return false;
+  if (leave_to_oiio) {
+    // OpenImageIO's reader decodes inside open(), before mvtm sees its spec: checked here.
+    CheckImageDims(path, d.cinfo.image_width, d.cinfo.image_height, d.cinfo.num_components);
+    CheckHeaderFitsFile(path, d.cinfo.image_width, d.cinfo.image_height,
+                        double(d.cinfo.image_width) * d.cinfo.image_height * d.cinfo.num_components,
+                        10000.0, 1 << 20);
+    if (d.cinfo.progressive_mode && ScansInFile(f.f) > kMaxScans)
+      throw Error(
+          path, 0,
+          "cannot read image: corrupt file: more than " + std::to_string(kMaxScans) + " scans");
+    return false;
+  }
   CheckImageDims(path, d.cinfo.output_width, d.cinfo.output_height, d.cinfo.output_components);
   Image out;
   out.width = int(d.cinfo.output_width), out.height = int(d.cinfo.output_height);
@@ -135,7 +168,6 @@ bool ReadJpeg(const std::string& path, bool header_only, Image* img) {
   // pixels, the file was cut short: refused before the allocation.
   CheckHeaderFitsFile(path, out.width, out.height, double(out.pixels()) * out.channels, 10000.0,
                       1 << 20);
-  jpeg_progress_mgr progress{};
   progress.progress_monitor = CountScans;
   d.cinfo.progress = &progress;
   const size_t rowbytes = size_t(out.width) * size_t(out.channels);

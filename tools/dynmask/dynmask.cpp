@@ -145,8 +145,9 @@ void DeclareEvidenceOptions(OptionTable& t, DynmaskOptions& o) {
          "Luma gradient per pixel at which a pixel's own evidence counts fully")
       .Above(0);
   t.Real("--ahead-veto", &o.evidence.ahead_veto,
-         "Photos with partners also get --ahead photos of their own drive farther along (a "
-         "drive's last photo: the --ahead photos just behind it): where they saw the pixel's "
+         "Photos with partners also get --ahead photos of their own drive farther along (with "
+         "none farther along, such as a drive's last photo: the --ahead photos just behind it): "
+         "where they saw the pixel's "
          "static point as the photo does (residual under F x --threshold), the partners' "
          "evidence there is the other drive's own traffic and is dropped (0: off)")
       .Range(0, 10)
@@ -184,10 +185,12 @@ OptionTable DeclareOptions(DynmaskOptions& o) {
       .Range(0, 8)
       .Alternative("0");
   t.Integer("--ahead", &o.ahead,
-            "Photos without partners of another drive: photos of the same drive farther along "
-            "the road, at N depths up to the photo's far surfaces: they see the road in front of "
-            "a vehicle driving ahead at the camera's speed; compared at the pixels at least 1.5 "
-            "times their depth only (0: none)")
+            "Photos of the same drive farther along the road, at N depths up to the photo's far "
+            "surfaces: they see the road in front of a vehicle driving ahead at the camera's "
+            "speed; compared at the pixels at least 1.5 times their depth only; a cue for photos "
+            "without partners of another drive, a veto of the partners' evidence for the others "
+            "(see --ahead-veto; with none farther along: the N photos just behind, at every "
+            "pixel) (0: none)")
       .Range(0, 8)
       .Alternative("0");
   t.Real("--ahead-min-share", &o.ahead_min_share,
@@ -428,8 +431,9 @@ Partners ChooseAhead(const Scene& s, int count, double min_share, const Partners
       if (!partners.images[i].empty() && !all) continue;
       for (const auto& [j, z] : PartnersAhead(s, i, own, count, min_share))
         if (j != i) p.images[i].push_back(j), p.beyond[i].push_back(kAheadReach * z);
-      // At the drive's end no photo is farther along: the `count` photos just behind veto
-      // instead, at every pixel (they see all the photo sees but what passed them).
+      // None picked farther along (the drive's end; also a road turning away, or an image
+      // with few model points): the `count` photos just behind veto instead, at every pixel
+      // (they see all the photo sees but what passed them).
       if (all && !partners.images[i].empty() && p.images[i].empty())
         for (size_t b = 1; b <= size_t(count) && b <= k; ++b)
           p.images[i].push_back(idx[k - b]), p.beyond[i].push_back(0);

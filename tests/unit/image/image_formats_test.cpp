@@ -329,28 +329,32 @@ TEST(ImageFormats, ErrorsNameTheFileOnOneLine) {
   }
 }
 
-// A progressive grey JPEG of `scans` valid scans: DC, then each AC coefficient k = 1..63 in a
-// scan of its own, first at half precision and (beyond 64 scans) refined.
-std::string ManyScanJpeg(const fs::path& path, int scans) {
+// A progressive JPEG of `scans` valid scans, grey (1 component) or CMYK (4): the DC of all
+// components, then each AC coefficient k = 1..63 of the first in a scan of its own, first at half
+// precision and refined when more scans are asked for, then one AC scan of each other component.
+std::string ManyScanJpeg(const fs::path& path, int scans, int components = 1) {
   std::vector<jpeg_scan_info> script;
-  script.push_back({1, {0}, 0, 0, 0, 0});
-  const bool refine = scans > 64;
+  script.push_back({components, {0, 1, 2, 3}, 0, 0, 0, 0});
+  const int others = components - 1;
+  const bool refine = scans - others > 64;
   for (int k = 1; k <= 63; ++k) script.push_back({1, {0}, k, k, 0, refine ? 1 : 0});
-  for (int k = 1; refine && k <= 63 && int(script.size()) < scans; ++k)
+  for (int k = 1; refine && k <= 63 && int(script.size()) < scans - others; ++k)
     script.push_back({1, {0}, k, k, 1, 0});
+  for (int c = 1; c <= others; ++c) script.push_back({1, {c}, 1, 63, 0, 0});
   jpeg_compress_struct c{};
   jpeg_error_mgr err{};
   c.err = jpeg_std_error(&err);
   jpeg_create_compress(&c);
   std::FILE* f = std::fopen(path.c_str(), "wb");
   jpeg_stdio_dest(&c, f);
-  c.image_width = 16, c.image_height = 16, c.input_components = 1, c.in_color_space = JCS_GRAYSCALE;
+  c.image_width = 16, c.image_height = 16, c.input_components = components;
+  c.in_color_space = components == 4 ? JCS_CMYK : JCS_GRAYSCALE;
   jpeg_set_defaults(&c);
   c.scan_info = script.data(), c.num_scans = int(script.size());
   jpeg_start_compress(&c, TRUE);
-  std::vector<unsigned char> row(16);
+  std::vector<unsigned char> row(size_t(16 * components));
   for (int y = 0; y < 16; ++y) {
-    for (int x = 0; x < 16; ++x) row[size_t(x)] = static_cast<unsigned char>(x * 13 + y * 7);
+    for (size_t x = 0; x < row.size(); ++x) row[x] = static_cast<unsigned char>(x * 13 + y * 7);
     JSAMPROW r = row.data();
     jpeg_write_scanlines(&c, &r, 1);
   }
@@ -436,6 +440,13 @@ TEST(ImageFormats, WhatOnlyForgedFilesHoldIsRefused) {
   ExpectSamePixels(ReadImage(ok.string()), OiioRead(ok), "a 64-scan progressive JPEG");
   ASSERT_TRUE(OIIO::ImageInput::open(many.string())) << "OpenImageIO reads the 126-scan JPEG";
   ExpectRefused(many, "more than 100 scans");
+  // CMYK goes to OpenImageIO's reader, which takes in every scan inside open(): counted first.
+  const fs::path cmyk_ok = Dir() / "cmyk_scans67.jpg", cmyk_many = Dir() / "cmyk_scans126.jpg";
+  EXPECT_EQ(ManyScanJpeg(cmyk_ok, 67, 4), "67");
+  EXPECT_EQ(ManyScanJpeg(cmyk_many, 126, 4), "126");
+  EXPECT_EQ(ReadImage(cmyk_ok.string()).channels, OiioRead(cmyk_ok).channels) << "67 scans read";
+  ASSERT_TRUE(OIIO::ImageInput::open(cmyk_many.string())) << "OpenImageIO reads 126 CMYK scans";
+  ExpectRefused(cmyk_many, "more than 100 scans");
 }
 
 }  // namespace
