@@ -475,8 +475,6 @@ std::vector<double> BlobOcclusions(const DynamicView& t, const cv::Mat& labels, 
   return behind;
 }
 
-// Sets to 0 the probability of every pixel where the photo's own depth is the static depth
-// within `tolerance` (relative); the number of pixels so cleared that were at or above `at`.
 // Non-zero where the photo's own depth (`t.seen`) is the static depth within `tolerance`
 // (relative): the photo saw the static surface there.
 cv::Mat ExplainedPixels(const DynamicView& t, double tolerance) {
@@ -489,6 +487,8 @@ cv::Mat ExplainedPixels(const DynamicView& t, double tolerance) {
   return out;
 }
 
+// Sets to 0 the probability of every pixel where the photo's own depth is the static depth
+// within `tolerance` (relative); the number of pixels so cleared that were at or above `at`.
 size_t ClearExplained(const DynamicView& t, double tolerance, double at, cv::Mat& probability) {
   const cv::Mat explained = ExplainedPixels(t, tolerance);
   size_t cleared = 0;

@@ -127,6 +127,12 @@ int ScansInFile(std::FILE* f) {
   }
 }
 
+// A JPEG compresses at most about 1:5000 (an all-grey image); smaller than that share of its
+// pixels, the file was cut short (or lies): refused before the decoder allocates.
+void CheckFitsFile(const std::string& path, int64_t w, int64_t h, int channels) {
+  CheckHeaderFitsFile(path, w, h, double(w) * double(h) * channels, 10000.0, 1 << 20);
+}
+
 [[noreturn]] void Fail(const std::string& path, const ErrorManager& e) {
   throw Error(path, 0, std::string("cannot read image: ") + (e.message[0] ? e.message : "?"));
 }
@@ -147,9 +153,7 @@ bool ReadJpeg(const std::string& path, bool header_only, Image* img) {
   if (leave_to_oiio) {
     // OpenImageIO's reader decodes inside open(), before mvtm sees its spec: checked here.
     CheckImageDims(path, d.cinfo.image_width, d.cinfo.image_height, d.cinfo.num_components);
-    CheckHeaderFitsFile(path, d.cinfo.image_width, d.cinfo.image_height,
-                        double(d.cinfo.image_width) * d.cinfo.image_height * d.cinfo.num_components,
-                        10000.0, 1 << 20);
+    CheckFitsFile(path, d.cinfo.image_width, d.cinfo.image_height, d.cinfo.num_components);
     if (d.cinfo.progressive_mode && ScansInFile(f.f) > kMaxScans)
       throw Error(
           path, 0,
@@ -164,10 +168,7 @@ bool ReadJpeg(const std::string& path, bool header_only, Image* img) {
     *img = std::move(out);
     return true;
   }
-  // A JPEG compresses at most about 1:5000 (an all-grey image); smaller than that share of its
-  // pixels, the file was cut short: refused before the allocation.
-  CheckHeaderFitsFile(path, out.width, out.height, double(out.pixels()) * out.channels, 10000.0,
-                      1 << 20);
+  CheckFitsFile(path, out.width, out.height, out.channels);
   progress.progress_monitor = CountScans;
   d.cinfo.progress = &progress;
   const size_t rowbytes = size_t(out.width) * size_t(out.channels);
