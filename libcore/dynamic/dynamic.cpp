@@ -678,6 +678,8 @@ int CompleteBlobs(const DynamicView& t, const MaskOptions& mask, const BlobCompl
     gc.setTo(cv::GC_BGD, fixed(roi));
     gc.setTo(cv::GC_PR_FGD, blob);  // the blob's own pixels, explained or on the border, too
     gc.setTo(cv::GC_FGD, core);
+    // A blob filling its box (a full mask): no background to model its colours against.
+    if (cv::countNonZero((gc == cv::GC_BGD) | (gc == cv::GC_PR_BGD)) == 0) continue;
     cv::Mat bg, fg;
     // GrabCut starts its colour models with k-means from OpenCV's thread's generator: seeded per
     // blob (and put back after), a blob's completion does not depend on what ran before it.
@@ -710,6 +712,126 @@ int CompleteBlobs(const DynamicView& t, const MaskOptions& mask, const BlobCompl
   cv::max(probability, mask.probability, raised);
   raised.copyTo(probability, add);
   return completed;
+}
+
+}  // namespace mvtm
+
+namespace mvtm {
+namespace {
+
+// A stretch of a path in the target's camera coordinates: its ends across `up` (a, b) and their
+// heights along it; `first`/`last`: the piece of path begins or ends there (not beyond it).
+struct DrivenSegment {
+  Eigen::Vector3d a, b;
+  double ha = 0, hb = 0;
+  bool first = false, last = false;
+};
+
+// The paths' stretches within `reach` (across up) of the target's camera centre, in its camera
+// coordinates.
+std::vector<DrivenSegment> DrivenSegments(const Rigid3d& w2c, const Eigen::Vector3d& up_cam,
+                                          const std::vector<std::vector<Eigen::Vector3d>>& paths,
+                                          double reach) {
+  const auto across = [&](const Eigen::Vector3d& p) {
+    return Eigen::Vector3d(p - p.dot(up_cam) * up_cam);
+  };
+  std::vector<DrivenSegment> out;
+  for (const std::vector<Eigen::Vector3d>& path : paths) {
+    std::vector<Eigen::Vector3d> c;
+    for (const Eigen::Vector3d& w : path) c.push_back(w2c * w);
+    for (size_t k = 0; k + 1 < c.size(); ++k) {
+      DrivenSegment s{across(c[k]),         across(c[k + 1]), c[k].dot(up_cam),
+                      c[k + 1].dot(up_cam), k == 0,           k + 2 == c.size()};
+      // Distance of the camera centre (the origin) to the stretch, across up.
+      const Eigen::Vector3d d = s.b - s.a;
+      const double l2 = d.squaredNorm();
+      const double t = l2 > 0 ? std::clamp(-s.a.dot(d) / l2, 0.0, 1.0) : 0.0;
+      if ((s.a + t * d).norm() <= reach) out.push_back(s);
+    }
+  }
+  return out;
+}
+
+// Pixel (x, y)'s point at depth map `z`'s depth, camera coordinates (any depth: check it first).
+Eigen::Vector3d PointAt(const Camera& c, const cv::Mat& z, int x, int y) {
+  const double d = z.at<float>(y, x);
+  return {(x + 0.5 - c.cx()) / c.fx() * d, (y + 0.5 - c.cy()) / c.fy() * d, d};
+}
+
+// The pixels (255) whose seen point is the static one (within o.agree) and lies in the driven
+// space: within half_width × height of a stretch across up (beside it, not beyond a path's
+// ends), between above and below × height over the road there.
+cv::Mat DrivenPixels(const DynamicView& t, const Eigen::Vector3d& up_cam,
+                     const std::vector<DrivenSegment>& segs, const DrivenSpace& o, double height) {
+  const cv::Mat& seen = t.seen;
+  cv::Mat marked(seen.size(), CV_8U, cv::Scalar(0));
+  const double width = o.half_width * height;
+  for (int y = 0; y < seen.rows; ++y)
+    for (int x = 0; x < seen.cols; ++x) {
+      const float z = seen.at<float>(y, x), zs = t.depth.at<float>(y, x);
+      if (!HasDepth(z) || !HasDepth(zs) || std::abs(z - zs) > o.agree * zs) continue;
+      const Eigen::Vector3d p = PointAt(t.camera, seen, x, y);
+      const double hp = p.dot(up_cam);
+      const Eigen::Vector3d ph = p - hp * up_cam;
+      double best = std::numeric_limits<double>::infinity(), road = 0;
+      bool beside = false;
+      for (const DrivenSegment& s : segs) {
+        const Eigen::Vector3d d = s.b - s.a;
+        const double l2 = d.squaredNorm();
+        const double u = l2 > 0 ? (ph - s.a).dot(d) / l2 : 0.0;
+        const double uc = std::clamp(u, 0.0, 1.0);
+        const double dist = (ph - s.a - uc * d).norm();
+        if (dist >= best) continue;
+        best = dist, road = s.ha + uc * (s.hb - s.ha) - height;
+        beside = !((s.first && u < 0) || (s.last && u > 1));
+      }
+      const double r = (hp - road) / height;
+      if (beside && best <= width && r > o.above && r < o.below) marked.at<uint8_t>(y, x) = 255;
+    }
+  return marked;
+}
+
+}  // namespace
+
+size_t MarkDriven(const DynamicView& t, const std::vector<std::vector<Eigen::Vector3d>>& paths,
+                  const Eigen::Vector3d& up, const DrivenSpace& o, cv::Mat& probability) {
+  if (!(o.half_width > 0) || !(o.above >= 0) || !(o.below > o.above) ||
+      !(o.agree > 0 && o.agree < 1) || o.open < 0 || !(o.min_area >= 0 && o.min_area < 1))
+    throw Error("MarkDriven: options out of range");
+  CheckView(t, "target view");
+  if (probability.type() != CV_32F || probability.size() != t.depth.size())
+    throw Error("target view: the probability must be float of the depth's size");
+  if (t.seen.empty()) return 0;
+  const Eigen::Vector3d up_cam = t.world_to_camera.R() * up.normalized();
+  const double height = -GroundBelow(t, up_cam);
+  if (!std::isfinite(height)) return 0;
+  double far = 0;
+  for (int y = 0; y < t.seen.rows; ++y)
+    for (int x = 0; x < t.seen.cols; ++x)
+      if (HasDepth(t.seen.at<float>(y, x)))
+        far = std::max(far, PointAt(t.camera, t.seen, x, y).norm());
+  const std::vector<DrivenSegment> segs =
+      DrivenSegments(t.world_to_camera, up_cam, paths, far + o.half_width * height);
+  if (segs.empty()) return 0;
+  cv::Mat marked = DrivenPixels(t, up_cam, segs, o, height);
+  // A stray depth is a speck; a vehicle a surface: specks go as the masks' do (an opening, then
+  // blobs under min_area).
+  if (o.open > 0)
+    cv::morphologyEx(
+        marked, marked, cv::MORPH_OPEN,
+        cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * o.open + 1, 2 * o.open + 1}));
+  cv::Mat labels, stats, centres;
+  const int n = cv::connectedComponentsWithStats(marked, labels, stats, centres, 8, CV_32S);
+  const double least = o.min_area * double(marked.total());
+  size_t raised = 0;
+  for (int y = 0; y < labels.rows; ++y)
+    for (int x = 0; x < labels.cols; ++x) {
+      const int b = labels.at<int>(y, x);
+      if (b == 0 || b >= n || stats.at<int>(b, cv::CC_STAT_AREA) < least) continue;
+      float& v = probability.at<float>(y, x);
+      if (v < 1) v = 1, ++raised;
+    }
+  return raised;
 }
 
 }  // namespace mvtm

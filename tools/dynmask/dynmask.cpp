@@ -101,6 +101,30 @@ void DeclareStandingOptions(OptionTable& t, DynmaskOptions& o) {
          "car's panels of the road's colour (0: off; needs densify's maps and the mesh)")
       .Range(0, 100)
       .Alternative("0");
+  t.Real("--driven", &o.driven.half_width,
+         "Surfaces standing where a drive's car passed are not static: pixels the photo's own "
+         "depth and the mesh put in one place (see --driven-agree) within W x the camera's "
+         "height of a drive's path, across it, between --driven-above and --driven-below x the "
+         "camera's height above the road: a car parked at the kerb of a lane another drive "
+         "took, a vehicle waiting ahead (0: off; needs densify's maps and the mesh)")
+      .Range(0, 10)
+      .Alternative("0");
+  t.Real("--driven-above", &o.driven.above,
+         "With --driven: the lowest surface counted, x the camera's height above the road (not "
+         "kerbs, speed bumps)")
+      .Range(0, 10)
+      .Alternative("0.3");
+  t.Real("--driven-below", &o.driven.below,
+         "With --driven: the highest surface counted, x the camera's height above the road (a "
+         "car's roof; not branches or signs over the road)")
+      .Range(0, 10, true, false)
+      .Alternative("2");
+  t.Real("--driven-agree", &o.driven.agree,
+         "With --driven: a pixel counts where densify's depth of the photo is the mesh's within "
+         "this (relative): a surface several photos saw in one place, not one photo's stereo "
+         "mistake")
+      .Range(0, 1, true, true)
+      .Alternative("0.2");
   t.Real("--max-fill", &o.max_fill,
          "In a blob more than S of whose pixels see a corridor wall that roadmesh --dense put "
          "behind a hole of the fused facades (a guessed depth), those pixels are cleared (1: off)")
@@ -222,6 +246,8 @@ OptionTable DeclareOptions(DynmaskOptions& o) {
 
 void DynmaskOptions::Check() const {
   CheckDeclared(*this);
+  if (driven.half_width > 0 && !(driven.below > driven.above))
+    throw UsageError("--driven-below: must be above --driven-above");
   evidence.Check();
   mask.Check();
   TrackOptions t = track;
@@ -241,6 +267,7 @@ struct Scene {
   std::vector<Camera> full, work;
   std::map<std::string, std::vector<size_t>> drives;  // PassOf → its images, in name order
   Eigen::Vector3d up = Eigen::Vector3d::Zero();       // the drive's up (unit, world)
+  std::vector<std::vector<Eigen::Vector3d>> paths;    // DrivenPaths: where the drives' cars went
 };
 
 Scene LoadScene(const Workspace& ws, int max_width) {
@@ -289,6 +316,26 @@ std::map<std::string, double> DriveSpacings(const Scene& s) {
     std::vector<Rigid3d> w2c;
     for (size_t i : idx) w2c.push_back(s.images[i]->world_to_camera);
     out[name] = MedianSpacing(w2c);
+  }
+  return out;
+}
+
+// Where each drive's car went (--driven): its camera centres in name order, broken where two
+// consecutive ones lie more than 5 median spacings of the drive apart (a drive registered in two
+// pieces, or photos missing: the car's way between them is not known).
+std::vector<std::vector<Eigen::Vector3d>> DrivenPaths(const Scene& s) {
+  std::vector<std::vector<Eigen::Vector3d>> out;
+  for (const auto& [name, spacing] : DriveSpacings(s)) {
+    std::vector<Eigen::Vector3d> piece;
+    for (size_t i : s.drives.at(name)) {
+      const Eigen::Vector3d c = s.images[i]->world_to_camera.Centre();
+      if (!piece.empty() && (c - piece.back()).norm() > 5 * spacing) {
+        out.push_back(std::move(piece));
+        piece.clear();
+      }
+      piece.push_back(c);
+    }
+    out.push_back(std::move(piece));
   }
   return out;
 }
@@ -720,7 +767,8 @@ void JudgeBlobs(const DynmaskOptions& o, const Scene& s, const DepthProvider& d,
   const bool tests = o.min_height > 0 || o.seen_tolerance > 0 || o.occludes > 0 || o.max_fill < 1;
   // Completion needs what the photo saw: explained pixels are its sure background.
   const bool complete = o.complete > 0 && d.UsesMesh();
-  if (!tests && !complete) return;
+  const bool driven = o.driven.half_width > 0 && d.UsesMesh();
+  if (!tests && !complete && !driven) return;
   DynamicView t = cache.Get(i);
   // The photo's own map against the mesh's depth; with densify's maps as the static depth they
   // are one map and explain nothing, and a vehicle parked in this drive is in that "static"
@@ -735,6 +783,13 @@ void JudgeBlobs(const DynmaskOptions& o, const Scene& s, const DepthProvider& d,
     rep.lying += size_t(c.lying), rep.surface += size_t(c.surface);
     rep.guessed += size_t(c.guessed);
     rep.explained += c.explained;
+  }
+  // After the tests: a parked vehicle is in the mesh when no drive's masks left it out (its
+  // pixels explained, its blob on the static surface), yet it stood where a car drove.
+  if (driven) {
+    DrivenSpace ds = o.driven;
+    ds.open = o.mask.open, ds.min_area = o.mask.min_area;
+    rep.driven += MarkDriven(t, s.paths, s.up, ds, probability);
   }
   if (complete) {
     BlobCompletion bc;
@@ -955,7 +1010,8 @@ DynmaskReport RunDynmask(const DynmaskOptions& o) {
   const Workspace ws(o.workspace);
   ws.Require("dynmask", {WsItem::kSparse, WsItem::kImages});
   const DepthProvider depth(ws, o.depth, o.max_fill < 1);
-  const Scene s = LoadScene(ws, o.max_width);
+  Scene s = LoadScene(ws, o.max_width);
+  if (o.driven.half_width > 0) s.paths = DrivenPaths(s);
   Pairing pair{ChooseNeighbours(s, o.neighbours, o.min_baseline),
                ChoosePartners(s, o.partners, o.partners_ahead),
                {}};

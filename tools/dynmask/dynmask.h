@@ -37,6 +37,7 @@ struct DynmaskOptions : WorkOptions {
   double occlusion_gap = 0.25;   // ... beyond their foot's depth by this (relative)
   double max_fill = 0.5;  // blobs with more of their pixels on corridor walls: cleared there; 1 off
   double complete = 3;    // blobs completed by GrabCut, growing at most this × their area; 0 off
+  DrivenSpace driven;     // --driven (0 off), --driven-above/-below/-agree: where cars drove
   DynamicOptions evidence;  // --threshold, --flow/--no-flow, --quantile, ...
   MaskOptions mask;         // --probability, --open, --close, --min-area
   TrackOptions track;       // segtrack's tracking options (defaults: the constructor)
@@ -71,6 +72,7 @@ struct DynmaskReport {
   size_t guessed = 0;        // blobs removed: mostly on a corridor wall (a guessed depth)
   size_t explained = 0;      // pixels cleared: the photo's own depth is the static depth there
   size_t completed = 0;      // blobs grown by GrabCut (--complete)
+  size_t driven = 0;         // pixels raised: seen where a drive's car passed (--driven)
   bool masked = false;       // masks and tracks.tsv were (re)made
   size_t masks_written = 0;
   TrackSummary summary;

@@ -40,6 +40,8 @@ int RunAndReport(mvtm::DynmaskOptions& o) {
                  r.guessed);
   if (r.explained)
     std::fprintf(stderr, "; %zu pixels the photo's own depth explains cleared", r.explained);
+  if (r.driven)
+    std::fprintf(stderr, "; %zu pixels seen where a drive's car passed raised", r.driven);
   if (r.completed) std::fprintf(stderr, "; %zu blobs completed from their colours", r.completed);
   if (r.no_neighbours)
     std::fprintf(stderr, "; %zu images seen by no other photo (nothing masked)", r.no_neighbours);

@@ -644,6 +644,104 @@ TEST(Dynamic, BlobsAreCompletedFromTheirColoursNeverIntoExplainedPixels) {
   EXPECT_THROW(CompleteBlobs(t, ExactBlobs(), {}, p), Error);
 }
 
+// A vehicle's rear standing 10 m ahead, 1 m either side of the camera's line and 1.4 m high
+// (world x -1..1, y 0.25..1.65 under the camera's y-down axes, z 10): the static depth and the
+// photo's own depth both see it. Hand-derived: its pixels are columns 108..131 (x = (col + 0.5 -
+// 120) / 120 × 10 within +-1) and rows 53..69; the rows whose point rises more than 0.15 × 1.65
+// = 0.2475 m above the road are 53..66 (row 66: 1.65 - 16.5 / 12 = 0.275 m; row 67: 0.192 m),
+// all below 1.2 × 1.65: 14 × 24 = 336 pixels.
+DynamicView StandingFaceView(double x0, double x1) {
+  DynamicView v = MakeView(0, nullptr);
+  const Camera& c = v.camera;
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const double X = (x + 0.5 - c.cx()) / c.fx() * 10, Y = (y + 0.5 - c.cy()) / c.fy() * 10;
+      if (X >= x0 && X <= x1 && Y >= 0.25 && Y <= kHeight) v.depth.at<float>(y, x) = 10;
+    }
+  v.seen = v.depth.clone();
+  return v;
+}
+
+// Camera centres along the camera's line (world x 0, y 0) from z0 to z1, every 2 m.
+std::vector<std::vector<Eigen::Vector3d>> StraightPath(double z0, double z1) {
+  std::vector<Eigen::Vector3d> p;
+  for (double z = z0; z <= z1 + 1e-9; z += 2) p.emplace_back(0, 0, z);
+  return {p};
+}
+
+TEST(Dynamic, SurfacesStandingWhereACarDroveAreMarked) {
+  const Eigen::Vector3d up(0, -1, 0);
+  DrivenSpace exact;  // no opening, no size limit: the pixels as they are
+  exact.open = 0, exact.min_area = 0;
+  const auto run = [&](const DynamicView& v, const std::vector<std::vector<Eigen::Vector3d>>& paths,
+                       const DrivenSpace& o, const Eigen::Vector3d& u) {
+    cv::Mat p(kH, kW, CV_32F, 0.f);
+    const size_t n = MarkDriven(v, paths, u, o, p);
+    EXPECT_EQ(size_t(cv::countNonZero(p == 1.f)), n);
+    return p;
+  };
+  const DynamicView face = StandingFaceView(-1, 1);
+  cv::Mat p = run(face, StraightPath(-10, 30), exact, up);
+  const cv::Rect truth(108, 53, 24, 14);
+  EXPECT_EQ(cv::countNonZero(p(truth) == 1.f), 336);
+  EXPECT_EQ(cv::countNonZero(p == 1.f), 336);
+  // Where no car drove: the path ends 1 m before it, or begins 1 m after it (within 1.65 m of
+  // the path's end, but beyond it); it begins 5 m before it (the camera itself off the path:
+  // the face still beside it).
+  EXPECT_EQ(cv::countNonZero(run(face, StraightPath(-21, 9), exact, up)), 0);
+  EXPECT_EQ(cv::countNonZero(run(face, StraightPath(11, 31), exact, up)), 0);
+  EXPECT_EQ(cv::countNonZero(run(face, StraightPath(5, 30), exact, up) == 1.f), 336);
+  // A face 2 to 4 m to the side: beyond 1 × 1.65 m of the path, within 2.5 × 1.65 m (columns
+  // 144..167).
+  const DynamicView side = StandingFaceView(2, 4);
+  EXPECT_EQ(cv::countNonZero(run(side, StraightPath(-10, 30), exact, up)), 0);
+  DrivenSpace wide = exact;
+  wide.half_width = 2.5;
+  p = run(side, StraightPath(-10, 30), wide, up);
+  EXPECT_EQ(cv::countNonZero(p(cv::Rect(144, 53, 24, 14)) == 1.f), 336);
+  EXPECT_EQ(cv::countNonZero(p), 336);
+  // The photo saw it but the mesh has the road there (a lone photo's stereo mistake), or the
+  // photo saw nothing: nothing marked. The road alone: nothing.
+  DynamicView lone = face;
+  lone.depth = MakeView(0, nullptr).depth;
+  EXPECT_EQ(cv::countNonZero(run(lone, StraightPath(-10, 30), exact, up)), 0);
+  lone = face;
+  lone.seen = cv::Mat();
+  EXPECT_EQ(cv::countNonZero(run(lone, StraightPath(-10, 30), exact, up)), 0);
+  DynamicView road = MakeView(0, nullptr);
+  road.seen = road.depth.clone();
+  EXPECT_EQ(cv::countNonZero(run(road, StraightPath(-10, 30), exact, up)), 0);
+  // Specks go with the masks' opening and size limit; the face stays but for the corners the
+  // opening's cross takes.
+  DrivenSpace masks;
+  DynamicView speck = StandingFaceView(-0.1, 0.0);  // one column wide
+  EXPECT_EQ(cv::countNonZero(run(speck, StraightPath(-10, 30), masks, up)), 0);
+  EXPECT_EQ(cv::countNonZero(run(face, StraightPath(-10, 30), masks, up)), 336 - 4);
+  // The same in a similar world (turned, scaled by 0.2, at UTM-sized coordinates).
+  const Eigen::Quaterniond q = SimilarWorldRotation();
+  DynamicView moved = InSimilarWorld(face, q);
+  moved.seen = face.seen * 0.2;
+  std::vector<std::vector<Eigen::Vector3d>> paths = StraightPath(-10, 30);
+  for (Eigen::Vector3d& c : paths[0]) c = q * (0.2 * c) + Eigen::Vector3d(451000, 120, 5410000);
+  p = run(moved, paths, exact, q * up);
+  EXPECT_EQ(cv::countNonZero(p(truth) == 1.f), 336);
+  EXPECT_EQ(cv::countNonZero(p), 336);
+  DrivenSpace bad = exact;
+  bad.agree = 0;
+  EXPECT_THROW(run(face, paths, bad, up), Error);
+}
+
+TEST(Dynamic, AWholeImageBlobIsNotCompleted) {
+  // Nothing outside it to model the background from (a full mask): left as it is.
+  DynamicView t = MakeView(10, nullptr);
+  t.colour = cv::Mat(kH, kW, CV_8UC3, cv::Scalar(90, 120, 60));
+  t.seen = t.depth.clone();
+  t.seen.setTo(std::numeric_limits<float>::infinity());
+  cv::Mat p(kH, kW, CV_32F, 1.f);
+  EXPECT_EQ(CompleteBlobs(t, ExactBlobs(), {}, p), 0);
+  EXPECT_EQ(cv::countNonZero(p == 1.f), kW * kH);
+}
+
 TEST(Dynamic, BadInputs) {
   DynamicView t = MakeView(10, nullptr);
   t.depth = cv::Mat(10, 10, CV_32F, 1.f);
