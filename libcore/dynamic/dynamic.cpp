@@ -679,7 +679,8 @@ int CompleteBlobs(const DynamicView& t, const MaskOptions& mask, const BlobCompl
     gc.setTo(cv::GC_PR_FGD, blob);  // the blob's own pixels, explained or on the border, too
     gc.setTo(cv::GC_FGD, core);
     // A blob filling its box (a full mask): no background to model its colours against.
-    if (cv::countNonZero((gc == cv::GC_BGD) | (gc == cv::GC_PR_BGD)) == 0) continue;
+    // (GrabCut's colour models are k-means of 5 clusters: fewer samples than that throw.)
+    if (cv::countNonZero((gc == cv::GC_BGD) | (gc == cv::GC_PR_BGD)) < 5) continue;
     cv::Mat bg, fg;
     // GrabCut starts its colour models with k-means from OpenCV's thread's generator: seeded per
     // blob (and put back after), a blob's completion does not depend on what ran before it.
@@ -719,34 +720,44 @@ int CompleteBlobs(const DynamicView& t, const MaskOptions& mask, const BlobCompl
 namespace mvtm {
 namespace {
 
-// A stretch of a path in the target's camera coordinates: its ends across `up` (a, b) and their
-// heights along it; `first`/`last`: the piece of path begins or ends there (not beyond it).
+// A stretch of a path in the target's camera coordinates: its ends across up (a, b), the road's
+// height along up under them (road_a, road_b), the drive's camera height; `first`/`last`: the
+// path begins or ends there (nothing beyond it is beside it).
 struct DrivenSegment {
   Eigen::Vector3d a, b;
-  double ha = 0, hb = 0;
+  double road_a = 0, road_b = 0, height = 0;
   bool first = false, last = false;
 };
 
-// The paths' stretches within `reach` (across up) of the target's camera centre, in its camera
-// coordinates.
+// The paths' stretches within far + half_width × their camera's height (across up) of the
+// target's camera centre, in its camera coordinates. Centres repeated (within 1e-6 of the camera's
+// height) are taken once: a car that stood still has no way there.
 std::vector<DrivenSegment> DrivenSegments(const Rigid3d& w2c, const Eigen::Vector3d& up_cam,
-                                          const std::vector<std::vector<Eigen::Vector3d>>& paths,
-                                          double reach) {
+                                          const std::vector<DrivenPath>& paths, double far,
+                                          double half_width) {
   const auto across = [&](const Eigen::Vector3d& p) {
     return Eigen::Vector3d(p - p.dot(up_cam) * up_cam);
   };
   std::vector<DrivenSegment> out;
-  for (const std::vector<Eigen::Vector3d>& path : paths) {
+  for (const DrivenPath& path : paths) {
+    if (!(path.height > 0)) continue;
     std::vector<Eigen::Vector3d> c;
-    for (const Eigen::Vector3d& w : path) c.push_back(w2c * w);
+    for (const Eigen::Vector3d& w : path.centres) {
+      const Eigen::Vector3d x = w2c * w;
+      if (c.empty() || (x - c.back()).norm() > 1e-6 * path.height) c.push_back(x);
+    }
     for (size_t k = 0; k + 1 < c.size(); ++k) {
-      DrivenSegment s{across(c[k]),         across(c[k + 1]), c[k].dot(up_cam),
-                      c[k + 1].dot(up_cam), k == 0,           k + 2 == c.size()};
+      DrivenSegment s{across(c[k]),
+                      across(c[k + 1]),
+                      c[k].dot(up_cam) - path.height,
+                      c[k + 1].dot(up_cam) - path.height,
+                      path.height,
+                      k == 0,
+                      k + 2 == c.size()};
       // Distance of the camera centre (the origin) to the stretch, across up.
       const Eigen::Vector3d d = s.b - s.a;
-      const double l2 = d.squaredNorm();
-      const double t = l2 > 0 ? std::clamp(-s.a.dot(d) / l2, 0.0, 1.0) : 0.0;
-      if ((s.a + t * d).norm() <= reach) out.push_back(s);
+      const double t = std::clamp(-s.a.dot(d) / d.squaredNorm(), 0.0, 1.0);
+      if ((s.a + t * d).norm() <= far + half_width * s.height) out.push_back(s);
     }
   }
   return out;
@@ -758,42 +769,53 @@ Eigen::Vector3d PointAt(const Camera& c, const cv::Mat& z, int x, int y) {
   return {(x + 0.5 - c.cx()) / c.fx() * d, (y + 0.5 - c.cy()) / c.fy() * d, d};
 }
 
-// The pixels (255) whose seen point is the static one (within o.agree) and lies in the driven
-// space: within half_width × height of a stretch across up (beside it, not beyond a path's
-// ends), between above and below × height over the road there.
+// Whether the seen point of (x, y) is the static one (within o.agree).
+bool Agrees(const DynamicView& t, double agree, int x, int y) {
+  const float z = t.seen.at<float>(y, x), zs = t.depth.at<float>(y, x);
+  return HasDepth(z) && HasDepth(zs) && std::abs(z - zs) <= agree * zs;
+}
+
+// The pixels (255) whose seen point is the static one and lies in the driven space of some
+// stretch: within half_width × its camera's height of it across up (beside it: not beyond a
+// path's first or last centre), between above and below × that height over the road there.
 cv::Mat DrivenPixels(const DynamicView& t, const Eigen::Vector3d& up_cam,
-                     const std::vector<DrivenSegment>& segs, const DrivenSpace& o, double height) {
-  const cv::Mat& seen = t.seen;
-  cv::Mat marked(seen.size(), CV_8U, cv::Scalar(0));
-  const double width = o.half_width * height;
-  for (int y = 0; y < seen.rows; ++y)
-    for (int x = 0; x < seen.cols; ++x) {
-      const float z = seen.at<float>(y, x), zs = t.depth.at<float>(y, x);
-      if (!HasDepth(z) || !HasDepth(zs) || std::abs(z - zs) > o.agree * zs) continue;
-      const Eigen::Vector3d p = PointAt(t.camera, seen, x, y);
-      const double hp = p.dot(up_cam);
-      const Eigen::Vector3d ph = p - hp * up_cam;
-      double best = std::numeric_limits<double>::infinity(), road = 0;
-      bool beside = false;
-      for (const DrivenSegment& s : segs) {
-        const Eigen::Vector3d d = s.b - s.a;
-        const double l2 = d.squaredNorm();
-        const double u = l2 > 0 ? (ph - s.a).dot(d) / l2 : 0.0;
-        const double uc = std::clamp(u, 0.0, 1.0);
-        const double dist = (ph - s.a - uc * d).norm();
-        if (dist >= best) continue;
-        best = dist, road = s.ha + uc * (s.hb - s.ha) - height;
-        beside = !((s.first && u < 0) || (s.last && u > 1));
+                     const std::vector<DrivenSegment>& segs, const DrivenSpace& o) {
+  cv::Mat marked(t.seen.size(), CV_8U, cv::Scalar(0));
+  // The heights along up where a stretch's space can be: a pixel outside them (the road, the
+  // facades' upper floors, the sky) needs no search.
+  double low = std::numeric_limits<double>::infinity(), high = -low;
+  for (const DrivenSegment& s : segs) {
+    low = std::min({low, s.road_a + o.above * s.height, s.road_b + o.above * s.height});
+    high = std::max({high, s.road_a + o.below * s.height, s.road_b + o.below * s.height});
+  }
+  cv::parallel_for_(cv::Range(0, t.seen.rows), [&](const cv::Range& rows) {
+    for (int y = rows.start; y < rows.end; ++y)
+      for (int x = 0; x < t.seen.cols; ++x) {
+        if (!Agrees(t, o.agree, x, y)) continue;
+        const Eigen::Vector3d p = PointAt(t.camera, t.seen, x, y);
+        const double hp = p.dot(up_cam);
+        if (hp <= low || hp >= high) continue;
+        const Eigen::Vector3d ph = p - hp * up_cam;
+        for (const DrivenSegment& s : segs) {
+          const Eigen::Vector3d d = s.b - s.a;
+          const double u = (ph - s.a).dot(d) / d.squaredNorm();
+          if ((s.first && u < 0) || (s.last && u > 1)) continue;
+          const double uc = std::clamp(u, 0.0, 1.0);
+          if ((ph - s.a - uc * d).norm() > o.half_width * s.height) continue;
+          const double rise = (hp - (s.road_a + uc * (s.road_b - s.road_a))) / s.height;
+          if (rise > o.above && rise < o.below) {
+            marked.at<uint8_t>(y, x) = 255;
+            break;
+          }
+        }
       }
-      const double r = (hp - road) / height;
-      if (beside && best <= width && r > o.above && r < o.below) marked.at<uint8_t>(y, x) = 255;
-    }
+  });
   return marked;
 }
 
 }  // namespace
 
-size_t MarkDriven(const DynamicView& t, const std::vector<std::vector<Eigen::Vector3d>>& paths,
+size_t MarkDriven(const DynamicView& t, const std::vector<DrivenPath>& paths,
                   const Eigen::Vector3d& up, const DrivenSpace& o, cv::Mat& probability) {
   if (!(o.half_width > 0) || !(o.above >= 0) || !(o.below > o.above) ||
       !(o.agree > 0 && o.agree < 1) || o.open < 0 || !(o.min_area >= 0 && o.min_area < 1))
@@ -803,17 +825,16 @@ size_t MarkDriven(const DynamicView& t, const std::vector<std::vector<Eigen::Vec
     throw Error("target view: the probability must be float of the depth's size");
   if (t.seen.empty()) return 0;
   const Eigen::Vector3d up_cam = t.world_to_camera.R() * up.normalized();
-  const double height = -GroundBelow(t, up_cam);
-  if (!std::isfinite(height)) return 0;
+  // The stretches that can hold an agreeing point: within its distance (plus the space's width,
+  // added per stretch) of the camera.
   double far = 0;
   for (int y = 0; y < t.seen.rows; ++y)
     for (int x = 0; x < t.seen.cols; ++x)
-      if (HasDepth(t.seen.at<float>(y, x)))
-        far = std::max(far, PointAt(t.camera, t.seen, x, y).norm());
+      if (Agrees(t, o.agree, x, y)) far = std::max(far, PointAt(t.camera, t.seen, x, y).norm());
   const std::vector<DrivenSegment> segs =
-      DrivenSegments(t.world_to_camera, up_cam, paths, far + o.half_width * height);
+      DrivenSegments(t.world_to_camera, up_cam, paths, far, o.half_width);
   if (segs.empty()) return 0;
-  cv::Mat marked = DrivenPixels(t, up_cam, segs, o, height);
+  cv::Mat marked = DrivenPixels(t, up_cam, segs, o);
   // A stray depth is a speck; a vehicle a surface: specks go as the masks' do (an opening, then
   // blobs under min_area).
   if (o.open > 0)

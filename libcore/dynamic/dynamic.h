@@ -248,22 +248,23 @@ int CompleteBlobs(const DynamicView& target, const MaskOptions& mask, const Blob
 // of a lane around its path and up to about the car's height above the road, was empty when it
 // passed. A static surface there (one the photo saw and the static reconstruction agrees with:
 // several photos saw it in one place) is a vehicle, a cyclist or a pedestrian that stood still
-// long enough to be fused, and was gone when the car passed (or came after it): a car parked at
-// the kerb of a lane another drive took, a vehicle waiting ahead. Such a vehicle is as
-// consistent as the road in the photos of one drive; its place, not its appearance, gives it
-// away. Every pixel whose seen point (`target.seen`, densify's map) is the static one (depth
-// within `agree` of `target.depth`, relative: a lone photo's stereo mistake, such as a wet
-// patch's reflection read as a surface, is not in the fused mesh) and lies within `half_width`
-// × the camera's height of a path across it (measured across `up`), beside the path's stretch
-// (not beyond its ends), and between `above` and `below` × the camera's height above the road
-// under the path there (the path's height there less the camera's height) gets probability 1,
-// after the marked pixels are opened (radius `open`) and their blobs under `min_area` of the
-// image dropped, as the masks' are. A path is the camera centres of a drive in the order it took
-// them (a drive registered in two pieces is two paths: the caller breaks it, so that it does not
-// sweep across what lies between). The camera's height above the road is KeepGrounded's (the
-// static depth's lower middle); without it, or without `target.seen`, nothing is marked. Returns
-// the number of pixels raised. Throws Error on options out of range or a probability not float
-// of the depth's size.
+// long enough to be fused, and was gone when the car passed (or came after it): a car parked in
+// a lane another drive took, a vehicle waiting ahead. Such a vehicle is as consistent as the
+// road in the photos of one drive; its place, not its appearance, gives it away.
+// A path is the camera centres of one drive in the order it took them (a drive registered in
+// two pieces is two paths: the caller breaks it, so that it does not sweep across what lies
+// between; centres repeated where the car stood are taken once) and the camera's height above
+// the road (model units, > 0; a path without one is skipped): the road under the path is that
+// far below its centres along `up`, whatever the grade. Every pixel whose seen point
+// (`target.seen`, densify's map) is the static one (depth within `agree` of `target.depth`,
+// relative: a lone photo's stereo mistake, such as a wet patch's reflection read as a surface,
+// is not in the fused mesh) and lies, for some stretch of some path, within `half_width` × that
+// path's camera height of it (measured across `up`), beside it (not beyond the path's first or
+// last centre) and between `above` and `below` × that height above the road under it there,
+// gets probability 1, after the marked pixels are opened (radius `open`) and their blobs under
+// `min_area` of the image dropped, as the masks' are. Without `target.seen` nothing is marked.
+// Returns the number of pixels raised. Throws Error on options out of range or a probability
+// not float of the depth's size.
 struct DrivenSpace {
   double half_width = 1.0;  // × the camera's height, > 0: a lane's half-width for a dashcam
   double above = 0.15;      // × the camera's height above the road, >= 0: not kerbs, bumps
@@ -272,7 +273,11 @@ struct DrivenSpace {
   int open = 1;             // the marked pixels' opening radius (pixels), >= 0
   double min_area = 2e-4;   // ... and their blobs under this share of the image go, [0, 1)
 };
-size_t MarkDriven(const DynamicView& target, const std::vector<std::vector<Eigen::Vector3d>>& paths,
+struct DrivenPath {
+  std::vector<Eigen::Vector3d> centres;  // world, in the order the drive took them
+  double height = 0;                     // the camera's height above the road, model units
+};
+size_t MarkDriven(const DynamicView& target, const std::vector<DrivenPath>& paths,
                   const Eigen::Vector3d& up, const DrivenSpace& options, cv::Mat& probability);
 
 }  // namespace mvtm

@@ -3,9 +3,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <memory>
+#include <numeric>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 
 #include "base/atomic_file.h"
 #include "base/error.h"
@@ -104,9 +107,10 @@ void DeclareStandingOptions(OptionTable& t, DynmaskOptions& o) {
   t.Real("--driven", &o.driven.half_width,
          "Surfaces standing where a drive's car passed are not static: pixels the photo's own "
          "depth and the mesh put in one place (see --driven-agree) within W x the camera's "
-         "height of a drive's path, across it, between --driven-above and --driven-below x the "
-         "camera's height above the road: a car parked at the kerb of a lane another drive "
-         "took, a vehicle waiting ahead (0: off; needs densify's maps and the mesh)")
+         "height of a drive's path, across it and beside it (not beyond its first or last "
+         "photo), between --driven-above and --driven-below x the camera's height above the "
+         "road: a car parked in a lane another drive took, a vehicle waiting ahead (0: off; "
+         "needs densify's maps and the mesh)")
       .Range(0, 10)
       .Alternative("0");
   t.Real("--driven-above", &o.driven.above,
@@ -267,7 +271,7 @@ struct Scene {
   std::vector<Camera> full, work;
   std::map<std::string, std::vector<size_t>> drives;  // PassOf → its images, in name order
   Eigen::Vector3d up = Eigen::Vector3d::Zero();       // the drive's up (unit, world)
-  std::vector<std::vector<Eigen::Vector3d>> paths;    // DrivenPaths: where the drives' cars went
+  std::vector<DrivenPath> paths;                      // DrivenPaths: where the drives' cars went
 };
 
 Scene LoadScene(const Workspace& ws, int max_width) {
@@ -316,26 +320,6 @@ std::map<std::string, double> DriveSpacings(const Scene& s) {
     std::vector<Rigid3d> w2c;
     for (size_t i : idx) w2c.push_back(s.images[i]->world_to_camera);
     out[name] = MedianSpacing(w2c);
-  }
-  return out;
-}
-
-// Where each drive's car went (--driven): its camera centres in name order, broken where two
-// consecutive ones lie more than 5 median spacings of the drive apart (a drive registered in two
-// pieces, or photos missing: the car's way between them is not known).
-std::vector<std::vector<Eigen::Vector3d>> DrivenPaths(const Scene& s) {
-  std::vector<std::vector<Eigen::Vector3d>> out;
-  for (const auto& [name, spacing] : DriveSpacings(s)) {
-    std::vector<Eigen::Vector3d> piece;
-    for (size_t i : s.drives.at(name)) {
-      const Eigen::Vector3d c = s.images[i]->world_to_camera.Centre();
-      if (!piece.empty() && (c - piece.back()).norm() > 5 * spacing) {
-        out.push_back(std::move(piece));
-        piece.clear();
-      }
-      piece.push_back(c);
-    }
-    out.push_back(std::move(piece));
   }
   return out;
 }
@@ -519,6 +503,11 @@ class DepthProvider {
     return "mesh (ray-cast; " + std::to_string(walls_) + " of its faces corridor walls)";
   }
   bool UsesMesh() const { return use_mesh_; }
+  // How far below `c` (along -up, unit) the mesh is; NaN without a mesh or a surface there.
+  double Below(const Eigen::Vector3d& c, const Eigen::Vector3d& up) const {
+    const auto hit = caster_ ? caster_->Closest(c, -up) : std::nullopt;
+    return hit ? hit->t : std::numeric_limits<double>::quiet_NaN();
+  }
   fs::path Input(const std::string& name) const {
     return use_mesh_ ? ws_.MeshPath() : ws_.StereoDepthPath(name);
   }
@@ -535,6 +524,48 @@ class DepthProvider {
   size_t walls_ = 0;            // its faces of kind kFaceFillWall
   std::unique_ptr<MeshRaycaster> caster_;
 };
+
+// Where each drive's car went (--driven): its camera centres in name order, those within a tenth
+// of the drive's spacing of the last one kept left out (a car standing still, pose jitter), broken
+// where two consecutive ones lie more than 5 spacings apart (a drive registered in two pieces,
+// photos missing: the car's way between them is not known); the spacing is the median step
+// between consecutive centres, steps under a hundredth of the mean left out (a car that stood
+// still half the time). The camera's height above the road: the median over the drive's photos
+// of how far below its centre the mesh is (a drive whose centres have nothing below: none).
+std::vector<DrivenPath> DrivenPaths(const Scene& s, const DepthProvider& d) {
+  std::vector<DrivenPath> out;
+  for (const auto& [name, idx] : s.drives) {
+    std::vector<Eigen::Vector3d> c;
+    std::vector<double> steps, below;
+    for (size_t i : idx) {
+      c.push_back(s.images[i]->world_to_camera.Centre());
+      if (c.size() > 1) steps.push_back((c.back() - c[c.size() - 2]).norm());
+      const double h = d.Below(c.back(), s.up);
+      if (std::isfinite(h)) below.push_back(h);
+    }
+    if (below.empty() || steps.empty()) continue;
+    const double mean = std::accumulate(steps.begin(), steps.end(), 0.0) / double(steps.size());
+    steps.erase(
+        std::remove_if(steps.begin(), steps.end(), [&](double v) { return v < 0.01 * mean; }),
+        steps.end());
+    if (steps.empty()) continue;
+    std::nth_element(steps.begin(), steps.begin() + long(steps.size() / 2), steps.end());
+    std::nth_element(below.begin(), below.begin() + long(below.size() / 2), below.end());
+    const double spacing = steps[steps.size() / 2], height = below[below.size() / 2];
+    DrivenPath piece{{c.front()}, height};
+    for (size_t k = 1; k < c.size(); ++k) {
+      const double step = (c[k] - piece.centres.back()).norm();
+      if (step < 0.1 * spacing) continue;
+      if (step > 5 * spacing) {
+        out.push_back(piece);
+        piece.centres.clear();
+      }
+      piece.centres.push_back(c[k]);
+    }
+    out.push_back(piece);
+  }
+  return out;
+}
 
 // densify's depth map of an image (what its photo saw) at the working size; empty when densify
 // made none.
@@ -732,9 +763,10 @@ std::vector<Job> StaleMaps(const DynmaskOptions& o, const Workspace& ws, const S
     };
     job.in.push_back(ws.ImagePath(s.images[i]->name));
     job.in.push_back(d.Input(s.images[i]->name));
-    // --seen-tolerance and --complete read the photo's own map.
+    // --seen-tolerance, --complete and --driven read the photo's own map.
     const fs::path own = ws.StereoDepthPath(s.images[i]->name);
-    if ((o.seen_tolerance > 0 || o.complete > 0) && d.UsesMesh() && fs::exists(own))
+    if ((o.seen_tolerance > 0 || o.complete > 0 || o.driven.half_width > 0) && d.UsesMesh() &&
+        fs::exists(own))
       job.in.push_back(own);
     const auto seen = [&](size_t j) {  // a partner's or a vetoing photo's densify map
       const fs::path p = ws.StereoDepthPath(s.images[j]->name);
@@ -1011,7 +1043,7 @@ DynmaskReport RunDynmask(const DynmaskOptions& o) {
   ws.Require("dynmask", {WsItem::kSparse, WsItem::kImages});
   const DepthProvider depth(ws, o.depth, o.max_fill < 1);
   Scene s = LoadScene(ws, o.max_width);
-  if (o.driven.half_width > 0) s.paths = DrivenPaths(s);
+  if (o.driven.half_width > 0 && depth.UsesMesh()) s.paths = DrivenPaths(s, depth);
   Pairing pair{ChooseNeighbours(s, o.neighbours, o.min_baseline),
                ChoosePartners(s, o.partners, o.partners_ahead),
                {}};

@@ -662,73 +662,99 @@ DynamicView StandingFaceView(double x0, double x1) {
   return v;
 }
 
-// Camera centres along the camera's line (world x 0, y 0) from z0 to z1, every 2 m.
-std::vector<std::vector<Eigen::Vector3d>> StraightPath(double z0, double z1) {
-  std::vector<Eigen::Vector3d> p;
-  for (double z = z0; z <= z1 + 1e-9; z += 2) p.emplace_back(0, 0, z);
-  return {p};
+// Camera centres along the camera's line (world x 0, y `y`) from z0 to z1, every 2 m, 1.65 m
+// above their road.
+DrivenPath StraightPath(double z0, double z1, double y = 0) {
+  DrivenPath p;
+  for (double z = z0; z <= z1 + 1e-9; z += 2) p.centres.emplace_back(0, y, z);
+  p.height = kHeight;
+  return p;
 }
 
 TEST(Dynamic, SurfacesStandingWhereACarDroveAreMarked) {
   const Eigen::Vector3d up(0, -1, 0);
   DrivenSpace exact;  // no opening, no size limit: the pixels as they are
   exact.open = 0, exact.min_area = 0;
-  const auto run = [&](const DynamicView& v, const std::vector<std::vector<Eigen::Vector3d>>& paths,
+  const auto run = [&](const DynamicView& v, const std::vector<DrivenPath>& paths,
                        const DrivenSpace& o, const Eigen::Vector3d& u) {
     cv::Mat p(kH, kW, CV_32F, 0.f);
     const size_t n = MarkDriven(v, paths, u, o, p);
     EXPECT_EQ(size_t(cv::countNonZero(p == 1.f)), n);
     return p;
   };
+  const auto count = [&](const DynamicView& v, const std::vector<DrivenPath>& paths,
+                         const DrivenSpace& o) { return cv::countNonZero(run(v, paths, o, up)); };
   const DynamicView face = StandingFaceView(-1, 1);
-  cv::Mat p = run(face, StraightPath(-10, 30), exact, up);
+  cv::Mat p = run(face, {StraightPath(-10, 30)}, exact, up);
   const cv::Rect truth(108, 53, 24, 14);
   EXPECT_EQ(cv::countNonZero(p(truth) == 1.f), 336);
   EXPECT_EQ(cv::countNonZero(p == 1.f), 336);
   // Where no car drove: the path ends 1 m before it, or begins 1 m after it (within 1.65 m of
-  // the path's end, but beyond it); it begins 5 m before it (the camera itself off the path:
-  // the face still beside it).
-  EXPECT_EQ(cv::countNonZero(run(face, StraightPath(-21, 9), exact, up)), 0);
-  EXPECT_EQ(cv::countNonZero(run(face, StraightPath(11, 31), exact, up)), 0);
-  EXPECT_EQ(cv::countNonZero(run(face, StraightPath(5, 30), exact, up) == 1.f), 336);
+  // the path's end, but beyond it), also where the car stood still at its end; it begins 5 m
+  // before it (the camera itself off the path: the face still beside it); a second path that
+  // passes it marks it whatever the first does.
+  EXPECT_EQ(count(face, {StraightPath(-21, 9)}, exact), 0);
+  EXPECT_EQ(count(face, {StraightPath(11, 31)}, exact), 0);
+  DrivenPath stood = StraightPath(-21, 9);
+  stood.centres.push_back(stood.centres.back());
+  EXPECT_EQ(count(face, {stood}, exact), 0);
+  EXPECT_EQ(count(face, {StraightPath(5, 30)}, exact), 336);
+  EXPECT_EQ(count(face, {StraightPath(-21, 9), StraightPath(5, 30)}, exact), 336);
+  // The road under a path is its camera's height below it: a drive 1 m higher (its road 1 m
+  // above this one) takes rises 1 m lower: only rows 53..54 rise more than 0.2475 m above its
+  // road (row 54: Y = 4.5 / 12 = 0.375, 1.275 - 1 m; row 55: 1.192 - 1 m), 2 × 24 = 48; the
+  // ground under it is not in its space.
+  EXPECT_EQ(count(face, {StraightPath(-10, 30, -1)}, exact), 48);
+  // --driven-below 0.5 (0.825 m): rows 60..66 (row 60: rise 1.65 - 10.5 / 12 = 0.775 m; row
+  // 59: 0.858 m), 7 × 24 = 168. A path without a camera height: nothing.
+  DrivenSpace low = exact;
+  low.below = 0.5;
+  EXPECT_EQ(count(face, {StraightPath(-10, 30)}, low), 168);
+  DrivenPath no_height = StraightPath(-10, 30);
+  no_height.height = 0;
+  EXPECT_EQ(count(face, {no_height}, exact), 0);
   // A face 2 to 4 m to the side: beyond 1 × 1.65 m of the path, within 2.5 × 1.65 m (columns
   // 144..167).
   const DynamicView side = StandingFaceView(2, 4);
-  EXPECT_EQ(cv::countNonZero(run(side, StraightPath(-10, 30), exact, up)), 0);
+  EXPECT_EQ(count(side, {StraightPath(-10, 30)}, exact), 0);
   DrivenSpace wide = exact;
   wide.half_width = 2.5;
-  p = run(side, StraightPath(-10, 30), wide, up);
+  p = run(side, {StraightPath(-10, 30)}, wide, up);
   EXPECT_EQ(cv::countNonZero(p(cv::Rect(144, 53, 24, 14)) == 1.f), 336);
   EXPECT_EQ(cv::countNonZero(p), 336);
   // The photo saw it but the mesh has the road there (a lone photo's stereo mistake), or the
   // photo saw nothing: nothing marked. The road alone: nothing.
   DynamicView lone = face;
   lone.depth = MakeView(0, nullptr).depth;
-  EXPECT_EQ(cv::countNonZero(run(lone, StraightPath(-10, 30), exact, up)), 0);
+  EXPECT_EQ(count(lone, {StraightPath(-10, 30)}, exact), 0);
   lone = face;
   lone.seen = cv::Mat();
-  EXPECT_EQ(cv::countNonZero(run(lone, StraightPath(-10, 30), exact, up)), 0);
+  EXPECT_EQ(count(lone, {StraightPath(-10, 30)}, exact), 0);
   DynamicView road = MakeView(0, nullptr);
   road.seen = road.depth.clone();
-  EXPECT_EQ(cv::countNonZero(run(road, StraightPath(-10, 30), exact, up)), 0);
-  // Specks go with the masks' opening and size limit; the face stays but for the corners the
-  // opening's cross takes.
+  EXPECT_EQ(count(road, {StraightPath(-10, 30)}, exact), 0);
+  // Specks go with the masks' opening and size limit: a face one column wide goes with the
+  // opening; the face stays but for the corners the opening's cross takes, and goes under a
+  // size limit of 2 % of the image (576 pixels).
   DrivenSpace masks;
-  DynamicView speck = StandingFaceView(-0.1, 0.0);  // one column wide
-  EXPECT_EQ(cv::countNonZero(run(speck, StraightPath(-10, 30), masks, up)), 0);
-  EXPECT_EQ(cv::countNonZero(run(face, StraightPath(-10, 30), masks, up)), 336 - 4);
+  EXPECT_EQ(count(StandingFaceView(-0.1, 0.0), {StraightPath(-10, 30)}, masks), 0);
+  EXPECT_EQ(count(face, {StraightPath(-10, 30)}, masks), 336 - 4);
+  DrivenSpace large = exact;
+  large.min_area = 0.02;
+  EXPECT_EQ(count(face, {StraightPath(-10, 30)}, large), 0);
   // The same in a similar world (turned, scaled by 0.2, at UTM-sized coordinates).
   const Eigen::Quaterniond q = SimilarWorldRotation();
   DynamicView moved = InSimilarWorld(face, q);
   moved.seen = face.seen * 0.2;
-  std::vector<std::vector<Eigen::Vector3d>> paths = StraightPath(-10, 30);
-  for (Eigen::Vector3d& c : paths[0]) c = q * (0.2 * c) + Eigen::Vector3d(451000, 120, 5410000);
-  p = run(moved, paths, exact, q * up);
+  DrivenPath path = StraightPath(-10, 30);
+  for (Eigen::Vector3d& c : path.centres) c = q * (0.2 * c) + Eigen::Vector3d(451000, 120, 5410000);
+  path.height *= 0.2;
+  p = run(moved, {path}, exact, q * up);
   EXPECT_EQ(cv::countNonZero(p(truth) == 1.f), 336);
   EXPECT_EQ(cv::countNonZero(p), 336);
   DrivenSpace bad = exact;
   bad.agree = 0;
-  EXPECT_THROW(run(face, paths, bad, up), Error);
+  EXPECT_THROW(run(face, {path}, bad, up), Error);
 }
 
 TEST(Dynamic, AWholeImageBlobIsNotCompleted) {
