@@ -378,12 +378,16 @@ DynamicEvidence EstimateDynamic(const DynamicView& t,
 
 namespace {
 
+// Pixel (x, y)'s point at depth map `z`'s depth, camera coordinates (any depth: check it first).
+Eigen::Vector3d PointAt(const Camera& c, const cv::Mat& z, int x, int y) {
+  const double d = z.at<float>(y, x);
+  return {(x + 0.5 - c.cx()) / c.fx() * d, (y + 0.5 - c.cy()) / c.fy() * d, d};
+}
+
 // The static point of pixel (x, y) in camera coordinates; NaN when it has no depth.
 Eigen::Vector3d StaticPoint(const DynamicView& t, int x, int y) {
-  const float z = t.depth.at<float>(y, x);
-  if (!HasDepth(z)) return Eigen::Vector3d::Constant(std::nan(""));
-  return {(x + 0.5 - t.camera.cx()) / t.camera.fx() * z,
-          (y + 0.5 - t.camera.cy()) / t.camera.fy() * z, z};
+  if (!HasDepth(t.depth.at<float>(y, x))) return Eigen::Vector3d::Constant(std::nan(""));
+  return PointAt(t.camera, t.depth, x, y);
 }
 
 // The static point of pixel (x, y) of `t` along `up` relative to the camera centre; NaN when the
@@ -533,15 +537,35 @@ int KeepGrounded(const DynamicView& t, const Eigen::Vector3d& up, double at, dou
   return int(std::count(drop.begin(), drop.end(), 1));
 }
 
+namespace {
+
+cv::Mat Disk(int r) { return cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * r + 1, 2 * r + 1}); }
+
+// Opens the binary mask `m` by a disk of radius r (> 0; 0: nothing): specks go.
+void OpenMask(cv::Mat& m, int r) {
+  if (r > 0) cv::morphologyEx(m, m, cv::MORPH_OPEN, Disk(r));
+}
+
+// Clears the blobs (8-connected) of `m` under `min_area` of the image.
+void DropSmallBlobs(cv::Mat& m, double min_area) {
+  cv::Mat labels, stats, cents;
+  const int k = cv::connectedComponentsWithStats(m, labels, stats, cents, 8, CV_32S);
+  const double min_px = min_area * static_cast<double>(m.total());
+  for (int y = 0; y < m.rows; ++y)
+    for (int x = 0; x < m.cols; ++x) {
+      const int l = labels.at<int>(y, x);
+      if (l > 0 && l < k && stats.at<int>(l, cv::CC_STAT_AREA) < min_px) m.at<uint8_t>(y, x) = 0;
+    }
+}
+
+}  // namespace
+
 cv::Mat MaskFromProbability(const cv::Mat& probability, const MaskOptions& o) {
   o.Check();
   cv::Mat m = probability >= o.probability;
-  const auto disk = [](int r) {
-    return cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * r + 1, 2 * r + 1});
-  };
-  if (o.open > 0) cv::morphologyEx(m, m, cv::MORPH_OPEN, disk(o.open));
+  OpenMask(m, o.open);
   const int close = static_cast<int>(std::lround(o.close * m.cols));
-  if (close > 0) cv::morphologyEx(m, m, cv::MORPH_CLOSE, disk(close));
+  if (close > 0) cv::morphologyEx(m, m, cv::MORPH_CLOSE, Disk(close));
   // Holes: background components that do not touch the border.
   cv::Mat bg = ~m, labels;
   const int n = cv::connectedComponents(bg, labels, 4, CV_32S);
@@ -556,15 +580,7 @@ cv::Mat MaskFromProbability(const cv::Mat& probability, const MaskOptions& o) {
     for (int x = 0; x < m.cols; ++x)
       if (!m.at<uint8_t>(y, x) && !border[static_cast<size_t>(labels.at<int>(y, x))])
         m.at<uint8_t>(y, x) = 255;
-  // Small blobs.
-  cv::Mat stats, cents;
-  const int k = cv::connectedComponentsWithStats(m, labels, stats, cents, 8, CV_32S);
-  const double min_px = o.min_area * static_cast<double>(m.total());
-  for (int y = 0; y < m.rows; ++y)
-    for (int x = 0; x < m.cols; ++x) {
-      const int l = labels.at<int>(y, x);
-      if (l > 0 && l < k && stats.at<int>(l, cv::CC_STAT_AREA) < min_px) m.at<uint8_t>(y, x) = 0;
-    }
+  DropSmallBlobs(m, o.min_area);
   return m;
 }
 
@@ -715,9 +731,6 @@ int CompleteBlobs(const DynamicView& t, const MaskOptions& mask, const BlobCompl
   return completed;
 }
 
-}  // namespace mvtm
-
-namespace mvtm {
 namespace {
 
 // A stretch of a path in the target's camera coordinates: its ends across up (a, b), the road's
@@ -763,22 +776,11 @@ std::vector<DrivenSegment> DrivenSegments(const Rigid3d& w2c, const Eigen::Vecto
   return out;
 }
 
-// Pixel (x, y)'s point at depth map `z`'s depth, camera coordinates (any depth: check it first).
-Eigen::Vector3d PointAt(const Camera& c, const cv::Mat& z, int x, int y) {
-  const double d = z.at<float>(y, x);
-  return {(x + 0.5 - c.cx()) / c.fx() * d, (y + 0.5 - c.cy()) / c.fy() * d, d};
-}
-
-// Whether the seen point of (x, y) is the static one (within o.agree).
-bool Agrees(const DynamicView& t, double agree, int x, int y) {
-  const float z = t.seen.at<float>(y, x), zs = t.depth.at<float>(y, x);
-  return HasDepth(z) && HasDepth(zs) && std::abs(z - zs) <= agree * zs;
-}
-
-// The pixels (255) whose seen point is the static one and lies in the driven space of some
-// stretch: within half_width × its camera's height of it across up (beside it: not beyond a
-// path's first or last centre), between above and below × that height over the road there.
-cv::Mat DrivenPixels(const DynamicView& t, const Eigen::Vector3d& up_cam,
+// The pixels (255) of `agree` (non-zero where the seen point is the static one) whose seen
+// point lies in the driven space of some stretch: within half_width × its camera's height of it
+// across up (beside it: not beyond a path's first or last centre), between above and below × that
+// height over the road there.
+cv::Mat DrivenPixels(const DynamicView& t, const cv::Mat& agree, const Eigen::Vector3d& up_cam,
                      const std::vector<DrivenSegment>& segs, const DrivenSpace& o) {
   cv::Mat marked(t.seen.size(), CV_8U, cv::Scalar(0));
   // The heights along up where a stretch's space can be: a pixel outside them (the road, the
@@ -791,7 +793,7 @@ cv::Mat DrivenPixels(const DynamicView& t, const Eigen::Vector3d& up_cam,
   cv::parallel_for_(cv::Range(0, t.seen.rows), [&](const cv::Range& rows) {
     for (int y = rows.start; y < rows.end; ++y)
       for (int x = 0; x < t.seen.cols; ++x) {
-        if (!Agrees(t, o.agree, x, y)) continue;
+        if (!agree.at<uint8_t>(y, x)) continue;
         const Eigen::Vector3d p = PointAt(t.camera, t.seen, x, y);
         const double hp = p.dot(up_cam);
         if (hp <= low || hp >= high) continue;
@@ -827,30 +829,23 @@ size_t MarkDriven(const DynamicView& t, const std::vector<DrivenPath>& paths,
   const Eigen::Vector3d up_cam = t.world_to_camera.R() * up.normalized();
   // The stretches that can hold an agreeing point: within its distance (plus the space's width,
   // added per stretch) of the camera.
+  const cv::Mat agree = ExplainedPixels(t, o.agree);
   double far = 0;
-  for (int y = 0; y < t.seen.rows; ++y)
-    for (int x = 0; x < t.seen.cols; ++x)
-      if (Agrees(t, o.agree, x, y)) far = std::max(far, PointAt(t.camera, t.seen, x, y).norm());
+  for (int y = 0; y < agree.rows; ++y)
+    for (int x = 0; x < agree.cols; ++x)
+      if (agree.at<uint8_t>(y, x)) far = std::max(far, PointAt(t.camera, t.seen, x, y).norm());
   const std::vector<DrivenSegment> segs =
       DrivenSegments(t.world_to_camera, up_cam, paths, far, o.half_width);
   if (segs.empty()) return 0;
-  cv::Mat marked = DrivenPixels(t, up_cam, segs, o);
-  // A stray depth is a speck; a vehicle a surface: specks go as the masks' do (an opening, then
-  // blobs under min_area).
-  if (o.open > 0)
-    cv::morphologyEx(
-        marked, marked, cv::MORPH_OPEN,
-        cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * o.open + 1, 2 * o.open + 1}));
-  cv::Mat labels, stats, centres;
-  const int n = cv::connectedComponentsWithStats(marked, labels, stats, centres, 8, CV_32S);
-  const double least = o.min_area * double(marked.total());
+  cv::Mat marked = DrivenPixels(t, agree, up_cam, segs, o);
+  // A stray depth is a speck; a vehicle a surface: specks go as the masks' do.
+  OpenMask(marked, o.open);
+  DropSmallBlobs(marked, o.min_area);
   size_t raised = 0;
-  for (int y = 0; y < labels.rows; ++y)
-    for (int x = 0; x < labels.cols; ++x) {
-      const int b = labels.at<int>(y, x);
-      if (b == 0 || b >= n || stats.at<int>(b, cv::CC_STAT_AREA) < least) continue;
+  for (int y = 0; y < marked.rows; ++y)
+    for (int x = 0; x < marked.cols; ++x) {
       float& v = probability.at<float>(y, x);
-      if (v < 1) v = 1, ++raised;
+      if (marked.at<uint8_t>(y, x) && v < 1) v = 1, ++raised;
     }
   return raised;
 }

@@ -549,9 +549,7 @@ std::vector<DrivenPath> DrivenPaths(const Scene& s, const DepthProvider& d) {
         std::remove_if(steps.begin(), steps.end(), [&](double v) { return v < 0.01 * mean; }),
         steps.end());
     if (steps.empty()) continue;
-    std::nth_element(steps.begin(), steps.begin() + long(steps.size() / 2), steps.end());
-    std::nth_element(below.begin(), below.begin() + long(below.size() / 2), below.end());
-    const double spacing = steps[steps.size() / 2], height = below[below.size() / 2];
+    const double spacing = Median(steps), height = Median(below);
     DrivenPath piece{{c.front()}, height};
     for (size_t k = 1; k < c.size(); ++k) {
       const double step = (c[k] - piece.centres.back()).norm();
