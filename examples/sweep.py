@@ -20,7 +20,8 @@ tool and OUT/index.html, the page to read before choosing settings. Work folders
              --occludes, --occlusion-gap, --min-ratio, --max-gap
              (no labels; the fixture's true mesh, no densify maps, so --seen-tolerance has nothing
              to compare: its rows are the road build's, issue 21's note), and --max-fill,
-             --complete, --driven and --driven-agree on a mesh densify + roadmesh --dense make of the same photos (with their
+             --complete, --driven, --driven-agree and --no-driven-grow on a mesh densify + roadmesh
+             --dense make of the same photos (with their
              densify maps): mask IoU against truth/masks and
              the share of drive B masked, against whole-process milliseconds per image
   inpaint3d  --method 3d|telea|ns|patch2d, --partners, --dilate: SSIM inside the vehicle masks
@@ -521,7 +522,7 @@ def sweep_dynmask(c):
                 "--segments": 300,
                 "--probability": 0.4, "--grounded": 0.25, "--min-height": 0.5,
                 "--min-ratio": 0.5, "--max-gap": 3, "--max-fill": 0.5, "--complete": 3,
-                "--driven": 1, "--driven-agree": 0.1}
+                "--driven": 1, "--driven-agree": 0.1, "--no-driven-grow": False}
     rows = []
 
     def measure(group, opt, v, args, where):
@@ -538,7 +539,7 @@ def sweep_dynmask(c):
 
     for group, opt, values, *extra in knobs:
         for v in values:
-            args = ([opt] if v is True else []) if opt == "--no-flow" else [opt, v]
+            args = ([opt] if v is True else []) if opt.startswith("--no-") else [opt, v]
             measure(group, opt, v, args + (extra[0] if extra else []), ws)
     # --max-fill judges blobs on the corridor walls of a mesh built from the photos (densify,
     # roadmesh --dense: the walls close the fused facades' holes); the true mesh has none.
@@ -560,6 +561,9 @@ def sweep_dynmask(c):
         for v in (0.05, 0.1, 0.2):
             measure("driven-agree (photo-built mesh)", "--driven-agree", v,
                     ["--driven-agree", v], photo)
+        for v in (False, True):
+            measure("no-driven-grow (photo-built mesh)", "--no-driven-grow", v,
+                    ["--no-driven-grow"] if v else [], photo)
     best_default = max(r["iou"] for r in rows if r["default"])
     c.checks(best_default > 0.2, f"dynmask defaults: IoU {best_default:.4f} above 0.2")
     s = sl.Section(
@@ -588,7 +592,8 @@ def sweep_dynmask(c):
         f"not explain, at most that many times their area; on the same photo-built workspace: "
         f"it needs densify's maps), "
         f"<code>--driven</code>, <code>--driven-agree</code> (surfaces the photo and the mesh "
-        f"agree on, standing where a drive's car passed; on the same photo-built workspace; "
+        f"agree on, standing where a drive's car passed; <code>--no-driven-grow</code>: not "
+        f"the rest of their surface in the mesh; on the same photo-built workspace; "
         f"the fixture's vehicles all move, so these rows show the time and that the road is "
         f"left alone; CamVid 0016E5 is where it finds parked and waiting vehicles), "
         f"<code>--min-ratio</code>, "

@@ -827,13 +827,23 @@ size_t MarkDriven(const DynamicView& t, const std::vector<DrivenPath>& paths,
     throw Error("target view: the probability must be float of the depth's size");
   if (t.seen.empty()) return 0;
   const Eigen::Vector3d up_cam = t.world_to_camera.R() * up.normalized();
-  // The stretches that can hold an agreeing point: within its distance (plus the space's width,
-  // added per stretch) of the camera.
   const cv::Mat agree = ExplainedPixels(t, o.agree);
+  if (cv::countNonZero(agree) == 0) return 0;
+  // The mesh's own surface, where it has one and it is not a guess (a corridor wall behind a
+  // hole): what the marked blobs grow over.
+  DynamicView mesh = t;
+  mesh.seen = t.depth;
+  cv::Mat surface(t.depth.size(), CV_8U, cv::Scalar(0));
+  if (o.grow) surface.setTo(1, (t.depth > 0) & (t.depth < std::numeric_limits<float>::infinity()));
+  if (!t.guessed.empty()) surface.setTo(0, t.guessed);
+  // The stretches that can hold a point counted: within its distance (plus the space's width,
+  // added per stretch) of the camera.
   double far = 0;
   for (int y = 0; y < agree.rows; ++y)
-    for (int x = 0; x < agree.cols; ++x)
+    for (int x = 0; x < agree.cols; ++x) {
       if (agree.at<uint8_t>(y, x)) far = std::max(far, PointAt(t.camera, t.seen, x, y).norm());
+      if (surface.at<uint8_t>(y, x)) far = std::max(far, PointAt(t.camera, t.depth, x, y).norm());
+    }
   const std::vector<DrivenSegment> segs =
       DrivenSegments(t.world_to_camera, up_cam, paths, far, o.half_width);
   if (segs.empty()) return 0;
@@ -841,6 +851,19 @@ size_t MarkDriven(const DynamicView& t, const std::vector<DrivenPath>& paths,
   // A stray depth is a speck; a vehicle a surface: specks go as the masks' do.
   OpenMask(marked, o.open);
   DropSmallBlobs(marked, o.min_area);
+  // Where the photo's depth has none or another (a dark body, a window: stereo finds nothing
+  // there), the mesh's surface in the space, joined to a marked blob, is the same vehicle.
+  if (o.grow && cv::countNonZero(marked) > 0) {
+    cv::Mat space = DrivenPixels(mesh, surface, up_cam, segs, o) | marked, labels;
+    const int n = cv::connectedComponents(space, labels, 8, CV_32S);
+    std::vector<uint8_t> seeded(size_t(n), 0);
+    for (int y = 0; y < labels.rows; ++y)
+      for (int x = 0; x < labels.cols; ++x)
+        if (marked.at<uint8_t>(y, x)) seeded[size_t(labels.at<int>(y, x))] = 1;
+    for (int y = 0; y < labels.rows; ++y)
+      for (int x = 0; x < labels.cols; ++x)
+        if (seeded[size_t(labels.at<int>(y, x))]) marked.at<uint8_t>(y, x) = 255;
+  }
   size_t raised = 0;
   for (int y = 0; y < marked.rows; ++y)
     for (int x = 0; x < marked.cols; ++x) {

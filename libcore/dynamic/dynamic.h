@@ -262,7 +262,10 @@ int CompleteBlobs(const DynamicView& target, const MaskOptions& mask, const Blob
 // path's camera height of it (measured across `up`), beside it (not beyond the path's first or
 // last centre) and between `above` and `below` × that height above the road under it there,
 // gets probability 1, after the marked pixels are opened (radius `open`) and their blobs under
-// `min_area` of the image dropped, as the masks' are. Without `target.seen` nothing is marked.
+// `min_area` of the image dropped, as the masks' are. With `grow`, the static surface
+// (`target.depth`, the mesh) in that space, 8-connected to a marked blob, is marked too: the
+// rest of the vehicle, where the photo's depth has none (a dark body, a window) or another.
+// Without `target.seen` nothing is marked.
 // Returns the number of pixels raised. Throws Error on options out of range or a probability
 // not float of the depth's size.
 struct DrivenSpace {
@@ -272,6 +275,7 @@ struct DrivenSpace {
   double agree = 0.1;       // seen depth within this of the static depth, relative, (0, 1)
   int open = 1;             // the marked pixels' opening radius (pixels), >= 0
   double min_area = 2e-4;   // ... and their blobs under this share of the image go, [0, 1)
+  bool grow = true;         // the mesh's surface in the space joined to a marked blob: marked
 };
 struct DrivenPath {
   std::vector<Eigen::Vector3d> centres;  // world, in the order the drive took them

@@ -129,6 +129,10 @@ void DeclareStandingOptions(OptionTable& t, DynmaskOptions& o) {
          "mistake")
       .Range(0, 1, true, true)
       .Alternative("0.2");
+  t.Flag("--no-driven-grow", &o.no_driven_grow,
+         "With --driven: mark only the pixels densify's depth puts in the space, not the rest "
+         "of their surface in the mesh (by default the mesh's surface in the space joined to a "
+         "marked blob is marked too: a dark body or a window densify found no depth for)");
   t.Real("--max-fill", &o.max_fill,
          "In a blob more than S of whose pixels see a corridor wall that roadmesh --dense put "
          "behind a hole of the fused facades (a guessed depth), those pixels are cleared (1: off)")
@@ -818,7 +822,7 @@ void JudgeBlobs(const DynmaskOptions& o, const Scene& s, const DepthProvider& d,
   // pixels explained, its blob on the static surface), yet it stood where a car drove.
   if (driven) {
     DrivenSpace ds = o.driven;
-    ds.open = o.mask.open, ds.min_area = o.mask.min_area;
+    ds.open = o.mask.open, ds.min_area = o.mask.min_area, ds.grow = !o.no_driven_grow;
     rep.driven += MarkDriven(t, s.paths, s.up, ds, probability);
   }
   if (complete) {

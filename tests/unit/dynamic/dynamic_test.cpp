@@ -734,11 +734,14 @@ TEST(Dynamic, SurfacesStandingWhereACarDroveAreMarked) {
   road.seen = road.depth.clone();
   EXPECT_EQ(count(road, {StraightPath(-10, 30)}, exact), 0);
   // Specks go with the masks' opening and size limit: a face one column wide goes with the
-  // opening; the face stays but for the corners the opening's cross takes, and goes under a
-  // size limit of 2 % of the image (576 pixels).
+  // opening; the face stays but for the corners the opening's cross takes (grown back from the
+  // mesh's surface), and goes under a size limit of 2 % of the image (576 pixels).
   DrivenSpace masks;
   EXPECT_EQ(count(StandingFaceView(-0.1, 0.0), {StraightPath(-10, 30)}, masks), 0);
+  masks.grow = false;
   EXPECT_EQ(count(face, {StraightPath(-10, 30)}, masks), 336 - 4);
+  masks.grow = true;
+  EXPECT_EQ(count(face, {StraightPath(-10, 30)}, masks), 336);
   DrivenSpace large = exact;
   large.min_area = 0.02;
   EXPECT_EQ(count(face, {StraightPath(-10, 30)}, large), 0);
@@ -755,6 +758,50 @@ TEST(Dynamic, SurfacesStandingWhereACarDroveAreMarked) {
   DrivenSpace bad = exact;
   bad.agree = 0;
   EXPECT_THROW(run(face, {path}, bad, up), Error);
+}
+
+TEST(Dynamic, TheRestOfASurfaceWhereACarDroveIsMarked) {
+  const Eigen::Vector3d up(0, -1, 0);
+  DrivenSpace exact;
+  exact.open = 0, exact.min_area = 0;
+  const auto count = [&](const DynamicView& v, const DrivenSpace& o, double z0 = -10) {
+    cv::Mat p(kH, kW, CV_32F, 0.f);
+    const size_t n = MarkDriven(v, {StraightPath(z0, 30)}, up, o, p);
+    EXPECT_EQ(size_t(cv::countNonZero(p == 1.f)), n);
+    return cv::countNonZero(p == 1.f);
+  };
+  // The face of SurfacesStandingWhereACarDroveAreMarked (rows 53..66 of columns 108..131 in the
+  // space), the photo's depth on its top three rows only: no depth below (a dark body), or
+  // another surface 5 m behind it (a window). Grown: the whole face, 336 pixels; not: 3 × 24.
+  DynamicView face = StandingFaceView(-1, 1);
+  face.seen(cv::Rect(0, 56, kW, kH - 56)).setTo(std::numeric_limits<float>::infinity());
+  EXPECT_EQ(count(face, exact), 336);
+  DrivenSpace seeds = exact;
+  seeds.grow = false;
+  EXPECT_EQ(count(face, seeds), 72);
+  face.seen(cv::Rect(0, 56, kW, kH - 56)).setTo(15.f);
+  EXPECT_EQ(count(face, exact), 336);
+  // Not beyond the space: the ground under the face and the road are the mesh's too, and it
+  // does not grow over them. Nothing to grow from: the photo's depth nowhere on the face, or
+  // the path beginning 1 m beyond it. A corridor wall (a guessed depth) is not grown over.
+  face.seen.setTo(std::numeric_limits<float>::infinity());
+  EXPECT_EQ(count(face, exact), 0);
+  face = StandingFaceView(-1, 1);
+  face.seen(cv::Rect(0, 56, kW, kH - 56)).setTo(std::numeric_limits<float>::infinity());
+  EXPECT_EQ(count(face, exact, 11), 0);
+  face.guessed = cv::Mat(kH, kW, CV_8U, cv::Scalar(0));
+  face.guessed(cv::Rect(0, 56, kW, kH - 56)).setTo(1);
+  EXPECT_EQ(count(face, exact), 72);
+  face.guessed = cv::Mat();
+  // A second face (columns 160..167, 3.3..4 m right of the path: within 2.5 × 1.65 m of it)
+  // with no depth of its own, 28 columns of far ground from the first: not grown into.
+  DrivenSpace wide = exact;
+  wide.half_width = 2.5;
+  const DynamicView right = StandingFaceView(3.3, 4);
+  right.depth.copyTo(face.depth, right.depth == 10.f);
+  EXPECT_EQ(count(face, wide), 336);
+  face.seen(cv::Rect(160, 53, 8, 3)).setTo(10.f);
+  EXPECT_EQ(count(face, wide), 336 + 8 * 14);
 }
 
 TEST(Dynamic, AWholeImageBlobIsNotCompleted) {
