@@ -21,6 +21,11 @@ constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 // A depth map's convention: +inf, NaN and <= 0 are "no depth".
 bool HasDepth(double z) { return z > 0 && std::isfinite(z); }
 
+// Non-zero where `depth` (CV_32F) has a depth: above 0 and finite.
+cv::Mat HasDepthMask(const cv::Mat& depth) {
+  return (depth > 0) & (depth < std::numeric_limits<float>::infinity());
+}
+
 void CheckView(const DynamicView& v, const char* what) {
   v.camera.RequireUndistorted();
   const int w = static_cast<int>(v.camera.width), h = static_cast<int>(v.camera.height);
@@ -370,8 +375,7 @@ DynamicEvidence EstimateDynamic(const DynamicView& t,
                                                           {&ahead_cue, o.threshold},
                                                       });
   if (o.segments > 0 && ev.neighbours + ev.partners + ev.ahead > 0) {
-    const cv::Mat has_depth = (t.depth > 0) & (t.depth < std::numeric_limits<float>::infinity());
-    SpreadOverRegions(t, has_depth, o, ev.probability);
+    SpreadOverRegions(t, HasDepthMask(t.depth), o, ev.probability);
   }
   return ev;
 }
@@ -507,6 +511,22 @@ size_t ClearExplained(const DynamicView& t, double tolerance, double at, cv::Mat
 }
 
 // Sets to 0 the probability of every pixel whose blob (`labels`, 0 = background) `drop` marks.
+// 255 where `mask`'s 8-connected component holds a pixel of `seeds` (both CV_8U, one size).
+cv::Mat ComponentsTouching(const cv::Mat& mask, const cv::Mat& seeds) {
+  cv::Mat labels;
+  const int n = cv::connectedComponents(mask, labels, 8, CV_32S);
+  std::vector<uint8_t> touches(size_t(n), 0);
+  for (int y = 0; y < labels.rows; ++y)
+    for (int x = 0; x < labels.cols; ++x)
+      if (seeds.at<uint8_t>(y, x)) touches[size_t(labels.at<int>(y, x))] = 1;
+  touches[0] = 0;
+  cv::Mat out(mask.size(), CV_8U, cv::Scalar(0));
+  for (int y = 0; y < labels.rows; ++y)
+    for (int x = 0; x < labels.cols; ++x)
+      if (touches[size_t(labels.at<int>(y, x))]) out.at<uint8_t>(y, x) = 255;
+  return out;
+}
+
 void ZeroBlobs(const cv::Mat& labels, const std::vector<uint8_t>& drop, cv::Mat& probability) {
   for (int y = 0; y < probability.rows; ++y)
     for (int x = 0; x < probability.cols; ++x)
@@ -705,20 +725,8 @@ int CompleteBlobs(const DynamicView& t, const MaskOptions& mask, const BlobCompl
     cv::grabCut(t.colour(roi), gc, cv::Rect(), bg, fg, o.iterations, cv::GC_INIT_WITH_MASK);
     cv::theRNG() = kept;
     const cv::Mat f = (gc == cv::GC_FGD) | (gc == cv::GC_PR_FGD);
-    // The parts of the foreground that touch the blob, less the blob: one pass to find them,
-    // one to keep them.
-    cv::Mat parts;
-    const int np = cv::connectedComponents(f, parts, 8, CV_32S);
-    std::vector<uint8_t> touches(size_t(np), 0);
-    for (int y = 0; y < parts.rows; ++y)
-      for (int x = 0; x < parts.cols; ++x)
-        if (blob.at<uint8_t>(y, x)) touches[size_t(parts.at<int>(y, x))] = 1;
-    touches[0] = 0;
-    cv::Mat grown(f.size(), CV_8U, cv::Scalar(0));
-    for (int y = 0; y < parts.rows; ++y)
-      for (int x = 0; x < parts.cols; ++x)
-        if (touches[size_t(parts.at<int>(y, x))] && !blob.at<uint8_t>(y, x))
-          grown.at<uint8_t>(y, x) = 255;
+    // The parts of the foreground that touch the blob, less the blob.
+    const cv::Mat grown = ComponentsTouching(f, blob) & ~blob;
     const int area = stats.at<int>(b, cv::CC_STAT_AREA), more = cv::countNonZero(grown);
     if (more == 0 || more > o.max_grow * area) continue;
     cv::Mat at = add(roi);
@@ -834,7 +842,7 @@ size_t MarkDriven(const DynamicView& t, const std::vector<DrivenPath>& paths,
   DynamicView mesh = t;
   mesh.seen = t.depth;
   cv::Mat surface(t.depth.size(), CV_8U, cv::Scalar(0));
-  if (o.grow) surface.setTo(1, (t.depth > 0) & (t.depth < std::numeric_limits<float>::infinity()));
+  if (o.grow) surface.setTo(1, HasDepthMask(t.depth));
   if (!t.guessed.empty()) surface.setTo(0, t.guessed);
   // The stretches that can hold a point counted: within its distance (plus the space's width,
   // added per stretch) of the camera.
@@ -853,17 +861,8 @@ size_t MarkDriven(const DynamicView& t, const std::vector<DrivenPath>& paths,
   DropSmallBlobs(marked, o.min_area);
   // Where the photo's depth has none or another (a dark body, a window: stereo finds nothing
   // there), the mesh's surface in the space, joined to a marked blob, is the same vehicle.
-  if (o.grow && cv::countNonZero(marked) > 0) {
-    cv::Mat space = DrivenPixels(mesh, surface, up_cam, segs, o) | marked, labels;
-    const int n = cv::connectedComponents(space, labels, 8, CV_32S);
-    std::vector<uint8_t> seeded(size_t(n), 0);
-    for (int y = 0; y < labels.rows; ++y)
-      for (int x = 0; x < labels.cols; ++x)
-        if (marked.at<uint8_t>(y, x)) seeded[size_t(labels.at<int>(y, x))] = 1;
-    for (int y = 0; y < labels.rows; ++y)
-      for (int x = 0; x < labels.cols; ++x)
-        if (seeded[size_t(labels.at<int>(y, x))]) marked.at<uint8_t>(y, x) = 255;
-  }
+  if (o.grow && cv::countNonZero(marked) > 0)
+    marked = ComponentsTouching(DrivenPixels(mesh, surface, up_cam, segs, o) | marked, marked);
   size_t raised = 0;
   for (int y = 0; y < marked.rows; ++y)
     for (int x = 0; x < marked.cols; ++x) {
