@@ -12,7 +12,8 @@ tool and OUT/index.html, the page to read before choosing settings. Work folders
              kdtree's picks, against pickview's own microseconds per query (index + search)
   segtrack   --smooth, --max-gap, --min-life on damaged labels: mask IoU against truth/masks,
              against whole-process milliseconds per frame
-  dynmask    --threshold, --flow-threshold, --no-flow, --neighbours, --partners, --min-baseline,
+  dynmask    --threshold, --no-colour, --colour-threshold, --flow-threshold, --no-flow,
+             --neighbours, --partners, --min-baseline,
              --partners-ahead, --ahead-veto, --ahead and --ahead-min-share (with --partners 0),
              --passes, --segments,
              --region-depth,
@@ -491,6 +492,8 @@ def sweep_dynmask(c):
     else:
         knobs = [("threshold", "--threshold", (0.03, 0.04, 0.05, 0.065, 0.08, 0.1)),
                  ("flow-threshold", "--flow-threshold", (1.5, 2, 2.5, 3.5, 5)),
+                 ("colour", "--no-colour", (False, True)),
+                 ("colour-threshold", "--colour-threshold", (0.05, 0.065, 0.08)),
                  ("flow", "--no-flow", (False, True)),
                  ("flow-relative", "--flow-relative", (0, 0.05, 0.1, 0.2)),
                  ("neighbours", "--neighbours", (2, 4, 6, 8)),
@@ -514,6 +517,7 @@ def sweep_dynmask(c):
                  ("min-ratio", "--min-ratio", (0.3, 0.4, 0.5)),
                  ("max-gap", "--max-gap", (1, 3, 10))]
     defaults = {"--threshold": 0.05, "--flow-threshold": 2.5, "--no-flow": False,
+                "--no-colour": False, "--colour-threshold": 0.065,
                 "--flow-relative": 0,
                 "--neighbours": 4, "--partners": 2, "--partners-ahead": 4, "--ahead": 2,
                 "--ahead-veto": 0.5, "--ahead-min-share": 0.1,
@@ -571,6 +575,7 @@ def sweep_dynmask(c):
         ["group", "setting", "default", "iou", "pass_b_masked", "ms_per_image",
          "slowest_ms_per_image"],
         f"<b>Knobs:</b> <code>--threshold</code> (photometric residual at p = 0.5), "
+        f"<code>--no-colour</code>, <code>--colour-threshold</code> (a colour channel's), "
         f"<code>--flow-threshold</code> (flow residual in pixels), <code>--no-flow</code>, "
         f"<code>--neighbours</code>, <code>--partners</code> (photos of the other drive), "
         f"<code>--partners-ahead</code> (photos of the other drive farther along the road), "

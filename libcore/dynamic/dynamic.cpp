@@ -265,6 +265,8 @@ void SpreadOverRegions(const DynamicView& t, const cv::Mat& has_depth, const Dyn
 void DynamicOptions::Check() const {
   if (!(threshold > 0) || !std::isfinite(threshold))
     throw UsageError("--threshold must be above 0, got " + std::to_string(threshold));
+  if (!(colour_threshold > 0) || !std::isfinite(colour_threshold))
+    throw UsageError("--colour-threshold must be above 0, got " + std::to_string(colour_threshold));
   if (!(flow_relative >= 0 && flow_relative < 10))
     throw UsageError("--flow-relative must be in [0, 10), got " + std::to_string(flow_relative));
   if (!(flow_threshold > 0) || !std::isfinite(flow_threshold))
@@ -299,6 +301,68 @@ void MaskOptions::Check() const {
 
 namespace {
 
+// The three colour channels of view `v` (which has a colour image), float 0..1.
+std::vector<cv::Mat> ColourPlanes(const DynamicView& v) {
+  std::vector<cv::Mat> c;
+  cv::split(v.colour, c);
+  for (cv::Mat& m : c) m.convertTo(m, CV_32F, 1.0 / 255);
+  return c;
+}
+
+// The planes the photometric residual compares in the target `t` against a view whose colour
+// image is there or not (`other_colour`): with `colour` and both colour images, the target's
+// three colour channels, unless it is grey (its channels all equal: a grey camera); else its luma.
+std::vector<cv::Mat> Planes(const DynamicView& t, bool colour, bool other_colour) {
+  if (colour && other_colour && !t.colour.empty()) {
+    std::vector<cv::Mat> c;
+    cv::split(t.colour, c);
+    if (cv::countNonZero(c[0] != c[1]) + cv::countNonZero(c[0] != c[2]) > 0) return ColourPlanes(t);
+  }
+  return {t.grey};
+}
+
+// A view resampled into the target through the static depth.
+struct Warped {
+  cv::Mat grey;                    // its luma, gained to the target's exposure (0 where not valid)
+  std::vector<cv::Mat> planes;     // its Planes(), each gained to the target's plane on its own
+  cv::Mat valid, coarser, motion;  // where it sees the target's point; WarpMaps' maps
+};
+
+// `nb` warped into the target, its planes matching `planes` of the target (luma or colour);
+// false when it sees none of the target's pixels.
+bool WarpView(const DynamicView& t, const std::vector<cv::Mat>& planes, const DynamicView& nb,
+              const DynamicOptions& o, Warped& w) {
+  cv::Mat mx, my;
+  WarpMaps(t, nb, o.depth_tolerance, mx, my, w.coarser, w.motion);
+  w.valid = mx == mx;  // not NaN
+  if (cv::countNonZero(w.valid) == 0) return false;
+  const auto resample = [&](const cv::Mat& src, const cv::Mat& target) {
+    cv::Mat out;
+    cv::remap(src, out, mx, my, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+    out.setTo(0, ~w.valid);
+    return cv::Mat(out * ExposureGain(target, out));
+  };
+  w.grey = resample(nb.grey, t.grey);
+  const std::vector<cv::Mat> own = planes.size() == 3 ? ColourPlanes(nb) : std::vector{nb.grey};
+  w.planes.clear();
+  for (size_t k = 0; k < own.size(); ++k) w.planes.push_back(resample(own[k], planes[k]));
+  return true;
+}
+
+// The photometric residual of `warped` planes against the target's `planes` (Photometric per
+// plane, where `valid`): their largest, colour planes' in units of the luma's threshold (times
+// threshold / colour_threshold).
+cv::Mat PlanesResidual(const std::vector<cv::Mat>& planes, const std::vector<cv::Mat>& warped,
+                       const cv::Mat& valid, const cv::Mat& coarser, const DynamicOptions& o) {
+  if (planes.size() == 1) return Photometric(planes[0], warped[0], valid, coarser, o);
+  cv::Mat out;
+  for (size_t k = 0; k < planes.size(); ++k) {
+    const cv::Mat r = Photometric(planes[k], warped[k], valid, coarser, o);
+    out = out.empty() ? r : cv::Mat(cv::max(out, r));  // NaN where not valid, in every plane
+  }
+  return out * (o.threshold / o.colour_threshold);
+}
+
 // The target's residuals against `views`, reduced over them (photometric, and flow when on);
 // returns how many views saw any of the target's pixels.
 int ReducedResiduals(const DynamicView& t, const std::vector<const DynamicView*>& views,
@@ -308,20 +372,52 @@ int ReducedResiduals(const DynamicView& t, const std::vector<const DynamicView*>
   int seen_by = 0;
   for (const DynamicView* nb : views) {
     CheckView(*nb, what);
-    cv::Mat mx, my, warp, coarser, motion;
-    WarpMaps(t, *nb, o.depth_tolerance, mx, my, coarser, motion);
-    const cv::Mat valid = mx == mx;  // not NaN
-    if (cv::countNonZero(valid) == 0) continue;
+    const std::vector<cv::Mat> planes = Planes(t, o.colour, !nb->colour.empty());
+    Warped w;
+    if (!WarpView(t, planes, *nb, o, w)) continue;
     ++seen_by;
-    cv::remap(nb->grey, warp, mx, my, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
-    warp.setTo(0, ~valid);
-    warp *= ExposureGain(t.grey, warp);
-    photo.push_back(Photometric(t.grey, warp, valid, coarser, o));
-    if (o.flow) flows.push_back(FlowResidual(t.grey, warp, valid, motion, o));
+    photo.push_back(PlanesResidual(planes, w.planes, w.valid, w.coarser, o));
+    if (o.flow) flows.push_back(FlowResidual(t.grey, w.grey, w.valid, w.motion, o));
   }
   photometric = Reduce(photo, o.quantile, t.grey.size());
   if (o.flow) flow = Reduce(flows, o.quantile, t.grey.size());
   return seen_by;
+}
+
+// Non-zero where one of the target's photos farther along (`ahead`) witnesses its static point:
+// its warp through the static depth agrees with the target (photometric residual under
+// ahead_veto × threshold) and its own pixel at the same place does not (at least that). A vehicle
+// keeping the camera's pace ahead keeps its place in the drive's photos: a photo where the
+// pixel's own place shows what the target shows as well as the warp does cannot tell the static
+// point from such a vehicle (a car's uniform panels, seen a pixel or two off). A view of another
+// size than the target's is a witness wherever its warp agrees. `seen_by`: how many of them saw
+// any of the target's pixels.
+cv::Mat AheadWitnesses(const DynamicView& t, const std::vector<const DynamicView*>& ahead,
+                       const DynamicOptions& o, int& seen_by) {
+  const double agree = o.ahead_veto * o.threshold;
+  cv::Mat out(t.grey.size(), CV_8U, cv::Scalar(0));
+  seen_by = 0;
+  for (const DynamicView* nb : ahead) {
+    CheckView(*nb, "ahead view");
+    const std::vector<cv::Mat> planes = Planes(t, o.colour, !nb->colour.empty());
+    Warped w;
+    if (!WarpView(t, planes, *nb, o, w)) continue;
+    ++seen_by;
+    cv::Mat witness = PlanesResidual(planes, w.planes, w.valid, w.coarser, o) < agree;
+    // A photo behind the target (its centre at z <= 0 in the target's camera) cannot have
+    // passed a vehicle ahead: its own pixel is compared too, gained alike.
+    const bool behind = (t.world_to_camera * nb->world_to_camera.Centre()).z() <= 0;
+    if (behind && nb->grey.size() == t.grey.size()) {
+      const cv::Mat all(t.grey.size(), CV_8U, cv::Scalar(255));
+      std::vector<cv::Mat> same = planes.size() == 3 ? ColourPlanes(*nb) : std::vector{nb->grey};
+      for (size_t k = 0; k < same.size(); ++k)  // new images: never nb's own, shared luma
+        same[k] = same[k] * ExposureGain(planes[k], same[k]);
+      const cv::Mat ones = cv::Mat::ones(t.grey.size(), CV_32F);
+      witness &= ~(PlanesResidual(planes, same, all, ones, o) < agree);
+    }
+    out |= witness;
+  }
+  return out;
 }
 
 // max over the cues of their logistic (a cue's map may be empty: no such cue).
@@ -351,18 +447,14 @@ DynamicEvidence EstimateDynamic(const DynamicView& t,
   if (!partners.empty())
     ev.partners =
         ReducedResiduals(t, partners, photometric_only, "partner view", ev.across, no_flow);
-  if (!ahead.empty())
-    ev.ahead = ReducedResiduals(t, ahead, photometric_only, "ahead view", ev.ahead_photo, no_flow);
-  cv::Mat ahead_cue = ev.ahead_photo;
-  if (o.ahead_veto > 0 && !ev.across.empty() && !ev.ahead_photo.empty()) {
+  cv::Mat ahead_cue;
+  if (o.ahead_veto > 0 && !ev.across.empty() && !ahead.empty()) {
     // The photo's own drive, farther along, saw these pixels as they are: what another drive's
     // photos disagree with there is that drive's own traffic.
-    for (int y = 0; y < t.grey.rows; ++y)
-      for (int x = 0; x < t.grey.cols; ++x) {
-        const float a = ev.ahead_photo.at<float>(y, x);
-        if (std::isfinite(a) && a < o.ahead_veto * o.threshold) ev.across.at<float>(y, x) = kNaN;
-      }
-    ahead_cue = cv::Mat();
+    ev.across.setTo(kNaN, AheadWitnesses(t, ahead, photometric_only, ev.ahead));
+  } else if (!ahead.empty()) {
+    ev.ahead = ReducedResiduals(t, ahead, photometric_only, "ahead view", ev.ahead_photo, no_flow);
+    ahead_cue = ev.ahead_photo;
   }
   ev.probability.create(t.grey.size(), CV_32F);
   for (int y = 0; y < t.grey.rows; ++y)

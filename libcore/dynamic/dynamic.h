@@ -15,11 +15,15 @@
 //    road a vehicle covers in j is not evidence against this photo's road), or z(p) is under
 //    j's `beyond` (a partner chosen for the far surfaces compares those only).
 //  * Exposure: j's warped luma times the gain exp(median(log target − log warped)) over the
-//    valid pixels (a camera's auto exposure changes between photos).
+//    valid pixels (a camera's auto exposure changes between photos); with `colour`, each colour
+//    channel warped and gained alike on its own (another white balance).
 //  * Photometric residual: the distance of the target's luma to the interval [min, max] of the
 //    gained warp over (2·slack+1)² pixels around p (Birchfield–Tomasi: a misalignment of up to
 //    `slack` pixels, from pose or depth error, costs nothing at edges), averaged over a
-//    window × window box (valid pixels only).
+//    window × window box (valid pixels only). With `colour`, when both views have colour
+//    images and the target's is not grey (its channels all equal), the largest of that distance
+//    over the three channels, times threshold / colour_threshold (a blue car on a grey road of
+//    its brightness differs in its channels, not in its luma).
 //  * Flow residual (optional): the length of DIS optical flow (OpenCV, coarse to fine) from the
 //    target to the warp (invalid warp pixels replaced by the target's own, so they do not move),
 //    in pixels: a vehicle moving with the camera keeps its place in the photos, but not in the
@@ -76,20 +80,22 @@ struct DynamicView {
 };
 
 struct DynamicOptions {
-  double threshold = 0.05;        // photometric residual (luma 0..1) at which p = 0.5, > 0
-  bool flow = true;               // also the flow residual
-  double flow_threshold = 2.5;    // flow residual in pixels (DIS's noise is ~1 px) at p = 0.5
-  double flow_relative = 0;       // ... or this share of the rigid motion, when larger, [0, 10)
-  double quantile = 0;            // of the residuals over the neighbours, in [0, 1]; 0: min
-  double depth_tolerance = 0.05;  // relative: occlusion test in the neighbour, in (0, 1)
-  int slack = 1;                  // pixels of misalignment forgiven, 0..5
-  int window = 5;                 // box averaging the photometric residual, odd, 1..31
-  double segments = 300;          // Felzenszwalb's k for the regions evidence spreads over; 0 off
-  double texture = 0.02;          // luma gradient (per pixel) at which a pixel's evidence is full
-  double region_depth = 0.5;      // a pixel without depth takes its region's probability when
-                                  // more than this share of the region has depth, [0, 1]; 1 never
-  double ahead_veto = 0.5;        // with partners: the photos farther along veto the partners'
-                                  // residual where theirs is under this × threshold; 0 off
+  double threshold = 0.05;          // photometric residual (luma 0..1) at which p = 0.5, > 0
+  bool colour = true;               // the photometric residual over the colour channels
+  double colour_threshold = 0.065;  // ... a channel's residual (0..1) at which p = 0.5, > 0
+  bool flow = true;                 // also the flow residual
+  double flow_threshold = 2.5;      // flow residual in pixels (DIS's noise is ~1 px) at p = 0.5
+  double flow_relative = 0;         // ... or this share of the rigid motion, when larger, [0, 10)
+  double quantile = 0;              // of the residuals over the neighbours, in [0, 1]; 0: min
+  double depth_tolerance = 0.05;    // relative: occlusion test in the neighbour, in (0, 1)
+  int slack = 1;                    // pixels of misalignment forgiven, 0..5
+  int window = 5;                   // box averaging the photometric residual, odd, 1..31
+  double segments = 300;            // Felzenszwalb's k for the regions evidence spreads over; 0 off
+  double texture = 0.02;            // luma gradient (per pixel) at which a pixel's evidence is full
+  double region_depth = 0.5;        // a pixel without depth takes its region's probability when
+                                    // more than this share of the region has depth, [0, 1]; 1 never
+  double ahead_veto = 0.5;          // with partners: the photos farther along veto the partners'
+                                    // residual where theirs is under this × threshold; 0 off
 
   void Check() const;  // throws UsageError naming the option
 };
@@ -101,7 +107,8 @@ struct DynamicEvidence {
   cv::Mat across;       // CV_32F: the photometric residual reduced over the partners (NaN where
                         // none saw the pixel; empty without partners)
   cv::Mat ahead_photo;  // CV_32F: the photometric residual reduced over the photos of the drive
-                        // farther along the road (NaN where none saw it; empty without them)
+                        // farther along the road (NaN where none saw it; empty without them,
+                        // and when they veto the partners' evidence rather than being a cue)
   int neighbours = 0;   // neighbours that saw any of the target's pixels
   int partners = 0;     // partners that saw any of the target's pixels
   int ahead = 0;        // photos farther along that saw any of the target's pixels
@@ -128,10 +135,14 @@ struct DynamicEvidence {
 // covers in the target below the vehicle's image in its own. Their photometric residuals are
 // reduced apart (the same quantile), one more cue; no flow (metres apart, the near road's warp
 // is too distorted). With partners too and `ahead_veto` > 0 they are not a cue but a veto: where
-// their residual is under ahead_veto × threshold, the target's own drive saw that static point
+// one's residual is under ahead_veto × threshold, the target's own drive saw that static point
 // as the target does, and what the partners disagree with there is their drive's own traffic (a
 // vehicle keeping its place ahead of the other drive's camera, which that drive's own first pass
-// cannot see move): the partners' residual is dropped there. Give them their `seen` maps then: a
+// cannot see move): the partners' residual is dropped there. A view behind the target (its
+// centre at z <= 0 in the target's camera: the photos just behind a drive's last photo) vetoes
+// only where its own pixel at the same place, unwarped, is not under that bound as well: a
+// vehicle keeping the target camera's pace keeps its place in them, and its uniform panels agree
+// with their warp moved a pixel or two. Give them their `seen` maps then: a
 // vehicle parked in the target's drive hides from them the road its pixels warp to (its uniform
 // paint would otherwise agree with itself, seen nearer and larger).
 DynamicEvidence EstimateDynamic(const DynamicView& target,

@@ -146,6 +146,13 @@ void DeclareEvidenceOptions(OptionTable& t, DynmaskOptions& o) {
          "Photometric residual (luma 0..1) at which a pixel is 50 % not static")
       .Above(0)
       .Alternative("0.08");
+  t.Flag("--no-colour", &o.no_colour,
+         "Photometric residual of the luma only (by default of each colour channel, each with its "
+         "own exposure gain: a blue car on a grey road of its brightness)");
+  t.Real("--colour-threshold", &o.evidence.colour_threshold,
+         "With colour: a channel's photometric residual (0..1) at which a pixel is 50 % not static")
+      .Above(0)
+      .Alternative("0.05");
   t.Flag("--no-flow", &o.no_flow, "Photometric evidence only (no optical flow against the warp)");
   t.Real("--flow-threshold", &o.evidence.flow_threshold,
          "Residual flow (working pixels) at which a pixel is 50 % not static")
@@ -839,6 +846,7 @@ void ComputeMaps(const DynmaskOptions& o, const Workspace& ws, const Scene& s, c
   CreateFolder(ws.DynamicDir());
   DynamicOptions ev = o.evidence;
   ev.flow = !o.no_flow;
+  ev.colour = !o.no_colour;
   ViewCache cache(ws, s, d, pair.neighbours, ev, o.mask);
   Progress bar("dynmask", todo.size(), o.quiet);
   const auto t0 = Clock::now();

@@ -29,6 +29,7 @@ struct DynmaskOptions : WorkOptions {
   double min_baseline = 0.25;    // nearest neighbour allowed, in median camera spacings
   DepthSource depth = DepthSource::kAuto;  // auto: the mesh, else densify's maps
   bool no_flow = false;                    // --no-flow: photometric evidence only
+  bool no_colour = false;                  // --no-colour: the luma's photometric residual only
   bool no_driven_grow = false;             // --no-driven-grow: densify's marked pixels only
   double grounded = 0.25;  // blobs must touch the ground within this × camera height; 0: off
   int passes = 2;  // 2: neighbours' pixels that their own first pass finds moving are left out
