@@ -309,15 +309,20 @@ std::vector<cv::Mat> ColourPlanes(const DynamicView& v) {
   return c;
 }
 
-// The planes the photometric residual compares in the target `t` against a view whose colour
-// image is there or not (`other_colour`): with `colour` and both colour images, the target's
-// three colour channels, unless it is grey (its channels all equal: a grey camera); else its luma.
-std::vector<cv::Mat> Planes(const DynamicView& t, bool colour, bool other_colour) {
-  if (colour && other_colour && !t.colour.empty()) {
-    std::vector<cv::Mat> c;
-    cv::split(t.colour, c);
-    if (cv::countNonZero(c[0] != c[1]) + cv::countNonZero(c[0] != c[2]) > 0) return ColourPlanes(t);
-  }
+// Whether view `v` has a colour image that is not grey (its three channels not all equal: a
+// grey camera's photo is loaded as three copies of its one channel).
+bool InColour(const DynamicView& v) {
+  if (v.colour.empty()) return false;
+  std::vector<cv::Mat> c;
+  cv::split(v.colour, c);
+  return cv::countNonZero(c[0] != c[1]) + cv::countNonZero(c[0] != c[2]) > 0;
+}
+
+// The planes the photometric residual compares in the target `t` against a view `nb`: with
+// `colour`, when both are in colour (InColour), the target's three colour channels; else its
+// luma.
+std::vector<cv::Mat> Planes(const DynamicView& t, bool colour, const DynamicView& nb) {
+  if (colour && InColour(t) && InColour(nb)) return ColourPlanes(t);
   return {t.grey};
 }
 
@@ -372,7 +377,7 @@ int ReducedResiduals(const DynamicView& t, const std::vector<const DynamicView*>
   int seen_by = 0;
   for (const DynamicView* nb : views) {
     CheckView(*nb, what);
-    const std::vector<cv::Mat> planes = Planes(t, o.colour, !nb->colour.empty());
+    const std::vector<cv::Mat> planes = Planes(t, o.colour, *nb);
     Warped w;
     if (!WarpView(t, planes, *nb, o, w)) continue;
     ++seen_by;
@@ -399,7 +404,7 @@ cv::Mat AheadWitnesses(const DynamicView& t, const std::vector<const DynamicView
   seen_by = 0;
   for (const DynamicView* nb : ahead) {
     CheckView(*nb, "ahead view");
-    const std::vector<cv::Mat> planes = Planes(t, o.colour, !nb->colour.empty());
+    const std::vector<cv::Mat> planes = Planes(t, o.colour, *nb);
     Warped w;
     if (!WarpView(t, planes, *nb, o, w)) continue;
     ++seen_by;
@@ -410,8 +415,10 @@ cv::Mat AheadWitnesses(const DynamicView& t, const std::vector<const DynamicView
     if (behind && nb->grey.size() == t.grey.size()) {
       const cv::Mat all(t.grey.size(), CV_8U, cv::Scalar(255));
       std::vector<cv::Mat> same = planes.size() == 3 ? ColourPlanes(*nb) : std::vector{nb->grey};
-      for (size_t k = 0; k < same.size(); ++k)  // new images: never nb's own, shared luma
-        same[k] = same[k] * ExposureGain(planes[k], same[k]);
+      for (size_t k = 0; k < same.size(); ++k) {  // a new image: never nb's own luma, in place
+        const cv::Mat gained = same[k] * ExposureGain(planes[k], same[k]);
+        same[k] = gained;
+      }
       const cv::Mat ones = cv::Mat::ones(t.grey.size(), CV_32F);
       witness &= ~(PlanesResidual(planes, same, all, ones, o) < agree);
     }

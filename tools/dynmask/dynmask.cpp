@@ -185,8 +185,9 @@ void DeclareEvidenceOptions(OptionTable& t, DynmaskOptions& o) {
       .Above(0);
   t.Real("--ahead-veto", &o.evidence.ahead_veto,
          "Photos with partners also get --ahead photos of their own drive farther along (with "
-         "none farther along, such as a drive's last photo: the --ahead photos just behind it): "
-         "where they saw the pixel's static point as the photo does (residual under F x "
+         "none farther along, such as a drive's last photo: the --ahead photos just behind it, "
+         "which veto only where their own pixel disagrees too: a lead car keeping its place): "
+         "where one saw the pixel's static point as the photo does (residual under F x "
          "--threshold), the partners' evidence there is the other drive's own traffic and is "
          "dropped (0: off)")
       .Range(0, 10)

@@ -359,14 +359,18 @@ TEST(Dynamic, PhotosJustBehindDoNotVetoALeadCarTheySeeInThePlace) {
     return v;
   };
   const DynamicView t = paint(MakeView(10, nullptr)), other = MakeView(10.5, nullptr, 1.1, -1.5);
-  const DynamicView a1 = paint(MakeView(9, nullptr)), a2 = paint(MakeView(8, nullptr));
+  DynamicView a1 = paint(MakeView(9, nullptr));
+  const DynamicView a2 = paint(MakeView(8, nullptr));
+  a1.grey *= 1.1;  // another exposure: its gain against the target is not 1
   DynamicOptions on;
   on.ahead_veto = 0.5;
   double recall, fp;
+  const cv::Mat a1_grey = a1.grey.clone();
   const DynamicEvidence lead = EstimateDynamic(t, {}, on, {&other}, {&a1, &a2});
   Score(MaskFromProbability(lead.probability, MaskOptions()), box, recall, fp);
   EXPECT_GE(recall, 0.85);
   EXPECT_LE(fp, 0.01);
+  EXPECT_EQ(cv::norm(a1.grey, a1_grey, cv::NORM_INF), 0);  // the views are not changed
   // Drive B's photo, whose photos behind saw the road bare: where A's partner paints the car on
   // it (the other drive's traffic), the road moved in them and the veto holds.
   const DynamicView b = MakeView(10, nullptr), pa = paint(MakeView(10.5, nullptr, 1.0, -1.5));
@@ -420,13 +424,30 @@ TEST(Dynamic, AVehicleOfTheRoadsLumaIsFoundByItsColour) {
         at_t, recall, fp);
   EXPECT_GE(recall, 0.85);
   EXPECT_LE(fp, 0.01);
-  // Another white balance in the neighbours (red +40 %, blue -30 %), the road bare: each
-  // channel's own gain takes it out.
-  // (A grey image, all channels equal, is compared by its luma: the target is warm-tinted.)
-  const DynamicView r = Tinted(MakeView(10, nullptr), nullptr, {1, 0.95, 0.9});
-  const DynamicView w1 = Tinted(MakeView(9, nullptr), nullptr, {1.4, 0.95, 0.63}),
-                    w2 = Tinted(MakeView(11, nullptr), nullptr, {1.4, 0.95, 0.63});
-  EXPECT_EQ(cv::countNonZero(EstimateDynamic(r, {&w1, &w2}, colour).probability >= 0.5f), 0);
+  // Another white balance in the neighbours (red +40 %, blue -30 % against the target's): each
+  // channel's own gain takes it out; the car is still found and the road is not masked.
+  const cv::Vec3d warm{1, 0.95, 0.9}, cold{1.4, 0.95, 0.63};
+  const DynamicView tw = Tinted(MakeView(10, nullptr), &at_t, warm);
+  const DynamicView w1 = Tinted(MakeView(8, nullptr), &a, cold),
+                    w2 = Tinted(MakeView(12, nullptr), &b, cold),
+                    w3 = Tinted(MakeView(6, nullptr), &c, cold),
+                    w4 = Tinted(MakeView(14, nullptr), &d, cold);
+  Score(MaskFromProbability(EstimateDynamic(tw, {&w1, &w2, &w3, &w4}, colour).probability,
+                            MaskOptions()),
+        at_t, recall, fp);
+  EXPECT_GE(recall, 0.85);
+  EXPECT_LE(fp, 0.01);
+  // A grey neighbour (its three channels equal, as a grey camera's photo is loaded): compared by
+  // the luma, where the car is the road.
+  const DynamicView g1 = Tinted(MakeView(8, nullptr), &a), g2 = Tinted(MakeView(12, nullptr), &b);
+  DynamicView grey1 = g1, grey2 = g2;
+  grey1.colour = Tinted(MakeView(8, nullptr), nullptr).colour;
+  grey2.colour = Tinted(MakeView(12, nullptr), nullptr).colour;
+  Score(
+      MaskFromProbability(EstimateDynamic(t, {&grey1, &grey2}, colour).probability, MaskOptions()),
+      at_t, recall, fp);
+  EXPECT_EQ(recall, 0);
+  EXPECT_LE(fp, 0.01);
 }
 
 TEST(Dynamic, ExposureChangeIsNotMotion) {
