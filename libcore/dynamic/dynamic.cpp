@@ -318,18 +318,26 @@ bool InColour(const DynamicView& v) {
   return cv::countNonZero(c[0] != c[1]) + cv::countNonZero(c[0] != c[2]) > 0;
 }
 
-// The planes the photometric residual compares in the target `t` against a view `nb`: with
-// `colour`, when both are in colour (InColour), the target's three colour channels; else its
-// luma.
-std::vector<cv::Mat> Planes(const DynamicView& t, bool colour, const DynamicView& nb) {
-  if (colour && InColour(t) && InColour(nb)) return ColourPlanes(t);
-  return {t.grey};
-}
+// The target's planes for the photometric residual, made once per target: its luma, and with
+// `colour` its three colour channels when it is in colour (InColour).
+class TargetPlanes {
+ public:
+  TargetPlanes(const DynamicView& t, bool colour) : luma_{t.grey} {
+    if (colour && InColour(t)) colour_ = ColourPlanes(t);
+  }
+  // Those compared against view `nb`: the colour channels when both are in colour, else the luma.
+  const std::vector<cv::Mat>& Against(const DynamicView& nb) const {
+    return !colour_.empty() && InColour(nb) ? colour_ : luma_;
+  }
+
+ private:
+  std::vector<cv::Mat> luma_, colour_;
+};
 
 // A view resampled into the target through the static depth.
 struct Warped {
-  cv::Mat grey;                    // its luma, gained to the target's exposure (0 where not valid)
-  std::vector<cv::Mat> planes;     // its Planes(), each gained to the target's plane on its own
+  cv::Mat grey;  // its luma, gained to the target's exposure (0 where not valid); flow only
+  std::vector<cv::Mat> planes;     // its planes matching the target's, each gained to it apart
   cv::Mat valid, coarser, motion;  // where it sees the target's point; WarpMaps' maps
 };
 
@@ -347,7 +355,7 @@ bool WarpView(const DynamicView& t, const std::vector<cv::Mat>& planes, const Dy
     out.setTo(0, ~w.valid);
     return cv::Mat(out * ExposureGain(target, out));
   };
-  w.grey = resample(nb.grey, t.grey);
+  if (o.flow) w.grey = resample(nb.grey, t.grey);  // only the flow reads it
   const std::vector<cv::Mat> own = planes.size() == 3 ? ColourPlanes(nb) : std::vector{nb.grey};
   w.planes.clear();
   for (size_t k = 0; k < own.size(); ++k) w.planes.push_back(resample(own[k], planes[k]));
@@ -375,9 +383,10 @@ int ReducedResiduals(const DynamicView& t, const std::vector<const DynamicView*>
                      cv::Mat& flow) {
   std::vector<cv::Mat> photo, flows;
   int seen_by = 0;
+  const TargetPlanes target(t, o.colour);
   for (const DynamicView* nb : views) {
     CheckView(*nb, what);
-    const std::vector<cv::Mat> planes = Planes(t, o.colour, *nb);
+    const std::vector<cv::Mat>& planes = target.Against(*nb);
     Warped w;
     if (!WarpView(t, planes, *nb, o, w)) continue;
     ++seen_by;
@@ -402,9 +411,10 @@ cv::Mat AheadWitnesses(const DynamicView& t, const std::vector<const DynamicView
   const double agree = o.ahead_veto * o.threshold;
   cv::Mat out(t.grey.size(), CV_8U, cv::Scalar(0));
   seen_by = 0;
+  const TargetPlanes target(t, o.colour);
   for (const DynamicView* nb : ahead) {
     CheckView(*nb, "ahead view");
-    const std::vector<cv::Mat> planes = Planes(t, o.colour, *nb);
+    const std::vector<cv::Mat>& planes = target.Against(*nb);
     Warped w;
     if (!WarpView(t, planes, *nb, o, w)) continue;
     ++seen_by;
