@@ -309,6 +309,18 @@ std::vector<cv::Mat> ColourPlanes(const DynamicView& v) {
   return c;
 }
 
+// View `v`'s planes of the kind of `n` target planes: its colour channels for 3, else its luma.
+std::vector<cv::Mat> PlanesLike(const DynamicView& v, size_t n) {
+  return n == 3 ? ColourPlanes(v) : std::vector{v.grey};
+}
+
+// `m` times the gain that brings it to `target`'s exposure (ExposureGain), as a new image: never
+// `m`'s own pixels in place (a view's luma is shared with the caller's cache).
+cv::Mat Gained(const cv::Mat& m, const cv::Mat& target) {
+  const cv::Mat out = m * ExposureGain(target, m);
+  return out;
+}
+
 // Whether view `v` has a colour image that is not grey (its three channels not all equal: a
 // grey camera's photo is loaded as three copies of its one channel).
 bool InColour(const DynamicView& v) {
@@ -341,10 +353,10 @@ struct Warped {
   cv::Mat valid, coarser, motion;  // where it sees the target's point; WarpMaps' maps
 };
 
-// `nb` warped into the target, its planes matching `planes` of the target (luma or colour);
+// `nb` warped into the target: `own`, nb's PlanesLike the target's `planes` (luma or colour);
 // false when it sees none of the target's pixels.
 bool WarpView(const DynamicView& t, const std::vector<cv::Mat>& planes, const DynamicView& nb,
-              const DynamicOptions& o, Warped& w) {
+              const std::vector<cv::Mat>& own, const DynamicOptions& o, Warped& w) {
   cv::Mat mx, my;
   WarpMaps(t, nb, o.depth_tolerance, mx, my, w.coarser, w.motion);
   w.valid = mx == mx;  // not NaN
@@ -353,12 +365,12 @@ bool WarpView(const DynamicView& t, const std::vector<cv::Mat>& planes, const Dy
     cv::Mat out;
     cv::remap(src, out, mx, my, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
     out.setTo(0, ~w.valid);
-    return cv::Mat(out * ExposureGain(target, out));
+    return Gained(out, target);
   };
-  if (o.flow) w.grey = resample(nb.grey, t.grey);  // only the flow reads it
-  const std::vector<cv::Mat> own = planes.size() == 3 ? ColourPlanes(nb) : std::vector{nb.grey};
   w.planes.clear();
   for (size_t k = 0; k < own.size(); ++k) w.planes.push_back(resample(own[k], planes[k]));
+  // Only the flow reads the luma; on the luma's planes it is the one plane warped already.
+  if (o.flow) w.grey = planes.size() == 1 ? w.planes[0] : resample(nb.grey, t.grey);
   return true;
 }
 
@@ -388,7 +400,7 @@ int ReducedResiduals(const DynamicView& t, const std::vector<const DynamicView*>
     CheckView(*nb, what);
     const std::vector<cv::Mat>& planes = target.Against(*nb);
     Warped w;
-    if (!WarpView(t, planes, *nb, o, w)) continue;
+    if (!WarpView(t, planes, *nb, PlanesLike(*nb, planes.size()), o, w)) continue;
     ++seen_by;
     photo.push_back(PlanesResidual(planes, w.planes, w.valid, w.coarser, o));
     if (o.flow) flows.push_back(FlowResidual(t.grey, w.grey, w.valid, w.motion, o));
@@ -415,8 +427,9 @@ cv::Mat AheadWitnesses(const DynamicView& t, const std::vector<const DynamicView
   for (const DynamicView* nb : ahead) {
     CheckView(*nb, "ahead view");
     const std::vector<cv::Mat>& planes = target.Against(*nb);
+    const std::vector<cv::Mat> own = PlanesLike(*nb, planes.size());
     Warped w;
-    if (!WarpView(t, planes, *nb, o, w)) continue;
+    if (!WarpView(t, planes, *nb, own, o, w)) continue;
     ++seen_by;
     cv::Mat witness = PlanesResidual(planes, w.planes, w.valid, w.coarser, o) < agree;
     // A photo behind the target (its centre at z <= 0 in the target's camera) cannot have
@@ -424,11 +437,8 @@ cv::Mat AheadWitnesses(const DynamicView& t, const std::vector<const DynamicView
     const bool behind = (t.world_to_camera * nb->world_to_camera.Centre()).z() <= 0;
     if (behind && nb->grey.size() == t.grey.size()) {
       const cv::Mat all(t.grey.size(), CV_8U, cv::Scalar(255));
-      std::vector<cv::Mat> same = planes.size() == 3 ? ColourPlanes(*nb) : std::vector{nb->grey};
-      for (size_t k = 0; k < same.size(); ++k) {  // a new image: never nb's own luma, in place
-        const cv::Mat gained = same[k] * ExposureGain(planes[k], same[k]);
-        same[k] = gained;
-      }
+      std::vector<cv::Mat> same;
+      for (size_t k = 0; k < own.size(); ++k) same.push_back(Gained(own[k], planes[k]));
       const cv::Mat ones = cv::Mat::ones(t.grey.size(), CV_32F);
       witness &= ~(PlanesResidual(planes, same, all, ones, o) < agree);
     }
@@ -619,7 +629,6 @@ size_t ClearExplained(const DynamicView& t, double tolerance, double at, cv::Mat
   return cleared;
 }
 
-// Sets to 0 the probability of every pixel whose blob (`labels`, 0 = background) `drop` marks.
 // 255 where `mask`'s 8-connected component holds a pixel of `seeds` (both CV_8U, one size).
 cv::Mat ComponentsTouching(const cv::Mat& mask, const cv::Mat& seeds) {
   cv::Mat labels;
@@ -636,6 +645,7 @@ cv::Mat ComponentsTouching(const cv::Mat& mask, const cv::Mat& seeds) {
   return out;
 }
 
+// Sets to 0 the probability of every pixel whose blob (`labels`, 0 = background) `drop` marks.
 void ZeroBlobs(const cv::Mat& labels, const std::vector<uint8_t>& drop, cv::Mat& probability) {
   for (int y = 0; y < probability.rows; ++y)
     for (int x = 0; x < probability.cols; ++x)
