@@ -18,7 +18,7 @@ tool and OUT/index.html, the page to read before choosing settings. Work folders
              --passes, --segments,
              --region-depth,
              --probability, --grounded, --min-height,
-             --occludes, --occlusion-gap, --min-ratio, --max-gap
+             --occludes, --occlusion-gap, --min-ratio, --max-gap, --gap-support
              (no labels; the fixture's true mesh, no densify maps, so --seen-tolerance has nothing
              to compare: its rows are the road build's, issue 21's note), and --max-fill,
              --complete, --driven, --driven-agree and --no-driven-grow on a mesh densify + roadmesh
@@ -515,7 +515,8 @@ def sweep_dynmask(c):
                  ("occludes", "--occludes", (0, 0.1, 0.2, 0.35)),
                  ("occlusion-gap", "--occlusion-gap", (0.1, 0.25, 0.5)),
                  ("min-ratio", "--min-ratio", (0.3, 0.4, 0.5)),
-                 ("max-gap", "--max-gap", (1, 3, 10))]
+                 ("max-gap", "--max-gap", (1, 3, 10)),
+                 ("gap-support", "--gap-support", (0, 0.05, 0.1))]
     defaults = {"--threshold": 0.05, "--flow-threshold": 2.5, "--no-flow": False,
                 "--no-colour": False, "--colour-threshold": 0.065,
                 "--flow-relative": 0,
@@ -525,7 +526,7 @@ def sweep_dynmask(c):
                 "--min-baseline": 0.25, "--passes": 2, "--occludes": 0.2, "--occlusion-gap": 0.25,
                 "--segments": 300,
                 "--probability": 0.4, "--grounded": 0.25, "--min-height": 0.5,
-                "--min-ratio": 0.5, "--max-gap": 3, "--max-fill": 0.5, "--complete": 3,
+                "--min-ratio": 0.5, "--max-gap": 3, "--gap-support": 0.05, "--max-fill": 0.5, "--complete": 3,
                 "--driven": 1, "--driven-agree": 0.1, "--no-driven-grow": False}
     rows = []
 
@@ -602,7 +603,8 @@ def sweep_dynmask(c):
         f"the fixture's vehicles all move, so these rows show the time and that the road is "
         f"left alone; CamVid 0016E5 is where it finds parked and waiting vehicles), "
         f"<code>--min-ratio</code>, "
-        f"<code>--max-gap</code> (tracking). Each varied alone on the "
+        f"<code>--max-gap</code> (tracking), <code>--gap-support</code> (a gap fill kept only "
+        f"where the probability supports it). Each varied alone on the "
         f"fixture's photos and true mesh ({len(a_names)} frames per drive, 640x192). "
         f"<b>Accuracy:</b> IoU of drive A's masks against truth/masks, pooled (the column "
         f"pass_b_masked: the share of drive B, which has no vehicle, masked: lower is better). "

@@ -87,6 +87,41 @@ void TrackResult::RenderMask(int frame, int dilate, std::vector<uint8_t>& out) c
   }
 }
 
+size_t RejectUnsupportedGaps(TrackResult& res, int frame, const float* evidence, double min_mean) {
+  const auto [b, e] = res.FrameRows(frame);
+  if (std::none_of(res.rows.begin() + ptrdiff_t(b), res.rows.begin() + ptrdiff_t(e),
+                   [](const TrackRow& r) { return r.state == RowState::kInterpolated; }))
+    return 0;
+  std::vector<uint8_t> detected(size_t(res.width) * size_t(res.height), 0);
+  for (size_t i = b; i < e; ++i)
+    if (res.rows[i].state == RowState::kDetected)
+      PaintBlob(res.blobs[res.rows[i].blob], res.rows[i].draw_x, res.rows[i].draw_y, 1,
+                detected.data(), res.width, res.height);
+  size_t dropped = 0;
+  for (size_t i = b; i < e; ++i) {
+    TrackRow& r = res.rows[i];
+    if (r.state != RowState::kInterpolated) continue;
+    const Blob& blob = res.blobs[r.blob];
+    double sum = 0, n = 0;
+    for (int y = 0; y < blob.h; ++y)
+      for (int x = 0; x < blob.w; ++x) {
+        const int px = r.draw_x + x, py = r.draw_y + y;
+        if (!blob.mask[size_t(y) * size_t(blob.w) + size_t(x)] || px < 0 || py < 0 ||
+            px >= res.width || py >= res.height)
+          continue;
+        const size_t q = size_t(py) * size_t(res.width) + size_t(px);
+        if (!detected[q]) sum += double(evidence[q]), n += 1;
+      }
+    if (n > 0 && sum < min_mean * n) {
+      r.state = RowState::kRejected;
+      ++dropped;
+    }
+  }
+  res.summary.interpolated -= dropped;
+  res.summary.unsupported_gaps += dropped;
+  return dropped;
+}
+
 Tracker::Tracker(int width, int height, const TrackOptions& options)
     : width_(width), height_(height), o_(options) {
   o_.Check();

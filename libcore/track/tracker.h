@@ -54,6 +54,7 @@ void DeclareTrackOptions(OptionTable& table, TrackOptions& o);
 struct TrackSummary {
   int frames = 0, tracks = 0, kept = 0, rejected = 0;
   size_t detected = 0, interpolated = 0, rejected_blobs = 0, unfilled_gaps = 0;
+  size_t unsupported_gaps = 0;  // interpolated rows RejectUnsupportedGaps turned to rejected
 };
 
 struct TrackResult {
@@ -72,6 +73,16 @@ struct TrackResult {
   friend class Tracker;
   std::vector<size_t> frame_begin_;  // frames+1 offsets into rows
 };
+
+// Gap filling checked against evidence the tracker never saw (dynmask's probability maps): in
+// frame `frame` of `res`, each interpolated row whose pixels outside that frame's detected rows
+// have a mean `evidence` (width×height values, row-major) below `min_mean` becomes rejected, so
+// RenderMask leaves it out. A row with no such pixel (all under detected blobs or off the image)
+// stays. The two ends of a gap need not be one vehicle: a track that lost its blob may take
+// another one (two vehicles merged, a patch of light) a few frames on, and the interpolation
+// between then paints what lies between them. Returns how many rows were rejected;
+// summary.interpolated and summary.unsupported_gaps follow.
+size_t RejectUnsupportedGaps(TrackResult& res, int frame, const float* evidence, double min_mean);
 
 class Tracker {
  public:

@@ -52,6 +52,12 @@ void DeclareMaskOptions(OptionTable& t, DynmaskOptions& o) {
          "0: a quarter of the image width)")
       .AtLeast(0);
   DeclareTrackOptions(t, o.track);
+  t.Real("--gap-support", &o.gap_support,
+         "Tracking: a frame's gap filled by interpolation is kept only when its pixels outside "
+         "that frame's detected blobs have a mean probability of at least P (0: every gap "
+         "filled, as segtrack fills them)")
+      .Range(0, 1)
+      .Alternative("0");
   t.Text("--also", &o.also, "Folder of masks (NAME.png) OR-ed into every output mask")
       .Dir()
       .Check([&o] { RequireFolder("--also", o.also); });
@@ -937,10 +943,8 @@ void ConfirmLabels(const DynmaskOptions& o, const LabelDecoder& decoder, const s
     }
 }
 
-// One image's mask from its probability map, at the image's full size.
-cv::Mat MaskOf(const DynmaskOptions& o, const LabelDecoder& decoder, const Workspace& ws,
-               const Scene& s, size_t i) {
-  const MaskOptions& mo = o.mask;
+// Image i's probability map (CV_32F, 0..1) at the working size.
+cv::Mat ReadProbability(const Workspace& ws, const Scene& s, size_t i) {
   const fs::path p = ws.DynamicPath(s.images[i]->name);
   const Image im = ReadImage(p.string());
   RequireImageSize(im, p.string(), s.work[i].width, s.work[i].height);
@@ -950,6 +954,14 @@ cv::Mat MaskOf(const DynmaskOptions& o, const LabelDecoder& decoder, const Works
       prob.at<float>(y, x) =
           float(im.data[(size_t(y) * size_t(im.width) + size_t(x)) * size_t(im.channels)] /
                 im.MaxValue());
+  return prob;
+}
+
+// One image's mask from its probability map, at the image's full size.
+cv::Mat MaskOf(const DynmaskOptions& o, const LabelDecoder& decoder, const Workspace& ws,
+               const Scene& s, size_t i) {
+  const MaskOptions& mo = o.mask;
+  const cv::Mat prob = ReadProbability(ws, s, i);
   cv::Mat m = MaskFromProbability(prob, mo), full;
   const cv::Size size(int(s.full[i].width), int(s.full[i].height));
   cv::resize(m, full, size, 0, 0, cv::INTER_NEAREST);
@@ -1006,7 +1018,18 @@ void WriteMasks(const DynmaskOptions& o, const Workspace& ws, const Scene& s, Le
                     ": every image of a drive must have one size to be tracked");
       tracker.AddFrame(MaskOf(o, decoder, ws, s, i).data);
     }
-    const TrackResult res = tracker.Finish();
+    TrackResult res = tracker.Finish();
+    if (o.gap_support > 0)
+      for (size_t k = 0; k < idx.size(); ++k) {
+        const auto [b, e] = res.FrameRows(int(k));
+        if (std::none_of(res.rows.begin() + ptrdiff_t(b), res.rows.begin() + ptrdiff_t(e),
+                         [](const TrackRow& r) { return r.state == RowState::kInterpolated; }))
+          continue;
+        cv::Mat p;
+        cv::resize(ReadProbability(ws, s, idx[k]), p, cv::Size(res.width, res.height), 0, 0,
+                   cv::INTER_LINEAR);
+        RejectUnsupportedGaps(res, int(k), p.ptr<float>(), o.gap_support);
+      }
     std::vector<uint8_t> mask;
     Image out(res.width, res.height, 1, 8);
     for (size_t k = 0; k < idx.size(); ++k) {
@@ -1032,6 +1055,7 @@ void WriteMasks(const DynmaskOptions& o, const Workspace& ws, const Scene& s, Le
     rep.summary.rejected += t.rejected, rep.summary.detected += t.detected;
     rep.summary.interpolated += t.interpolated, rep.summary.rejected_blobs += t.rejected_blobs;
     rep.summary.unfilled_gaps += t.unfilled_gaps;
+    rep.summary.unsupported_gaps += t.unsupported_gaps;
   }
   WriteTracksTsv(ws.TracksPath().string(), rows);
   ledger.Done(ws.TracksPath(), inputs);

@@ -47,6 +47,7 @@ struct DynmaskOptions : WorkOptions {
   std::string labels;       // folder of label images: blobs confirmed or rejected by geometry
   std::string classes = "8,9,10";  // their classes (CamVid: car, pedestrian, cyclist)
   double confirm = 0.25;           // a label blob whose mean probability reaches this is masked
+  double gap_support = 0.05;       // a gap filled by tracking needs this mean probability; 0: off
 
   // Tracking as segtrack's but for: max_jump 0 (a quarter width: probability blobs jump more
   // than label blobs); max_gap 3 (a blob of light at the image border and a vehicle entering

@@ -51,6 +51,9 @@ int RunAndReport(mvtm::DynmaskOptions& o) {
                  "; masks: %zu written, %.2f %% of the image masked on average; %d tracks (%d "
                  "kept, %d rejected)",
                  r.masks_written, 100 * r.masked_share, t.tracks, t.kept, t.rejected);
+    if (t.unsupported_gaps)
+      std::fprintf(stderr, ", %zu gap fills the probability does not support left out",
+                   t.unsupported_gaps);
   } else if (!o.frames.empty() || !o.shard.empty()) {
     std::fprintf(stderr, "; masks not made (a run without --frames/--shard makes them)");
   } else {
