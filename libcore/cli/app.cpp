@@ -6,6 +6,7 @@
 #include <iostream>
 #include <locale>
 #include <new>
+#include <string>
 
 #include "base/error.h"
 #include "base/version.h"
@@ -31,6 +32,19 @@ int RunTool(OptionTable table, const std::string& description, int argc, char** 
   return RunMain(app, table.tool(), argc, argv, run);
 }
 
+namespace {
+
+// CLI11's words for a flag given a value ("no-flow was given a disallowed flag override") in the
+// tools' own form, "--no-flow: a flag takes no value"; other parse errors as CLI11 words them.
+std::string ParseErrorText(const std::string& what) {
+  const std::string tag = " was given a disallowed flag override";
+  const size_t at = what.find(tag);
+  if (at == std::string::npos || at == 0) return what;
+  return "--" + what.substr(0, at) + ": a flag takes no value";
+}
+
+}  // namespace
+
 int RunMain(CLI::App& app, const std::string& tool, int argc, char** argv,
             const std::function<int()>& run) {
   std::setlocale(LC_ALL, "C");
@@ -50,7 +64,7 @@ int RunMain(CLI::App& app, const std::string& tool, int argc, char** argv,
     } catch (const CLI::Success&) {
       return 0;  // a flag that printed what was asked (--options-json)
     } catch (const CLI::ParseError& e) {
-      std::cerr << tool << ": error: " << e.what() << " (try --help)\n";
+      std::cerr << tool << ": error: " << ParseErrorText(e.what()) << " (try --help)\n";
       return 2;
     }
     return run();

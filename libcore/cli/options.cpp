@@ -16,7 +16,8 @@ void AddOptionTable(CLI::App& app, OptionTable& table) {
   for (const OptionSpec& s : table.options()) {
     if (s.hidden) continue;
     if (s.is_flag) {
-      // A flag takes no value: `--no-flow=0` is a usage error, not a silent "on".
+      // A flag takes no value: `--no-flow=0` (any value but CLI11's "true") is a usage error,
+      // not a silent "on".
       app.add_flag_function(
              s.names, [set = s.set](int64_t n) { set(n > 0 ? "1" : "0"); }, s.help)
           ->disable_flag_override();

@@ -262,10 +262,9 @@ TEST(Tracker, DilateGrowsTheMaskByADisk) {
 
 // The artefact RejectUnsupportedGaps is for: a small blob (frames 0-2) is lost, and two frames
 // on the track takes another, larger thing 36 px away (frames 5-7); the gap between is filled
-// with the small blob scaled and moved across the empty road. With the evidence 0 there (the
-// only evidence on the two things themselves) both filled rows go; with the evidence at 0.3 on
-// the filled pixels they stay. A third case: a filled blob lying under another track's detected
-// blob has no pixel of its own to judge and stays whatever the evidence.
+// with the small blob scaled and moved across the empty road. With evidence 0 on the filled
+// pixels both filled rows go; with 0.3 on them they stay. Then fills under another track's
+// detected blob: only the pixels outside it are judged.
 TEST(Tracker, GapsTheEvidenceDoesNotSupportAreRejected) {
   TrackOptions o;
   o.smooth = 0;
@@ -309,29 +308,40 @@ TEST(Tracker, GapsTheEvidenceDoesNotSupportAreRejected) {
     EXPECT_EQ(RejectUnsupportedGaps(r, f, evidence.data(), 0.35), 1u);
   }
 
-  // Under another track's detected blob (a wide box over both, by hand): nothing to judge.
-  Tracker t(kW, kH, o);
+  // Blobs by hand (AddBlobs): a wide box (rows 0-11) detected in every frame, and a 6x6 box
+  // lost in frame 2 and filled there.
   auto box_blob = [](const Box& b) {
-    Blob blob{b.x,
-              b.y,
-              b.w,
-              b.h,
-              b.x + (b.w - 1) / 2.0,
-              b.y + (b.h - 1) / 2.0,
-              b.w * b.h,
-              std::vector<uint8_t>(size_t(b.w * b.h), 1)};
-    return blob;
+    return Blob{b.x,
+                b.y,
+                b.w,
+                b.h,
+                b.x + (b.w - 1) / 2.0,
+                b.y + (b.h - 1) / 2.0,
+                b.w * b.h,
+                std::vector<uint8_t>(size_t(b.w * b.h), 1)};
   };
-  for (int f = 0; f < 5; ++f) {
-    std::vector<Blob> blobs{box_blob({0, 0, kW, 12})};
-    if (f != 2) blobs.push_back(box_blob({50, 2, 6, 6}));
-    t.AddBlobs(blobs);
-  }
-  TrackResult covered = t.Finish();
-  ASSERT_EQ(covered.summary.interpolated, 1u);
-  std::fill(evidence.begin(), evidence.end(), 0.f);
+  auto fill_under_wide_box = [&](int small_y) {
+    Tracker t(kW, kH, o);
+    for (int f = 0; f < 5; ++f) {
+      std::vector<Blob> blobs{box_blob({0, 0, kW, 12})};
+      if (f != 2) blobs.push_back(box_blob({50, small_y, 6, 6}));
+      t.AddBlobs(blobs);
+    }
+    TrackResult res = t.Finish();
+    EXPECT_EQ(res.summary.interpolated, 1u);
+    return res;
+  };
+  // Evidence 1 under the wide box, 0 elsewhere. Wholly under it (rows 2-7): nothing of its own
+  // to judge, it stays.
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) evidence[y * kW + x] = y < 12 ? 1.f : 0.f;
+  TrackResult covered = fill_under_wide_box(2);
   EXPECT_EQ(RejectUnsupportedGaps(covered, 2, evidence.data(), 0.5), 0u);
   EXPECT_EQ(covered.summary.interpolated, 1u);
+  // Rows 8-13: its 12 pixels below the wide box have evidence 0 and it goes; the covered pixels'
+  // evidence (1) must not count, or the mean would be 24/36 or 24/12 and it would stay.
+  TrackResult half = fill_under_wide_box(8);
+  EXPECT_EQ(RejectUnsupportedGaps(half, 2, evidence.data(), 0.5), 1u);
 }
 
 TEST(TrackOptions, CheckNamesTheBadValue) {
