@@ -26,8 +26,8 @@ struct TrackRow {
   RowState state = RowState::kDetected;
   // The pixels drawn (detected, rejected: the blob as found; interpolated, and a gap fill that
   // RejectUnsupportedGaps rejected: the moved blob, clipped to the image): bounding box,
-  // centroid, pixel count. An interpolated blob that falls
-  // entirely outside the image has area 0 and an empty box at its unclipped position.
+  // centroid, pixel count. An interpolated blob that falls entirely outside the image has area
+  // 0 and an empty box at its unclipped position.
   int x = 0, y = 0, w = 0, h = 0;
   double cx = 0, cy = 0;
   int area = 0;

@@ -87,11 +87,15 @@ void TrackResult::RenderMask(int frame, int dilate, std::vector<uint8_t>& out) c
   }
 }
 
+bool TrackResult::HasInterpolated(int frame) const {
+  const auto [b, e] = FrameRows(frame);
+  return std::any_of(rows.begin() + ptrdiff_t(b), rows.begin() + ptrdiff_t(e),
+                     [](const TrackRow& r) { return r.state == RowState::kInterpolated; });
+}
+
 size_t RejectUnsupportedGaps(TrackResult& res, int frame, const float* evidence, double min_mean) {
+  if (!res.HasInterpolated(frame)) return 0;
   const auto [b, e] = res.FrameRows(frame);
-  if (std::none_of(res.rows.begin() + ptrdiff_t(b), res.rows.begin() + ptrdiff_t(e),
-                   [](const TrackRow& r) { return r.state == RowState::kInterpolated; }))
-    return 0;
   std::vector<uint8_t> detected(size_t(res.width) * size_t(res.height), 0);
   for (size_t i = b; i < e; ++i)
     if (res.rows[i].state == RowState::kDetected)

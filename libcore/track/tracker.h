@@ -65,6 +65,8 @@ struct TrackResult {
 
   // Rows of frame f: [begin, end) indices into rows.
   std::pair<size_t, size_t> FrameRows(int frame) const;
+  // Whether frame f has a row of state interpolated (a gap fill).
+  bool HasInterpolated(int frame) const;
   // The output mask of `frame`: width*height bytes, 255 under the detected and interpolated blobs
   // of kept tracks, 0 elsewhere; then dilated by a disk of radius `dilate` (0: not dilated).
   void RenderMask(int frame, int dilate, std::vector<uint8_t>& out) const;

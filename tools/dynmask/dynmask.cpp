@@ -1021,10 +1021,7 @@ void WriteMasks(const DynmaskOptions& o, const Workspace& ws, const Scene& s, Le
     TrackResult res = tracker.Finish();
     if (o.gap_support > 0)
       for (size_t k = 0; k < idx.size(); ++k) {
-        const auto [b, e] = res.FrameRows(int(k));
-        if (std::none_of(res.rows.begin() + ptrdiff_t(b), res.rows.begin() + ptrdiff_t(e),
-                         [](const TrackRow& r) { return r.state == RowState::kInterpolated; }))
-          continue;
+        if (!res.HasInterpolated(int(k))) continue;  // the map is read only where a gap is filled
         cv::Mat p;
         cv::resize(ReadProbability(ws, s, idx[k]), p, cv::Size(res.width, res.height), 0, 0,
                    cv::INTER_LINEAR);
