@@ -549,7 +549,8 @@ def sweep_dynmask(c):
     # --max-fill judges blobs on the corridor walls of a mesh built from the photos (densify,
     # roadmesh --dense: the walls close the fused facades' holes); the true mesh has none.
     photo = sl.copy_workspace(ws, os.path.join(folder, "photo"),
-                              leave_out=("mesh.ply", "masks", "dynamic", "tracks.tsv"))
+                              leave_out=("mesh.ply", "dynmask-mesh.ply", "masks", "dynamic",
+                                         "tracks.tsv"))
     c.tools.run("densify", "--quiet", photo)
     c.tools.run("roadmesh", "--quiet", "--dense", "--metric", "--no-colours", photo)
     for v in (0.5, 1) if c.short else (0.3, 0.5, 1):

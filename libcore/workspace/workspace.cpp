@@ -71,6 +71,7 @@ fs::path Workspace::TextureProvenancePath(const std::string& name) const {
   return Derived(TexturesDir() / "provenance", name, ".png");
 }
 fs::path Workspace::NewMeshPath() const { return root_ / "mesh.ply"; }
+fs::path Workspace::DynmaskMeshPath() const { return root_ / "dynmask-mesh.ply"; }
 std::vector<fs::path> Workspace::SparseModelFiles() const {
   std::vector<fs::path> files;
   for (const auto& f : ColmapModelFiles(SparseDir().string())) files.emplace_back(f);

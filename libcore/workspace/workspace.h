@@ -7,6 +7,7 @@
 //   labels/NAME.png       semantic labels (segtrack input)
 //   masks/NAME.png        8-bit masks, 255 = remove (segtrack or dynmask output)
 //   dynamic/NAME.png      8-bit probability of "not static", 255 = surely not (dynmask)
+//   dynmask-mesh.ply      the mesh as dynmask's first run found it, vehicles and all (dynmask)
 //   tracks.tsv            segtrack's (or dynmask's) tracks
 //   partners.tsv          pickview's view selection
 //   exposure.tsv          gain and offset per image (exposure)
@@ -82,6 +83,9 @@ class Workspace {
   fs::path TextureProvenancePath(const std::string& name) const;
   // Where a tool that builds the workspace's mesh writes it (mesh.ply).
   fs::path NewMeshPath() const;
+  // dynmask-mesh.ply: the mesh dynmask checks the photos against, kept (hard-linked) as its
+  // first run found it, since roadmesh rebuilds mesh.ply without the masked pixels afterwards.
+  fs::path DynmaskMeshPath() const;
   // The sparse model's files that exist (text and binary): the inputs every derived output
   // (depth maps, frames, partners, the mesh) depends on.
   std::vector<fs::path> SparseModelFiles() const;

@@ -259,6 +259,15 @@ OptionTable DeclareOptions(DynmaskOptions& o) {
             {DepthSource::kMesh, "mesh"},
             {DepthSource::kStereo, "stereo"}},
            "Static depth: the mesh ray-cast, densify's maps, or auto (the mesh, else the maps)");
+  t.Text("--mesh", &o.mesh,
+         "The mesh to ray-cast (default: dynmask-mesh.ply, the workspace's mesh as dynmask's "
+         "first run found it, vehicles and all: roadmesh rebuilds mesh.ply without the masked "
+         "pixels afterwards)")
+      .File()
+      .Check([&o] {
+        if (!o.mesh.empty() && !fs::is_regular_file(o.mesh))
+          throw UsageError("--mesh: no such file: " + o.mesh);
+      });
   DeclareEvidenceOptions(t, o);
   DeclareMaskOptions(t, o);
   DeclareWorkOptions(t, o, "images", "in name order",
@@ -491,17 +500,37 @@ Partners ChooseAhead(const Scene& s, int count, double min_share, const Partners
   return p;
 }
 
+// The mesh the photos are checked against: --mesh; else dynmask-mesh.ply, which the first run
+// keeps of the workspace's mesh (a hard link, a copy where links fail), so that a rerun after
+// roadmesh rebuilt mesh.ply without the masked pixels still ray-casts the scene as recorded, the
+// vehicles' surfaces that --driven grows over included. Empty when there is none.
+fs::path StaticMesh(const DynmaskOptions& o, const Workspace& ws) {
+  if (!o.mesh.empty()) return o.mesh;
+  const fs::path kept = ws.DynmaskMeshPath(), mesh = ws.MeshPath();
+  if (fs::exists(kept)) return kept;
+  if (o.depth == DepthSource::kStereo || !fs::exists(mesh)) return {};
+  AtomicFile af(kept);
+  std::error_code ec;
+  const fs::path file = fs::canonical(mesh);  // a link to a symbolic link would follow it
+  fs::create_hard_link(file, af.temp_path(), ec);
+  if (ec) fs::copy_file(file, af.temp_path(), fs::copy_options::overwrite_existing, ec);
+  if (ec) throw Error(kept.string(), 0, "cannot keep " + mesh.string() + ": " + ec.message());
+  af.Commit();
+  return kept;
+}
+
 // Static depth of one image at its working size.
 class DepthProvider {
  public:
-  // mark_walls: Depth() marks the pixels whose ray meets a corridor wall (for --max-fill).
-  DepthProvider(const Workspace& ws, DepthSource src, bool mark_walls)
-      : ws_(ws), mark_walls_(mark_walls) {
-    const bool mesh = fs::exists(ws.MeshPath()), stereo = fs::is_directory(ws.StereoDir());
-    use_mesh_ = src == DepthSource::kMesh || (src == DepthSource::kAuto && mesh);
+  // mesh: StaticMesh(); mark_walls: Depth() marks the pixels whose ray meets a corridor wall (for
+  // --max-fill).
+  DepthProvider(const Workspace& ws, DepthSource src, fs::path mesh, bool mark_walls)
+      : ws_(ws), mesh_(std::move(mesh)), mark_walls_(mark_walls) {
+    const bool stereo = fs::is_directory(ws.StereoDir());
+    use_mesh_ = src == DepthSource::kMesh || (src == DepthSource::kAuto && !mesh_.empty());
     if (use_mesh_) {
-      ws.Require("dynmask", {WsItem::kMesh});
-      Mesh m = ReadMesh(ws.MeshPath().string());
+      if (mesh_.empty()) ws.Require("dynmask", {WsItem::kMesh});
+      Mesh m = ReadMesh(mesh_.string());
       // The corridor walls behind the fused facades' holes are a backdrop at a guessed depth.
       if (m.has_face_kinds()) {
         walls_ = size_t(std::count(m.face_kinds.begin(), m.face_kinds.end(), kFaceFillWall));
@@ -517,8 +546,10 @@ class DepthProvider {
   }
   std::string Name() const {
     if (!use_mesh_) return "stereo/ (densify)";
-    if (walls_ == 0) return "mesh (ray-cast)";
-    return "mesh (ray-cast; " + std::to_string(walls_) + " of its faces corridor walls)";
+    const std::string file =
+        mesh_.parent_path() == ws_.root() ? mesh_.filename().string() : mesh_.string();
+    if (walls_ == 0) return file + " (ray-cast)";
+    return file + " (ray-cast; " + std::to_string(walls_) + " of its faces corridor walls)";
   }
   bool UsesMesh() const { return use_mesh_; }
   // How far below `c` (along -up, unit) the mesh is; NaN without a mesh or a surface there.
@@ -527,7 +558,7 @@ class DepthProvider {
     return hit ? hit->t : std::numeric_limits<double>::quiet_NaN();
   }
   fs::path Input(const std::string& name) const {
-    return use_mesh_ ? ws_.MeshPath() : ws_.StereoDepthPath(name);
+    return use_mesh_ ? mesh_ : ws_.StereoDepthPath(name);
   }
   // `guessed` (when given): CV_8U, 255 where the ray meets a corridor wall, else 0; empty when
   // the static depth says nothing of guesses (densify's maps, a mesh without face kinds).
@@ -536,6 +567,7 @@ class DepthProvider {
 
  private:
   const Workspace& ws_;
+  fs::path mesh_;
   bool mark_walls_ = false;
   bool use_mesh_ = false;
   std::vector<uint8_t> kinds_;  // the mesh's face kinds (empty: the mesh says nothing)
@@ -1073,7 +1105,7 @@ DynmaskReport RunDynmask(const DynmaskOptions& o) {
   o.Check();
   const Workspace ws(o.workspace);
   ws.Require("dynmask", {WsItem::kSparse, WsItem::kImages});
-  const DepthProvider depth(ws, o.depth, o.max_fill < 1);
+  const DepthProvider depth(ws, o.depth, StaticMesh(o, ws), o.max_fill < 1);
   Scene s = LoadScene(ws, o.max_width);
   if (o.driven.half_width > 0 && depth.UsesMesh()) s.paths = DrivenPaths(s, depth);
   Pairing pair{ChooseNeighbours(s, o.neighbours, o.min_baseline),

@@ -28,10 +28,11 @@ struct DynmaskOptions : WorkOptions {
   double ahead_min_share = 0.1;  // ... none nearer than this share of the depth it stands for
   double min_baseline = 0.25;    // nearest neighbour allowed, in median camera spacings
   DepthSource depth = DepthSource::kAuto;  // auto: the mesh, else densify's maps
-  bool no_flow = false;                    // --no-flow: photometric evidence only
-  bool no_colour = false;                  // --no-colour: the luma's photometric residual only
-  bool no_driven_grow = false;             // --no-driven-grow: densify's marked pixels only
-  double grounded = 0.25;  // blobs must touch the ground within this × camera height; 0: off
+  std::string mesh;  // --mesh: the mesh to ray-cast ("": dynmask-mesh.ply, kept at the first run)
+  bool no_flow = false;         // --no-flow: photometric evidence only
+  bool no_colour = false;       // --no-colour: the luma's photometric residual only
+  bool no_driven_grow = false;  // --no-driven-grow: densify's marked pixels only
+  double grounded = 0.25;       // blobs must touch the ground within this × camera height; 0: off
   int passes = 2;  // 2: neighbours' pixels that their own first pass finds moving are left out
   double min_height = 0.5;       // blobs must rise this × the camera's height; 0: off
   double seen_tolerance = 0.05;  // pixels where densify's depth is the static one: static; 0 off
