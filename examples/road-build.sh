@@ -358,7 +358,9 @@ if [ "$poses" != - ]; then
     cmp -s "$model/$f" "$ws/sparse/$f" || cp "$model/$f" "$ws/sparse/$f"
   done
 fi
-[ -f "$out/ba/georef.json" ] && cp "$out/ba/georef.json" "$ws/georef.json"
+if [ -f "$out/ba/georef.json" ]; then
+  cmp -s "$out/ba/georef.json" "$ws/georef.json" || cp "$out/ba/georef.json" "$ws/georef.json"
+fi
 # A video's burned-in overlay: undistorted like the photos, one mask per image, so that fusion,
 # vertex colours and projection leave those pixels out (ptmrender fills them from other photos);
 # dynmask ORs them into its masks.

@@ -83,14 +83,16 @@ void RequireInputs(const Workspace& ws, const RoadMeshOptions& o) {
   ws.Require("roadmesh", needs);
 }
 
-// The files the mesh is made from: the model, the images that colour it (textures/NAME when
-// there, as BakeColours reads them) and with --dense densify's maps (missing ones are left out;
-// one that appears makes the mesh stale).
+// The files the mesh is made from: the model, the images that colour it and their masks, and
+// with --dense densify's maps (missing ones are left out; one that appears makes the mesh stale).
+// The colours come from images/, never from textures/: inpaint3d makes those from the mesh (its
+// depth, its vertex colours) and blends a seam outside each mask, so a mesh coloured from them
+// would be stale again after every inpaint3d, and a rerun of the road build would never settle.
 std::vector<fs::path> MeshInputs(const Workspace& ws, const Reconstruction& rec,
                                  const RoadMeshOptions& o) {
   std::vector<fs::path> in = ws.SparseModelFiles();
   for (const ImageRecord* im : rec.ImagesByName()) {
-    if (!o.no_colours) in.push_back(ws.SourceImagePath(im->name));
+    if (!o.no_colours) in.push_back(ws.ImagePath(im->name));
     // Masked pixels (vehicles: segtrack or dynmask; a video's overlay) are left out of the
     // colours and of fusion: a mask that appears or changes makes the mesh stale.
     if (fs::exists(ws.MaskPath(im->name))) in.push_back(ws.MaskPath(im->name));
@@ -124,7 +126,7 @@ void BakeColours(const Workspace& ws, const Reconstruction& rec, const RoadMeshO
   for (const ImageRecord* im : images) {
     const Camera& cam = rec.cameras.at(im->camera_id);
     cam.RequireUndistorted();  // before reading the image: the camera model is the first error
-    const std::string path = ws.SourceImagePath(im->name).string();
+    const std::string path = ws.ImagePath(im->name).string();  // see MeshInputs
     Image img = ReadImage(path);
     RequireImageSize(img, path, cam.width, cam.height);
     baker.Add(cam, im->world_to_camera, img, ReadMaskAtCamera(ws, im->name, cam));
