@@ -43,6 +43,23 @@ std::string ParseErrorText(const std::string& what) {
   return "--" + what.substr(0, at) + ": a flag takes no value";
 }
 
+// The first "--FLAG=VALUE" on the command line whose FLAG is a flag of the tool's table, "" when
+// none: CLI11 refuses a flag's value but its own "true" (disable_flag_override), so
+// "--no-flow=true" would pass as "on"; every value is refused instead, before parsing.
+std::string FlagGivenValue(int argc, char** argv) {
+  const OptionTable* table = CommandLineTable();
+  if (!table) return "";
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--") break;
+    const size_t eq = arg.find('=');
+    if (arg.rfind("--", 0) != 0 || eq == std::string::npos) continue;
+    for (const OptionSpec& s : table->options())
+      if (s.is_flag && s.flag == arg.substr(0, eq)) return s.flag;
+  }
+  return "";
+}
+
 }  // namespace
 
 int RunMain(CLI::App& app, const std::string& tool, int argc, char** argv,
@@ -51,6 +68,10 @@ int RunMain(CLI::App& app, const std::string& tool, int argc, char** argv,
   std::locale::global(std::locale::classic());
   try {
     try {
+      if (const std::string flag = FlagGivenValue(argc, argv); !flag.empty()) {
+        std::cerr << tool << ": error: " << flag << ": a flag takes no value (try --help)\n";
+        return 2;
+      }
       app.parse(argc, argv);
     } catch (const CLI::CallForHelp&) {
       std::cout << app.help();
