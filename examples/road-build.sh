@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The whole road build as one shell script: photos (or a video) + poses (or none) + intrinsics
 # (or none) → a rendered, scored mvtm workspace. Each step skips when its output exists (delete
-# it, or the workspace, to redo).
+# it, or the workspace, to redo). New poses (BORESIGHT, HOLDOUT_STRICT) redo the mesh; a new
+# first mesh also replaces the one dynmask judges against (OUT/ws/dynmask-mesh.ply, man dynmask).
 #
 # usage: examples/road-build.sh IMAGES|VIDEO POSES|- OUT [-- INTRINSICS...]
 #   IMAGES      folder of the frames (sorted by name = frame order); every photo is kept
@@ -355,7 +356,9 @@ if [ "$poses" != - ]; then
     model=$out/boresight
   fi
   for f in cameras.bin images.bin points3D.bin; do
-    cmp -s "$model/$f" "$ws/sparse/$f" || cp "$model/$f" "$ws/sparse/$f"
+    # New poses: the first mesh (and the one dynmask kept of it) was built with the old ones.
+    cmp -s "$model/$f" "$ws/sparse/$f" ||
+      { cp "$model/$f" "$ws/sparse/$f"; rm -f "$ws/mesh.ply" "$ws/dynmask-mesh.ply"; }
   done
 fi
 if [ -f "$out/ba/georef.json" ]; then
@@ -392,6 +395,7 @@ cpu_mesh() {
 
 log "3. mesh"
 if [ ! -f "$ws/mesh.ply" ] && [ ! -f "$ws/meshed-poisson.ply" ]; then
+  rm -f "$ws/dynmask-mesh.ply"  # dynmask judges against this new first mesh
   if colmap -h 2>&1 | grep -q "with CUDA"; then
     colmap_log colmap patch_match_stereo --workspace_path "$ws"
     colmap_log colmap stereo_fusion --workspace_path "$ws" --output_path "$ws/fused.ply"

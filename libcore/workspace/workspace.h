@@ -14,7 +14,8 @@
 //   depth/NAME.exr        float32 linear camera-space depth, +inf = no surface (bakedepth)
 //   stereo/NAME.exr       float32 linear depth from multi-view stereo, +inf = untrusted (densify)
 //   stereo/NAME.conf.exr  its confidence, 0..1
-//   textures/NAME         images with vehicles removed (inpaint3d); preferred over images/
+//   textures/NAME         images with vehicles removed (inpaint3d); preferred over images/ by
+//                         the programs that project them (never by those that build the mesh)
 //   textures/provenance/NAME.png  where each inpainted pixel came from (inpaint3d)
 //   provenance/TOOL.json  the record of what made a tool's outputs here (run/ledger.h)
 // NAME keeps any sub-folders of the image name; derived files replace the extension (".png",

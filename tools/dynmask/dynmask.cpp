@@ -279,6 +279,8 @@ void DynmaskOptions::Check() const {
   CheckDeclared(*this);
   if (driven.half_width > 0 && !(driven.below > driven.above))
     throw UsageError("--driven-below: must be above --driven-above");
+  if (!mesh.empty() && depth == DepthSource::kStereo)
+    throw UsageError("--mesh: a mesh is not read with --depth stereo");
   evidence.Check();
   mask.Check();
   TrackOptions t = track;
@@ -501,36 +503,47 @@ Partners ChooseAhead(const Scene& s, int count, double min_share, const Partners
 }
 
 // The mesh the photos are checked against: --mesh; else dynmask-mesh.ply, which the first run
-// keeps of the workspace's mesh (a hard link, a copy where links fail), so that a rerun after
-// roadmesh rebuilt mesh.ply without the masked pixels still ray-casts the scene as recorded, the
-// vehicles' surfaces that --driven grows over included. Empty when there is none.
-fs::path StaticMesh(const DynmaskOptions& o, const Workspace& ws) {
+// keeps of the workspace's mesh (DepthProvider), so that a rerun after roadmesh rebuilt mesh.ply
+// without the masked pixels still ray-casts the scene as recorded, the vehicles' surfaces that
+// --driven grows over included. Empty when there is none; `keep` says the mesh is to be kept.
+fs::path StaticMesh(const DynmaskOptions& o, const Workspace& ws, bool& keep) {
+  keep = false;
   if (!o.mesh.empty()) return o.mesh;
   const fs::path kept = ws.DynmaskMeshPath(), mesh = ws.MeshPath();
   if (fs::exists(kept)) return kept;
   if (o.depth == DepthSource::kStereo || !fs::exists(mesh)) return {};
-  AtomicFile af(kept);
+  keep = true;
+  return mesh;
+}
+
+// Links `mesh` (its file, when a symbolic link) to a temporary beside dynmask-mesh.ply, a copy
+// where links fail; the caller commits it once the mesh has been read.
+void LinkKeptMesh(const fs::path& mesh, const AtomicFile& af) {
   std::error_code ec;
   const fs::path file = fs::canonical(mesh);  // a link to a symbolic link would follow it
   fs::create_hard_link(file, af.temp_path(), ec);
   if (ec) fs::copy_file(file, af.temp_path(), fs::copy_options::overwrite_existing, ec);
-  if (ec) throw Error(kept.string(), 0, "cannot keep " + mesh.string() + ": " + ec.message());
-  af.Commit();
-  return kept;
+  if (ec)
+    throw Error(af.final_path().string(), 0, "cannot keep " + mesh.string() + ": " + ec.message());
 }
 
 // Static depth of one image at its working size.
 class DepthProvider {
  public:
-  // mesh: StaticMesh(); mark_walls: Depth() marks the pixels whose ray meets a corridor wall (for
-  // --max-fill).
-  DepthProvider(const Workspace& ws, DepthSource src, fs::path mesh, bool mark_walls)
-      : ws_(ws), mesh_(std::move(mesh)), mark_walls_(mark_walls) {
+  // mark_walls: Depth() marks the pixels whose ray meets a corridor wall (for --max-fill).
+  DepthProvider(const DynmaskOptions& o, const Workspace& ws, bool mark_walls)
+      : ws_(ws), mark_walls_(mark_walls) {
+    bool keep = false;
+    mesh_ = StaticMesh(o, ws, keep);
     const bool stereo = fs::is_directory(ws.StereoDir());
-    use_mesh_ = src == DepthSource::kMesh || (src == DepthSource::kAuto && !mesh_.empty());
+    use_mesh_ = o.depth == DepthSource::kMesh || (o.depth == DepthSource::kAuto && !mesh_.empty());
     if (use_mesh_) {
       if (mesh_.empty()) ws.Require("dynmask", {WsItem::kMesh});
-      Mesh m = ReadMesh(mesh_.string());
+      // The mesh is kept only once it has been read: a broken mesh.ply is not kept.
+      std::optional<AtomicFile> kept;
+      if (keep) kept.emplace(ws.DynmaskMeshPath()), LinkKeptMesh(mesh_, *kept);
+      Mesh m = ReadMesh((kept ? kept->temp_path() : mesh_).string());
+      if (kept) kept->Commit(), mesh_ = ws.DynmaskMeshPath();
       // The corridor walls behind the fused facades' holes are a backdrop at a guessed depth.
       if (m.has_face_kinds()) {
         walls_ = size_t(std::count(m.face_kinds.begin(), m.face_kinds.end(), kFaceFillWall));
@@ -539,7 +552,7 @@ class DepthProvider {
       caster_ = std::make_unique<MeshRaycaster>(m);
       return;
     }
-    if (src == DepthSource::kAuto && !stereo)
+    if (o.depth == DepthSource::kAuto && !stereo)
       throw Error(ws.root().string() +
                   ": no static depth: neither a mesh (run roadmesh) nor stereo/ (run densify)");
     ws.Require("dynmask", {WsItem::kStereo});
@@ -547,7 +560,7 @@ class DepthProvider {
   std::string Name() const {
     if (!use_mesh_) return "stereo/ (densify)";
     const std::string file =
-        mesh_.parent_path() == ws_.root() ? mesh_.filename().string() : mesh_.string();
+        mesh_ == ws_.DynmaskMeshPath() ? mesh_.filename().string() : mesh_.string();
     if (walls_ == 0) return file + " (ray-cast)";
     return file + " (ray-cast; " + std::to_string(walls_) + " of its faces corridor walls)";
   }
@@ -1105,7 +1118,7 @@ DynmaskReport RunDynmask(const DynmaskOptions& o) {
   o.Check();
   const Workspace ws(o.workspace);
   ws.Require("dynmask", {WsItem::kSparse, WsItem::kImages});
-  const DepthProvider depth(ws, o.depth, StaticMesh(o, ws), o.max_fill < 1);
+  const DepthProvider depth(o, ws, o.max_fill < 1);
   Scene s = LoadScene(ws, o.max_width);
   if (o.driven.half_width > 0 && depth.UsesMesh()) s.paths = DrivenPaths(s, depth);
   Pairing pair{ChooseNeighbours(s, o.neighbours, o.min_baseline),

@@ -285,14 +285,13 @@ void LinkImageFiles(const Workspace& src, const Workspace& dst, const std::strin
   LinkFile(src.StereoConfidencePath(name), dst.StereoConfidencePath(name), rep);
 }
 
-// Each fragment's mesh: its own triangles first, then its neighbours' within the overlap.
-void SplitMesh(const RoadSplitOptions& o, const Workspace& ws, const fs::path& tmp, Plan& p,
-               RoadSplitReport& rep) {
-  if (!fs::exists(ws.MeshPath())) return;
-  const Mesh mesh = ReadMesh(ws.MeshPath().string());
-  rep.triangles = mesh.faces.size();
-  const size_t n = p.fragments.size();
-  std::vector<std::vector<uint32_t>> own(n), near(n);
+// Each fragment's triangles of `mesh`: own[k], those whose centre lies on fragment k's stretch
+// of the path, and near[k], the other fragments' within the overlap of k.
+void AssignFaces(const RoadSplitOptions& o, const Plan& p, const Mesh& mesh,
+                 std::vector<std::vector<uint32_t>>& own,
+                 std::vector<std::vector<uint32_t>>& near) {
+  own.assign(p.fragments.size(), {});
+  near.assign(p.fragments.size(), {});
   for (uint32_t f = 0; f < mesh.faces.size(); ++f) {
     const auto& t = mesh.faces[f];
     const Eigen::Vector3d c =
@@ -303,6 +302,35 @@ void SplitMesh(const RoadSplitOptions& o, const Workspace& ws, const fs::path& t
     for (size_t j : FragmentsNear(p, s, o.overlap))
       if (j != k) near[j].push_back(f);
   }
+}
+
+// dynmask's kept mesh (dynmask-mesh.ply: the scene as recorded, vehicles and all) split as
+// mesh.ply is, so that dynmask on a fragment judges against it, not against the fragment's
+// mesh.ply, which a road build made without the masked pixels.
+void SplitDynmaskMesh(const RoadSplitOptions& o, const Workspace& ws, const fs::path& tmp,
+                      const Plan& p) {
+  if (!fs::exists(ws.DynmaskMeshPath())) return;
+  const Mesh mesh = ReadMesh(ws.DynmaskMeshPath().string());
+  std::vector<std::vector<uint32_t>> own, near;
+  AssignFaces(o, p, mesh, own, near);
+  for (size_t k = 0; k < p.fragments.size(); ++k) {
+    std::vector<uint32_t> faces = own[k];
+    faces.insert(faces.end(), near[k].begin(), near[k].end());
+    if (faces.empty()) continue;
+    const Workspace dst(tmp / "Models" / p.fragments[k].id);
+    WriteMesh(dst.DynmaskMeshPath().string(), SubMesh(mesh, faces));
+  }
+}
+
+// Each fragment's mesh: its own triangles first, then its neighbours' within the overlap.
+void SplitMesh(const RoadSplitOptions& o, const Workspace& ws, const fs::path& tmp, Plan& p,
+               RoadSplitReport& rep) {
+  if (!fs::exists(ws.MeshPath())) return;
+  const Mesh mesh = ReadMesh(ws.MeshPath().string());
+  rep.triangles = mesh.faces.size();
+  const size_t n = p.fragments.size();
+  std::vector<std::vector<uint32_t>> own, near;
+  AssignFaces(o, p, mesh, own, near);
   for (size_t k = 0; k < n; ++k) {
     std::vector<uint32_t> faces = own[k];
     faces.insert(faces.end(), near[k].begin(), near[k].end());
@@ -361,6 +389,7 @@ void WriteFragments(const RoadSplitOptions& o, const Workspace& ws, const Recons
     f.overlap = o.overlap;
   }
   SplitMesh(o, ws, tmp, p, rep);
+  SplitDynmaskMesh(o, ws, tmp, p);
   WriteRoadGraph(tmp, p.fragments);
   RoadPath path{PathStep(o), {}, {}};  // what RoadMeshes re-owns a fragment's new mesh by
   for (const ImageRecord* im : p.record) {
@@ -376,6 +405,7 @@ std::vector<fs::path> RoadInputs(const Workspace& ws,
                                  const std::vector<const ImageRecord*>& images) {
   std::vector<fs::path> in = ws.SparseModelFiles();
   in.push_back(ws.MeshPath());
+  if (fs::exists(ws.DynmaskMeshPath())) in.push_back(ws.DynmaskMeshPath());
   in.push_back(ws.ExposurePath());
   for (fs::path& r : WorkspaceRecords(ws)) in.push_back(std::move(r));
   for (const ImageRecord* im : images) {
