@@ -2,7 +2,7 @@
 # The whole road build as one shell script: photos (or a video) + poses (or none) + intrinsics
 # (or none) → a rendered, scored mvtm workspace. Each step skips when its output exists (delete
 # it, or the workspace, to redo). New poses (BORESIGHT, HOLDOUT_STRICT) redo the mesh; a new
-# first mesh also replaces the one dynmask judges against (OUT/ws/dynmask-mesh.ply, man dynmask).
+# first mesh also redoes dynmask's masks and the mesh it judges against (dynmask-mesh.ply).
 #
 # usage: examples/road-build.sh IMAGES|VIDEO POSES|- OUT [-- INTRINSICS...]
 #   IMAGES      folder of the frames (sorted by name = frame order); every photo is kept
@@ -395,7 +395,13 @@ cpu_mesh() {
 
 log "3. mesh"
 if [ ! -f "$ws/mesh.ply" ] && [ ! -f "$ws/meshed-poisson.ply" ]; then
-  rm -f "$ws/dynmask-mesh.ply"  # dynmask judges against this new first mesh
+  # dynmask judges against this new first mesh, the scene as recorded: the masks an earlier
+  # dynmask run made (tracks.tsv says one did) are not left out of it, only a video's overlay.
+  rm -f "$ws/dynmask-mesh.ply"
+  if [ ! -d "$ws/labels" ] && [ -f "$ws/tracks.tsv" ]; then
+    rm -rf "$ws/masks" "$ws/tracks.tsv"
+    [ -z "$overlay_masks" ] || cp -r "$overlay_masks" "$ws/masks"
+  fi
   if colmap -h 2>&1 | grep -q "with CUDA"; then
     colmap_log colmap patch_match_stereo --workspace_path "$ws"
     colmap_log colmap stereo_fusion --workspace_path "$ws" --output_path "$ws/fused.ply"
