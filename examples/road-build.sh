@@ -394,6 +394,13 @@ cpu_mesh() {
 }
 
 log "3. mesh"
+# A workspace whose masks dynmask made without keeping its mesh (an earlier mvtm, or
+# dynmask-mesh.ply deleted): mesh.ply was built without the masked pixels, so the first mesh is
+# built again (below) for dynmask to judge against.
+if [ ! -d "$ws/labels" ] && [ -f "$ws/tracks.tsv" ] && [ -f "$ws/mesh.ply" ] &&
+  [ ! -f "$ws/dynmask-mesh.ply" ]; then
+  rm -f "$ws/mesh.ply"
+fi
 if [ ! -f "$ws/mesh.ply" ] && [ ! -f "$ws/meshed-poisson.ply" ]; then
   # dynmask judges against this new first mesh, the scene as recorded: the masks an earlier
   # dynmask run made (tracks.tsv says one did) are not left out of it, only a video's overlay.

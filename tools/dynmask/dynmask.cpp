@@ -539,11 +539,18 @@ class DepthProvider {
     use_mesh_ = o.depth == DepthSource::kMesh || (o.depth == DepthSource::kAuto && !mesh_.empty());
     if (use_mesh_) {
       if (mesh_.empty()) ws.Require("dynmask", {WsItem::kMesh});
-      // The mesh is kept only once it has been read: a broken mesh.ply is not kept.
+      // The mesh is kept only once it has been read (errors name mesh.ply, the link's file): a
+      // broken mesh.ply is not kept.
       std::optional<AtomicFile> kept;
-      if (keep) kept.emplace(ws.DynmaskMeshPath()), LinkKeptMesh(mesh_, *kept);
-      Mesh m = ReadMesh((kept ? kept->temp_path() : mesh_).string());
-      if (kept) kept->Commit(), mesh_ = ws.DynmaskMeshPath();
+      if (keep) {
+        kept.emplace(ws.DynmaskMeshPath());
+        LinkKeptMesh(mesh_, *kept);
+      }
+      Mesh m = ReadMesh(mesh_.string());
+      if (kept) {
+        kept->Commit();
+        mesh_ = ws.DynmaskMeshPath();
+      }
       // The corridor walls behind the fused facades' holes are a backdrop at a guessed depth.
       if (m.has_face_kinds()) {
         walls_ = size_t(std::count(m.face_kinds.begin(), m.face_kinds.end(), kFaceFillWall));
