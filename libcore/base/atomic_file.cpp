@@ -54,6 +54,14 @@ void CreateFolder(const fs::path& dir) {
   if (ec) throw Error(dir.string(), 0, "cannot create folder: " + ec.message());
 }
 
+bool LinkOrCopy(const fs::path& from, const fs::path& to, std::error_code& ec) {
+  fs::create_hard_link(from, to, ec);
+  if (!ec) return true;
+  ec.clear();
+  fs::copy_file(from, to, fs::copy_options::overwrite_existing, ec);
+  return false;
+}
+
 fs::path TemporaryPathFor(const fs::path& final_path) {
   return final_path.parent_path() /
          ("." + final_path.stem().string() + ".tmp-" + std::to_string(getpid()) + "-" +

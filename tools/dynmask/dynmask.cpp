@@ -521,8 +521,7 @@ fs::path StaticMesh(const DynmaskOptions& o, const Workspace& ws, bool& keep) {
 void LinkKeptMesh(const fs::path& mesh, const AtomicFile& af) {
   std::error_code ec;
   const fs::path file = fs::canonical(mesh);  // a link to a symbolic link would follow it
-  fs::create_hard_link(file, af.temp_path(), ec);
-  if (ec) fs::copy_file(file, af.temp_path(), fs::copy_options::overwrite_existing, ec);
+  LinkOrCopy(file, af.temp_path(), ec);
   if (ec)
     throw Error(af.final_path().string(), 0, "cannot keep " + mesh.string() + ": " + ec.message());
 }

@@ -262,14 +262,9 @@ bool LinkFile(const fs::path& from, const fs::path& to, RoadSplitReport& rep) {
   if (!fs::exists(from)) return false;
   fs::create_directories(to.parent_path());
   std::error_code ec;
-  fs::create_hard_link(from, to, ec);
-  if (!ec) {
-    ++rep.linked;
-    return true;
-  }
-  fs::copy_file(from, to, fs::copy_options::overwrite_existing, ec);
+  const bool linked = LinkOrCopy(from, to, ec);
   if (ec) throw Error(to.string() + ": cannot copy " + from.string() + ": " + ec.message());
-  ++rep.copied;
+  ++(linked ? rep.linked : rep.copied);
   return true;
 }
 
@@ -285,13 +280,12 @@ void LinkImageFiles(const Workspace& src, const Workspace& dst, const std::strin
   LinkFile(src.StereoConfidencePath(name), dst.StereoConfidencePath(name), rep);
 }
 
-// Each fragment's triangles of `mesh`: own[k], those whose centre lies on fragment k's stretch
-// of the path, and near[k], the other fragments' within the overlap of k.
-void AssignFaces(const RoadSplitOptions& o, const Plan& p, const Mesh& mesh,
-                 std::vector<std::vector<uint32_t>>& own,
-                 std::vector<std::vector<uint32_t>>& near) {
-  own.assign(p.fragments.size(), {});
-  near.assign(p.fragments.size(), {});
+// Each fragment's triangles of `mesh`: first the owned[k] whose centre lies on fragment k's
+// stretch of the path, then the other fragments' within the overlap of k.
+std::vector<std::vector<uint32_t>> FragmentFaces(const RoadSplitOptions& o, const Plan& p,
+                                                 const Mesh& mesh, std::vector<size_t>& owned) {
+  const size_t n = p.fragments.size();
+  std::vector<std::vector<uint32_t>> own(n), near(n);
   for (uint32_t f = 0; f < mesh.faces.size(); ++f) {
     const auto& t = mesh.faces[f];
     const Eigen::Vector3d c =
@@ -302,6 +296,12 @@ void AssignFaces(const RoadSplitOptions& o, const Plan& p, const Mesh& mesh,
     for (size_t j : FragmentsNear(p, s, o.overlap))
       if (j != k) near[j].push_back(f);
   }
+  owned.resize(n);
+  for (size_t k = 0; k < n; ++k) {
+    owned[k] = own[k].size();
+    own[k].insert(own[k].end(), near[k].begin(), near[k].end());
+  }
+  return own;
 }
 
 // dynmask's kept mesh (dynmask-mesh.ply: the scene as recorded, vehicles and all) split as
@@ -311,14 +311,12 @@ void SplitDynmaskMesh(const RoadSplitOptions& o, const Workspace& ws, const fs::
                       const Plan& p) {
   if (!fs::exists(ws.DynmaskMeshPath())) return;
   const Mesh mesh = ReadMesh(ws.DynmaskMeshPath().string());
-  std::vector<std::vector<uint32_t>> own, near;
-  AssignFaces(o, p, mesh, own, near);
+  std::vector<size_t> owned;
+  const auto faces = FragmentFaces(o, p, mesh, owned);
   for (size_t k = 0; k < p.fragments.size(); ++k) {
-    std::vector<uint32_t> faces = own[k];
-    faces.insert(faces.end(), near[k].begin(), near[k].end());
-    if (faces.empty()) continue;
+    if (faces[k].empty()) continue;
     const Workspace dst(tmp / "Models" / p.fragments[k].id);
-    WriteMesh(dst.DynmaskMeshPath().string(), SubMesh(mesh, faces));
+    WriteMesh(dst.DynmaskMeshPath().string(), SubMesh(mesh, faces[k]));
   }
 }
 
@@ -328,19 +326,16 @@ void SplitMesh(const RoadSplitOptions& o, const Workspace& ws, const fs::path& t
   if (!fs::exists(ws.MeshPath())) return;
   const Mesh mesh = ReadMesh(ws.MeshPath().string());
   rep.triangles = mesh.faces.size();
-  const size_t n = p.fragments.size();
-  std::vector<std::vector<uint32_t>> own, near;
-  AssignFaces(o, p, mesh, own, near);
-  for (size_t k = 0; k < n; ++k) {
-    std::vector<uint32_t> faces = own[k];
-    faces.insert(faces.end(), near[k].begin(), near[k].end());
-    const Mesh out = SubMesh(mesh, faces);
-    p.fragments[k].owned_faces = own[k].size();
+  std::vector<size_t> owned;
+  const auto faces = FragmentFaces(o, p, mesh, owned);
+  for (size_t k = 0; k < p.fragments.size(); ++k) {
+    const Mesh out = SubMesh(mesh, faces[k]);
+    p.fragments[k].owned_faces = owned[k];
     p.fragments[k].mesh_faces = out.faces.size();
     p.fragments[k].mesh_vertices = out.vertices.size();
-    if (!own[k].empty()) {
+    if (owned[k] > 0) {
       std::array<Eigen::Vector3d, 2> box{out.vertices[0], out.vertices[0]};
-      for (size_t f = 0; f < own[k].size(); ++f)
+      for (size_t f = 0; f < owned[k]; ++f)
         for (uint32_t v : out.faces[f])
           box[0] = box[0].cwiseMin(out.vertices[v]), box[1] = box[1].cwiseMax(out.vertices[v]);
       p.fragments[k].bounds = box;

@@ -2,6 +2,7 @@
 #include "base/atomic_file.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <chrono>
 #include <fstream>
@@ -103,6 +104,38 @@ TEST(AtomicFile, TemporaryNamesCarryTheProcessSpaceAndKeepTheExtension) {
   EXPECT_EQ(ProcessSpace().find_first_not_of(
                 "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-~"),
             std::string::npos);
+  fs::remove_all(d);
+}
+
+// A link within one file system; a copy across two (/dev/shm is a tmpfs where Linux has one; the
+// copy case is skipped when it shares the temporary folder's file system); both fail for a
+// missing source.
+TEST(AtomicFile, LinkOrCopyLinksWithinAFileSystemAndCopiesAcrossOnes) {
+  fs::path d = TempDir("link");
+  std::ofstream(d / "a.ply") << "mesh";
+  std::error_code ec;
+  EXPECT_TRUE(LinkOrCopy(d / "a.ply", d / "b.ply", ec));
+  EXPECT_FALSE(ec);
+  EXPECT_TRUE(fs::equivalent(d / "a.ply", d / "b.ply"));
+  EXPECT_EQ(fs::hard_link_count(d / "a.ply"), 2u);
+  EXPECT_FALSE(LinkOrCopy(d / "missing.ply", d / "c.ply", ec));
+  EXPECT_TRUE(ec);
+  EXPECT_FALSE(fs::exists(d / "c.ply"));
+  const fs::path shm = "/dev/shm";
+  struct stat a {
+  }, b{};
+  if (stat(shm.c_str(), &a) == 0 && stat(d.c_str(), &b) == 0 && a.st_dev != b.st_dev) {
+    const fs::path other = shm / ("mvtm-link-" + std::to_string(getpid()) + ".ply");
+    ec.clear();
+    EXPECT_FALSE(LinkOrCopy(d / "a.ply", other, ec));
+    EXPECT_FALSE(ec) << ec.message();
+    EXPECT_FALSE(fs::equivalent(d / "a.ply", other));
+    std::ifstream in(other);
+    std::string text;
+    in >> text;
+    EXPECT_EQ(text, "mesh");
+    fs::remove(other);
+  }
   fs::remove_all(d);
 }
 
