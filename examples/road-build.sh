@@ -394,11 +394,21 @@ cpu_mesh() {
 }
 
 log "3. mesh"
+read -r -a dynmask_opts <<< "${DYNMASK_FLAGS:-}"
+# dynmask keeps the mesh it judges against (dynmask-mesh.ply) unless it is told to judge against
+# densify's maps (--depth stereo) or another mesh (--mesh FILE).
+dynmask_keeps=1
+for i in "${!dynmask_opts[@]}"; do
+  case "${dynmask_opts[$i]}" in
+    --mesh | --mesh=* | --depth=stereo) dynmask_keeps=0 ;;
+    --depth) [ "${dynmask_opts[$((i + 1))]:-}" != stereo ] || dynmask_keeps=0 ;;
+  esac
+done
 # A workspace whose masks dynmask made without keeping its mesh (an earlier mvtm, or
 # dynmask-mesh.ply deleted): mesh.ply was built without the masked pixels, so the first mesh is
 # built again (below) for dynmask to judge against.
 if [ ! -d "$ws/labels" ] && [ -f "$ws/tracks.tsv" ] && [ -f "$ws/mesh.ply" ] &&
-  [ ! -f "$ws/dynmask-mesh.ply" ]; then
+  [ "$dynmask_keeps" = 1 ] && [ ! -f "$ws/dynmask-mesh.ply" ]; then
   rm -f "$ws/mesh.ply"
 fi
 if [ ! -f "$ws/mesh.ply" ] && [ ! -f "$ws/meshed-poisson.ply" ]; then
@@ -424,7 +434,6 @@ log "3b. exposure: a gain and an offset per photo, so that projectors blend at o
 "$bin/exposure" -q "$ws"
 
 log "4. vehicle masks and partners"
-read -r -a dynmask_opts <<< "${DYNMASK_FLAGS:-}"
 [ -n "$overlay_masks" ] && dynmask_opts+=(--also "$overlay_masks")
 if [ -d "$ws/labels" ]; then
   [ -f "$ws/tracks.tsv" ] || "$bin/segtrack" "$ws/labels" "$ws"
