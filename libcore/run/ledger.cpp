@@ -139,7 +139,19 @@ nlohmann::json Ledger::StampJson(const std::string& name, const fs::path& path) 
 }
 
 // "" when a recorded run had this run's options and inputs; else what differs.
-std::string Ledger::CompareRun(const nlohmann::json& run) {
+void Ledger::Independent(const fs::path& folder, std::set<std::string> keys) {
+  std::lock_guard<std::recursive_mutex> lock(mutex_);
+  independent_[Name(folder, root_) + "/"] = std::move(keys);
+}
+
+const std::set<std::string>& Ledger::IgnoredFor(const std::string& rel) const {
+  static const std::set<std::string> none;
+  for (const auto& [folder, keys] : independent_)
+    if (rel.compare(0, folder.size(), folder) == 0) return keys;
+  return none;
+}
+
+std::string Ledger::CompareRun(const nlohmann::json& run, const std::set<std::string>& ignored) {
   if (!run.is_object() || !run.contains("options") || !run.contains("inputs")) return "no record";
   const nlohmann::json& opts = run["options"];
   std::string changed;
@@ -148,6 +160,7 @@ std::string Ledger::CompareRun(const nlohmann::json& run) {
   if (opts.is_object())
     for (const auto& [k, v] : opts.items()) keys.insert(k);
   for (const std::string& k : keys) {
+    if (ignored.count(k)) continue;
     const bool same = opts.is_object() && opts.contains(k) && options_key_.contains(k) &&
                       opts[k] == options_key_[k];
     if (!same) changed += (changed.empty() ? "" : ", ") + table_.FlagOf(k);
@@ -210,10 +223,16 @@ std::string Ledger::StaleExisting(const std::string& rel, const fs::path& output
   }
   if (!maker) return "no record";
   const std::string run = entry.value("run", std::string());
-  auto v = run_verdicts_.find(run);
+  const std::set<std::string>& ignored = IgnoredFor(rel);
+  std::string verdict_key = run;
+  for (const auto& [folder, keys] : independent_)
+    if (&keys == &ignored) verdict_key = folder + "\n" + run;
+  auto v = run_verdicts_.find(verdict_key);
   if (v == run_verdicts_.end()) {
     auto rit = maker->runs.find(run);
-    v = run_verdicts_.emplace(run, CompareRun(rit == maker->runs.end() ? nlohmann::json() : *rit))
+    const nlohmann::json none;
+    v = run_verdicts_
+            .emplace(verdict_key, CompareRun(rit == maker->runs.end() ? none : *rit, ignored))
             .first;
   }
   if (!v->second.empty()) return v->second;

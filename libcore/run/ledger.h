@@ -20,9 +20,10 @@
 // options are compared with this run's (the flags that differ are named: "--lateral changed"),
 // then the build of the tool ("another build of TOOL"), then its inputs: an input is unchanged when
 // its size and modification time are, else when its content checksum is (so `touch` or a copy redo
-// nothing, a rewrite with new content does). Measured choice: stat first, checksum only on a
-// changed time — the up-to-date check of 10,000 outputs with unchanged inputs costs one stat each
-// (bench_ledger).
+// nothing, a rewrite with new content does). The outputs of a folder declared Independent() of
+// some options ignore those (dynmask's maps and its tracking options). Measured choice: stat first,
+// checksum only on a changed time — the up-to-date check of 10,000 outputs with unchanged inputs
+// costs one stat each (bench_ledger).
 //
 // Robustness. The record is written atomically (temporary + rename) at the end of the run and
 // every 10 s during it, so kill -9 loses at most the last seconds' entries (those outputs are
@@ -77,6 +78,10 @@ class Ledger {
   // every output, so each one's reason counts in Summary().
   bool AnyStale(const std::vector<fs::path>& outputs, const std::vector<fs::path>& item_inputs = {},
                 bool force = false);
+  // The outputs inside `folder` do not depend on the options of `keys` (provenance keys): a
+  // change of them alone leaves those outputs up to date (dynmask's probability maps and its
+  // tracking options, which only its masks depend on). Call before Stale().
+  void Independent(const fs::path& folder, std::set<std::string> keys);
   // Records that `output` (now complete on disk) was made by this run from `item_inputs`.
   void Done(const fs::path& output, const std::vector<fs::path>& item_inputs = {});
   // Writes the record now (atomically). `extra` is merged into the top level (e.g. a plan).
@@ -99,7 +104,8 @@ class Ledger {
   std::string Name(const fs::path& p, const fs::path& base) const;
   std::string StaleExisting(const std::string& rel, const fs::path& output, const FileStamp& now,
                             const std::vector<fs::path>& item_inputs);
-  std::string CompareRun(const nlohmann::json& run);
+  std::string CompareRun(const nlohmann::json& run, const std::set<std::string>& ignored);
+  const std::set<std::string>& IgnoredFor(const std::string& rel) const;
   bool Unchanged(const std::string& name, const fs::path& path, const nlohmann::json& stamp);
   const FileStamp& Current(const std::string& name, const fs::path& path, bool checksum);
   nlohmann::json StampJson(const std::string& name, const fs::path& path);
@@ -113,8 +119,9 @@ class Ledger {
   std::string build_;  // ProgramChecksum() (base/plugin.h): another build's outputs are redone
   std::vector<std::pair<std::string, fs::path>> inputs_;
   std::vector<Record> records_;                      // this tool's records in ROOT/provenance
-  std::map<std::string, std::string> run_verdicts_;  // record run id → "" or a reason
-  std::map<std::string, FileStamp> stamps_;          // this run's view of files, by name
+  std::map<std::string, std::string> run_verdicts_;  // "FOLDER\nRUN ID" → "" or a reason
+  std::map<std::string, std::set<std::string>> independent_;  // rel folder + "/" → keys
+  std::map<std::string, FileStamp> stamps_;                   // this run's view of files, by name
   std::map<std::string, Entry> kept_;  // entries carried into this run's record, by rel path
   nlohmann::json kept_runs_;           // the runs those entries refer to
   std::string run_id_;

@@ -15,6 +15,10 @@ how to vary fails the test. SPECS (tests/cli/options_walk.json) gives per tool:
   args      per flag, the extra arguments that vary it when its declared alternative alone does
             not do (e.g. a file, or a companion option); "" skips the flag, with
   why       per skipped flag, the reason (a skipped flag without a reason fails)
+  kept      per output folder/file, the flags that do not change it: changed alone, such a flag
+            must leave it untouched (and redo the others); the byte-for-byte comparison with a
+            fresh run then checks that it indeed does not depend on the flag (dynmask's maps
+            and its tracking options)
   session   (simulate) the tool runs a session, not outputs kept up to date: every run makes
             its files anew. Walked instead: the base run's record (the file `record` names, e.g.
             rec/summary.json) lists exactly the options --help shows, and every option changed
@@ -163,11 +167,18 @@ for opt in table["options"]:
         continue
     after = files(run)
     if opt["changes_output"]:
-        touched = set(after) != set(before) or all(after[f] != before[f] for f in before)
+        kept_under = [k for k, flags in spec.get("kept", {}).items() if flag in flags]
+        is_kept = lambda f: any(f == k or f.startswith(k + "/") for k in kept_under)
+        redo = [f for f in before if not is_kept(f)]
+        touched = set(after) != set(before) or all(after[f] != before[f] for f in redo)
         if not touched:
-            stale = [f for f in before if after.get(f) == before[f]]
-            failures.append(f"{flag}: changed to {args!r}, yet {len(stale)} of {len(before)} "
+            stale = [f for f in redo if after.get(f) == before[f]]
+            failures.append(f"{flag}: changed to {args!r}, yet {len(stale)} of {len(redo)} "
                             f"outputs were not redone (e.g. {stale[0]})")
+        rewritten = [f for f in before if is_kept(f) and after.get(f) != before[f]]
+        if rewritten:
+            failures.append(f"{flag}: changed to {args!r}, it redid {len(rewritten)} outputs "
+                            f"that do not depend on it (e.g. {rewritten[0]})")
         ref = fresh("ref" + flag.replace("-", "_"))
         sh(cmd, ref)
         ref_files = files(ref)

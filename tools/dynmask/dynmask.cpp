@@ -9,6 +9,7 @@
 #include <numeric>
 #include <opencv2/imgproc.hpp>
 #include <optional>
+#include <set>
 
 #include "base/atomic_file.h"
 #include "base/error.h"
@@ -37,7 +38,7 @@ void RequireFolder(const char* flag, const std::string& dir) {
     throw UsageError(std::string(flag) + ": no such folder: " + dir);
 }
 
-// The options that turn probability maps into tracked masks.
+// The options that turn probability maps into blobs (the blob tests of the maps use them too).
 void DeclareMaskOptions(OptionTable& t, DynmaskOptions& o) {
   t.Real("--probability", &o.mask.probability, "Probability at or above which a pixel is masked")
       .Range(0, 1, true, true)
@@ -47,6 +48,11 @@ void DeclareMaskOptions(OptionTable& t, DynmaskOptions& o) {
       .Range(0, 0.2);
   t.Real("--min-area", &o.mask.min_area, "Blobs below this share of the image are dropped")
       .Range(0, 1, false, true);
+}
+
+// The options that only the masks depend on, not the probability maps: tracking, gap filling,
+// masks OR-ed in, labels confirmed.
+void DeclareTrackingOptions(OptionTable& t, DynmaskOptions& o) {
   t.Real("--max-jump", &o.track.max_jump,
          "Tracking: largest distance from a track's predicted centroid to its blob (pixels; "
          "0: a quarter of the image width)")
@@ -270,6 +276,7 @@ OptionTable DeclareOptions(DynmaskOptions& o) {
       });
   DeclareEvidenceOptions(t, o);
   DeclareMaskOptions(t, o);
+  DeclareTrackingOptions(t, o);
   DeclareWorkOptions(t, o, "images", "in name order",
                      "Recompute probability maps and masks even when they are up to date");
   return t;
@@ -1118,6 +1125,18 @@ bool MasksStale(const DynmaskOptions& o, const Workspace& ws, const Scene& s, Le
   return ledger.AnyStale(outputs, MaskInputs(o, ws, s), o.force);
 }
 
+// The provenance keys of the options only the masks depend on: a change of them alone leaves
+// the probability maps up to date.
+std::set<std::string> MaskOnlyKeys() {
+  DynmaskOptions o;
+  OptionTable t("dynmask");
+  DeclareTrackingOptions(t, o);
+  std::set<std::string> keys;
+  const nlohmann::json changing = t.OutputJson();
+  for (const auto& [key, value] : changing.items()) keys.insert(key);
+  return keys;
+}
+
 }  // namespace
 
 DynmaskReport RunDynmask(const DynmaskOptions& o) {
@@ -1137,6 +1156,7 @@ DynmaskReport RunDynmask(const DynmaskOptions& o) {
   DynmaskOptions resolved = o;
   const OptionTable table = DeclareOptions(resolved);
   Ledger ledger(ws.root(), o.ProvenanceName("dynmask"), table, ws.SparseModelFiles(), ws.root());
+  ledger.Independent(ws.DynamicDir(), MaskOnlyKeys());
   const std::vector<Job> todo = StaleMaps(o, ws, s, pair, depth, ledger, rep);
   RemoveStaleTemporaries(ws.DynamicDir());
   RemoveStaleTemporaries(ws.MasksDir());

@@ -47,9 +47,12 @@ class LedgerTest : public ::testing::Test {
 
   // One run: checks `outputs`, makes the stale ones, writes the record; returns the reasons.
   std::vector<std::string> Run(Opts o, const std::vector<std::string>& outputs,
-                               const std::string& record = "demo") {
+                               const std::string& record = "demo",
+                               const std::string& independent_of_lateral = "") {
     OptionTable t = Declare(o);
     Ledger ledger(dir_ / "out", record, t, {dir_ / "ws/mesh.ply"}, dir_ / "ws");
+    if (!independent_of_lateral.empty())
+      ledger.Independent(dir_ / "out" / independent_of_lateral, {"lateral"});
     std::vector<std::string> why;
     for (const std::string& name : outputs) {
       const fs::path out = dir_ / "out" / name;
@@ -85,6 +88,22 @@ TEST_F(LedgerTest, AnOptionThatChangesOutputRedoesAndIsNamed) {
 TEST_F(LedgerTest, ACosmeticOptionRedoesNothing) {
   Run({}, {"f0.png"});
   EXPECT_EQ(Run({0, 8}, {"f0.png"}), (V{""}));
+}
+
+// dynmask's maps (dynamic/) and masks (masks/): the masks depend on an option the maps do not.
+TEST_F(LedgerTest, AFolderIndependentOfAnOptionKeepsItsOutputsWhenOnlyThatOptionChanges) {
+  const V both{"dynamic/f0.png", "masks/f0.png"};
+  EXPECT_EQ(Run({}, both, "demo", "dynamic"), (V{"new", "new"}));
+  EXPECT_EQ(Run({0.5, 1}, both, "demo", "dynamic"), (V{"", "--lateral changed"}));
+  EXPECT_EQ(summary_, "1 redone: --lateral changed");
+  EXPECT_EQ(Run({0.5, 1}, both, "demo", "dynamic"), (V{"", ""}));
+  // The map's entry kept its own run (lateral 0), so going back redoes only the mask again.
+  EXPECT_EQ(Run({}, both, "demo", "dynamic"), (V{"", "--lateral changed"}));
+  // "dynamic" is a folder, not a prefix of names: dynamic2/ depends on every option.
+  EXPECT_EQ(Run({}, {"dynamic2/f0.png"}, "demo", "dynamic"), (V{"new"}));
+  EXPECT_EQ(Run({0.5, 1}, {"dynamic2/f0.png"}, "demo", "dynamic"), (V{"--lateral changed"}));
+  // Without the declaration the map depends on it too.
+  EXPECT_EQ(Run({0.5, 1}, both), (V{"--lateral changed", "--lateral changed"}));
 }
 
 TEST_F(LedgerTest, AnInputRewrittenRedoesATouchedOneDoesNot) {
