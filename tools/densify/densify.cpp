@@ -88,12 +88,16 @@ cv::Mat LoadGrey(const fs::path& path, const Camera& full, const Camera& cam) {
   return g;
 }
 
-// The camera of an image's maps: --scale, or with --scale 0 the scale that gives the maps a
+// The scale of an image's maps: --scale, or with --scale 0 the scale that gives the maps a
 // focal length of --map-focal pixels (the larger of fx and fy), never above the image's size.
+double MapScale(const Camera& c, const DensifyOptions& o) {
+  return o.scale > 0 ? o.scale : std::min(1.0, o.map_focal / std::max(c.fx(), c.fy()));
+}
+
+// The camera of an image's maps (MapScale, sizes rounded).
 Camera ScaledCamera(const Camera& c, const DensifyOptions& o) {
   c.RequireUndistorted();
-  const double scale =
-      o.scale > 0 ? o.scale : std::min(1.0, o.map_focal / std::max(c.fx(), c.fy()));
+  const double scale = MapScale(c, o);
   if (scale == 1.0) return c;
   return c.Scaled(std::max<uint64_t>(1, uint64_t(std::lround(double(c.width) * scale))),
                   std::max<uint64_t>(1, uint64_t(std::lround(double(c.height) * scale))));
@@ -125,6 +129,18 @@ DenseScene LoadDenseScene(const Workspace& ws, const DensifyOptions& o) {
   }
   DriveAxes(s.w2c, s.down, s.side);
   return s;
+}
+
+// Each model camera's map scale and size, what --scale (0: from --map-focal) comes to for it:
+// the record says it, since the options alone do not.
+nlohmann::json MapSizes(const DensifyOptions& o, const DenseScene& s) {
+  nlohmann::json j = nlohmann::json::object();
+  for (size_t i = 0; i < s.images.size(); ++i)
+    j[std::to_string(s.images[i]->camera_id)] = {
+        {"scale", MapScale(s.rec.cameras.at(s.images[i]->camera_id), o)},
+        {"width", s.cameras[i].width},
+        {"height", s.cameras[i].height}};
+  return j;
 }
 
 std::vector<SweepFamily> Families(const DensifyOptions& o, const DenseScene& s, size_t i,
@@ -230,7 +246,7 @@ DensifyReport RunDensify(const DensifyOptions& o) {
   rep.ms_per_image =
       std::chrono::duration<double, std::milli>(Clock::now() - t0).count() / double(rep.written);
   rep.valid_share = share / double(rep.written);
-  ledger.Write();
+  ledger.Write({{"map_sizes", MapSizes(o, s)}});
   return rep;
 }
 
