@@ -54,8 +54,9 @@ void WriteBytesAtomic(const fs::path& path, const void* data, size_t size);
 void CreateFolder(const fs::path& dir);
 
 // Hard-links the file `from` to the new name `to`, or copies it where a link fails (another file
-// system, one without hard links). True for a link, false for a copy; `ec` is set when both fail
-// (the caller words the message: it knows which name a user should see).
+// system, one without hard links, or `to` exists: the copy overwrites it). True for a link, false
+// for a copy; `ec` is set when both fail (the caller words the message: it knows which name a
+// user should see).
 bool LinkOrCopy(const fs::path& from, const fs::path& to, std::error_code& ec);
 
 // True when `output` exists and is at least as new as every existing input.

@@ -121,6 +121,7 @@ bool Ledger::Unchanged(const std::string& name, const fs::path& path, const nloh
 const std::string& Ledger::RunId() {
   if (run_id_.empty()) {
     std::string id = options_key_.dump() + "\nbuild " + build_;
+    if (!run_notes_.empty()) id += "\nnotes " + run_notes_.dump();
     for (const auto& [name, path] : inputs_)
       id += "\n" + name + " " + Current(name, path, true).fnv1a64;
     run_id_ = Hex64(Fnv1a64(id.data(), id.size()));
@@ -138,19 +139,30 @@ nlohmann::json Ledger::StampJson(const std::string& name, const fs::path& path) 
   return j;
 }
 
-// "" when a recorded run had this run's options and inputs; else what differs.
 void Ledger::Independent(const fs::path& folder, std::set<std::string> keys) {
   std::lock_guard<std::recursive_mutex> lock(mutex_);
-  independent_[Name(folder, root_) + "/"] = std::move(keys);
+  std::string rel = Name(folder.lexically_normal(), root_);
+  while (!rel.empty() && rel.back() == '/') rel.pop_back();
+  // A folder that names no output folder (the root, or nothing) would set options aside for
+  // outputs that depend on them.
+  if (rel.empty() || rel == "." || !run_verdicts_.empty())
+    throw Error("Ledger::Independent: " + folder.string() +
+                ": give an output folder, before any output is judged");
+  independent_[rel + "/"] = std::move(keys);
 }
 
+// The options the outputs of `rel`'s folder do not depend on (the innermost declared folder).
 const std::set<std::string>& Ledger::IgnoredFor(const std::string& rel) const {
   static const std::set<std::string> none;
+  const std::set<std::string>* found = &none;
+  size_t longest = 0;
   for (const auto& [folder, keys] : independent_)
-    if (rel.compare(0, folder.size(), folder) == 0) return keys;
-  return none;
+    if (folder.size() > longest && rel.compare(0, folder.size(), folder) == 0)
+      found = &keys, longest = folder.size();
+  return *found;
 }
 
+// "" when a recorded run had this run's options (but `ignored`) and inputs; else what differs.
 std::string Ledger::CompareRun(const nlohmann::json& run, const std::set<std::string>& ignored) {
   if (!run.is_object() || !run.contains("options") || !run.contains("inputs")) return "no record";
   const nlohmann::json& opts = run["options"];
@@ -226,7 +238,7 @@ std::string Ledger::StaleExisting(const std::string& rel, const fs::path& output
   const std::set<std::string>& ignored = IgnoredFor(rel);
   std::string verdict_key = run;
   for (const auto& [folder, keys] : independent_)
-    if (&keys == &ignored) verdict_key = folder + "\n" + run;
+    if (&keys == &ignored) verdict_key = folder + "\n" + run;  // no run id holds a newline
   auto v = run_verdicts_.find(verdict_key);
   if (v == run_verdicts_.end()) {
     auto rit = maker->runs.find(run);
@@ -252,6 +264,12 @@ std::string Ledger::StaleExisting(const std::string& rel, const fs::path& output
   kept_[rel] = {run, entry.dump()};
   kept_runs_[run] = maker->runs.at(run);
   return "";
+}
+
+void Ledger::NoteRun(const std::string& key, nlohmann::json value) {
+  std::lock_guard<std::recursive_mutex> lock(mutex_);
+  if (!run_id_.empty()) throw Error("Ledger::NoteRun: " + key + ": noted after an output was done");
+  run_notes_[key] = std::move(value);
 }
 
 void Ledger::Done(const fs::path& output, const std::vector<fs::path>& item_inputs) {
@@ -284,6 +302,7 @@ void Ledger::Write(const nlohmann::json& extra) {
   std::lock_guard<std::recursive_mutex> lock(mutex_);
   nlohmann::json run = {
       {"options", options_key_}, {"build", build_}, {"inputs", nlohmann::json::object()}};
+  for (const auto& [k, v] : run_notes_.items()) run[k] = v;
   nlohmann::json list = nlohmann::json::array();
   for (const auto& [name, path] : inputs_) {
     run["inputs"][name] = StampJson(name, path);

@@ -10,7 +10,8 @@
 // with their checksums — and, per output, the stamp it was written with and which run made it:
 //
 //   { "tool", "version", "time", "options": {...all...}, "inputs": [{path, bytes, fnv1a64}],
-//     "runs": { "ID": { "options": {...changing output...}, "build", "inputs": { PATH: STAMP } } },
+//     "runs": { "ID": { "options": {...changing output...}, "build", "inputs": { PATH: STAMP },
+//                       NoteRun's keys } },
 //     "outputs": { "REL/PATH": { "run": "ID", "bytes", "mtime_ns", "fnv1a64", "in": {PATH: STAMP}}
 //     } }
 //
@@ -80,8 +81,13 @@ class Ledger {
                 bool force = false);
   // The outputs inside `folder` do not depend on the options of `keys` (provenance keys): a
   // change of them alone leaves those outputs up to date (dynmask's probability maps and its
-  // tracking options, which only its masks depend on). Call before Stale().
+  // tracking options, which only its masks depend on). `folder` is an output folder under the
+  // root (else Error); call it before Stale().
   void Independent(const fs::path& folder, std::set<std::string> keys);
+  // Adds `key` to this run's entry in the record, beside its options: what they resolved to
+  // (densify's map sizes from --scale 0). Each output's run says it for that output; it does not
+  // count in staleness. Call it before Done().
+  void NoteRun(const std::string& key, nlohmann::json value);
   // Records that `output` (now complete on disk) was made by this run from `item_inputs`.
   void Done(const fs::path& output, const std::vector<fs::path>& item_inputs = {});
   // Writes the record now (atomically). `extra` is merged into the top level (e.g. a plan).
@@ -124,6 +130,7 @@ class Ledger {
   std::map<std::string, FileStamp> stamps_;                   // this run's view of files, by name
   std::map<std::string, Entry> kept_;  // entries carried into this run's record, by rel path
   nlohmann::json kept_runs_;           // the runs those entries refer to
+  nlohmann::json run_notes_ = nlohmann::json::object();  // NoteRun: into this run's entry
   std::string run_id_;
   std::map<std::string, size_t> reasons_;
   std::set<fs::path> swept_;  // output folders whose stale temporaries are gone

@@ -132,7 +132,7 @@ DenseScene LoadDenseScene(const Workspace& ws, const DensifyOptions& o) {
 }
 
 // Each model camera's map scale and size, what --scale (0: from --map-focal) comes to for it:
-// the record says it, since the options alone do not.
+// the record's entry of the run that made a map says it, since the options alone do not.
 nlohmann::json MapSizes(const DensifyOptions& o, const DenseScene& s) {
   nlohmann::json j = nlohmann::json::object();
   for (size_t i = 0; i < s.images.size(); ++i)
@@ -233,6 +233,7 @@ DensifyReport RunDensify(const DensifyOptions& o) {
   rep.why = ledger.Summary();
   RemoveStaleTemporaries(ws.StereoDir());  // a killed run's leftovers, even when all is up to date
   if (todo.empty()) return rep;
+  ledger.NoteRun("map_sizes", MapSizes(o, s));
   CreateFolder(ws.StereoDir());
   Progress bar("densify", todo.size(), o.quiet);
   double share = 0;
@@ -246,7 +247,7 @@ DensifyReport RunDensify(const DensifyOptions& o) {
   rep.ms_per_image =
       std::chrono::duration<double, std::milli>(Clock::now() - t0).count() / double(rep.written);
   rep.valid_share = share / double(rep.written);
-  ledger.Write({{"map_sizes", MapSizes(o, s)}});
+  ledger.Write();
   return rep;
 }
 

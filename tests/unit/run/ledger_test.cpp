@@ -106,6 +106,51 @@ TEST_F(LedgerTest, AFolderIndependentOfAnOptionKeepsItsOutputsWhenOnlyThatOption
   EXPECT_EQ(Run({0.5, 1}, both), (V{"--lateral changed", "--lateral changed"}));
 }
 
+TEST_F(LedgerTest, IndependentTakesAnOutputFolderOnlyAndBeforeAnyVerdict) {
+  Opts o;
+  OptionTable t = Declare(o);
+  Ledger ledger(dir_ / "out", "demo", t, {}, dir_ / "ws");
+  EXPECT_THROW(ledger.Independent(dir_ / "out", {"lateral"}), Error);
+  EXPECT_THROW(ledger.Independent(dir_ / "out/.", {"lateral"}), Error);
+  ledger.Independent(dir_ / "out/dynamic/", {"lateral"});  // a trailing separator is the folder
+  Run({}, {"dynamic/f0.png"});
+  Ledger again(dir_ / "out", "demo", t, {}, dir_ / "ws");
+  again.Stale(dir_ / "out/dynamic/f0.png");
+  EXPECT_THROW(again.Independent(dir_ / "out/dynamic", {"lateral"}), Error);
+}
+
+// What a run's options resolved to is kept in its own entry, which each of its outputs names.
+TEST_F(LedgerTest, ARunsNoteStaysWithTheOutputsItMade) {
+  const auto note_of = [&](const std::string& output) {
+    const nlohmann::json j =
+        nlohmann::json::parse(std::ifstream(dir_ / "out/provenance/demo.json"));
+    return j["runs"][j["outputs"][output]["run"].get<std::string>()].value("size", -1);
+  };
+  Opts o;
+  OptionTable t = Declare(o);
+  {
+    Ledger ledger(dir_ / "out", "demo", t, {}, dir_ / "ws");
+    ledger.NoteRun("size", 621);
+    for (const char* f : {"f0.png", "f1.png"}) {
+      Put(dir_ / "out" / f, "map");
+      ledger.Done(dir_ / "out" / f);
+    }
+    ledger.Write();
+  }
+  // Another run of the same options with another note (what they resolved to differs: the
+  // cameras, say), one output remade.
+  {
+    Ledger ledger(dir_ / "out", "demo", t, {}, dir_ / "ws");
+    ledger.NoteRun("size", 319);
+    EXPECT_EQ(ledger.Stale(dir_ / "out/f1.png"), "");  // the note does not count in staleness
+    Put(dir_ / "out/f0.png", "map 2");
+    ledger.Done(dir_ / "out/f0.png");
+    ledger.Write();
+  }
+  EXPECT_EQ(note_of("f0.png"), 319);
+  EXPECT_EQ(note_of("f1.png"), 621);
+}
+
 TEST_F(LedgerTest, AnInputRewrittenRedoesATouchedOneDoesNot) {
   Run({}, {"f0.png"});
   SetTime(dir_ / "ws/mesh.ply", 2000000000);  // same bytes, another time: a copy, a touch
