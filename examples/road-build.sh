@@ -400,7 +400,7 @@ read -r -a dynmask_opts <<< "${DYNMASK_FLAGS:-}"
 dynmask_keeps=1
 for i in "${!dynmask_opts[@]}"; do
   case "${dynmask_opts[$i]}" in
-    --mesh | --mesh=* | --depth=stereo) dynmask_keeps=0 ;;
+    --mesh | --mesh=?* | --depth=stereo) dynmask_keeps=0 ;;
     --depth) [ "${dynmask_opts[$((i + 1))]:-}" != stereo ] || dynmask_keeps=0 ;;
   esac
 done
