@@ -151,15 +151,15 @@ void Ledger::Independent(const fs::path& folder, std::set<std::string> keys) {
   independent_[rel + "/"] = std::move(keys);
 }
 
-// The options the outputs of `rel`'s folder do not depend on (the innermost declared folder).
-const std::set<std::string>& Ledger::IgnoredFor(const std::string& rel) const {
-  static const std::set<std::string> none;
-  const std::set<std::string>* found = &none;
-  size_t longest = 0;
-  for (const auto& [folder, keys] : independent_)
-    if (folder.size() > longest && rel.compare(0, folder.size(), folder) == 0)
-      found = &keys, longest = folder.size();
-  return *found;
+// The innermost folder declared Independent() that holds the output `rel`, with the options its
+// outputs do not depend on; nullptr when none does.
+const Ledger::IndependentFolder* Ledger::FolderOf(const std::string& rel) const {
+  const IndependentFolder* found = nullptr;
+  for (const IndependentFolder& f : independent_)
+    if ((!found || f.first.size() > found->first.size()) &&
+        rel.compare(0, f.first.size(), f.first) == 0)
+      found = &f;
+  return found;
 }
 
 // "" when a recorded run had this run's options (but `ignored`) and inputs; else what differs.
@@ -235,16 +235,17 @@ std::string Ledger::StaleExisting(const std::string& rel, const fs::path& output
   }
   if (!maker) return "no record";
   const std::string run = entry.value("run", std::string());
-  const std::set<std::string>& ignored = IgnoredFor(rel);
-  std::string verdict_key = run;
-  for (const auto& [folder, keys] : independent_)
-    if (&keys == &ignored) verdict_key = folder + "\n" + run;  // no run id holds a newline
+  // A run's verdict differs between folders that ignore different options.
+  static const std::set<std::string> every_option_counts;
+  const IndependentFolder* folder = FolderOf(rel);
+  const std::set<std::string>& ignored = folder ? folder->second : every_option_counts;
+  const std::string verdict_key = folder ? folder->first + "\n" + run : run;  // ids hold no \n
   auto v = run_verdicts_.find(verdict_key);
   if (v == run_verdicts_.end()) {
     auto rit = maker->runs.find(run);
-    const nlohmann::json none;
+    const nlohmann::json no_run;
     v = run_verdicts_
-            .emplace(verdict_key, CompareRun(rit == maker->runs.end() ? none : *rit, ignored))
+            .emplace(verdict_key, CompareRun(rit == maker->runs.end() ? no_run : *rit, ignored))
             .first;
   }
   if (!v->second.empty()) return v->second;

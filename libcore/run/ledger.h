@@ -46,6 +46,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "base/file_stamp.h"
@@ -111,7 +112,8 @@ class Ledger {
   std::string StaleExisting(const std::string& rel, const fs::path& output, const FileStamp& now,
                             const std::vector<fs::path>& item_inputs);
   std::string CompareRun(const nlohmann::json& run, const std::set<std::string>& ignored);
-  const std::set<std::string>& IgnoredFor(const std::string& rel) const;
+  using IndependentFolder = std::pair<const std::string, std::set<std::string>>;
+  const IndependentFolder* FolderOf(const std::string& rel) const;
   bool Unchanged(const std::string& name, const fs::path& path, const nlohmann::json& stamp);
   const FileStamp& Current(const std::string& name, const fs::path& path, bool checksum);
   nlohmann::json StampJson(const std::string& name, const fs::path& path);
