@@ -96,9 +96,15 @@ static void WriteAtomic(const fs::path& path, std::ios::openmode mode,
     if (!f) throw Error(path.string(), 0, "cannot open for writing");
     f.imbue(std::locale::classic());
     f.precision(17);
+    errno = 0;
     write(f);
     f.close();
-    if (f.fail()) throw Error(path.string(), 0, "write failed (disk full?)");
+    // The stream keeps no reason; the system call that failed (write(2) in the stream's buffer,
+    // or close(2)) left it in errno, which nothing in between resets.
+    if (f.fail())
+      throw Error(path.string(), 0,
+                  errno != 0 ? std::string("write failed: ") + strerror(errno)
+                             : std::string("write failed (disk full?)"));
   }
   out.Commit();
 }

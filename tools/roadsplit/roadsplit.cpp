@@ -460,6 +460,16 @@ RoadSplitReport RunRoadSplit(const RoadSplitOptions& o) {
     fs::rename(tmp, road);
     ledger.Done(graph);
     ledger.Write({{"fragments", rep.fragments}, {"junctions", rep.junctions}});
+  } catch (const Error& e) {
+    std::error_code ec;
+    fs::remove_all(tmp, ec);
+    // A file of the road under construction is named where it would have been: ROAD/..., not
+    // the temporary folder that is gone now.
+    const std::string built = tmp.string(), file = e.file();
+    if (dynamic_cast<const UsageError*>(&e) || file.compare(0, built.size(), built) != 0) throw;
+    const fs::path rel = fs::path(file).lexically_relative(tmp);
+    throw Error((rel == "." ? road : road / rel).string(), e.line(),
+                std::string(e.what()).substr(Located(file, e.line(), "").size()));
   } catch (...) {
     std::error_code ec;
     fs::remove_all(tmp, ec);
