@@ -14,7 +14,8 @@ tool and OUT/index.html, the page to read before choosing settings. Work folders
              against whole-process milliseconds per frame
   dynmask    --threshold, --no-colour, --colour-threshold, --flow-threshold, --no-flow,
              --neighbours, --partners, --min-baseline,
-             --partners-ahead, --ahead-veto, --ahead and --ahead-min-share (with --partners 0),
+             --partners-ahead, --ahead-veto, --partners-veto, --ahead and --ahead-min-share
+             (with --partners 0),
              --passes, --segments,
              --region-depth,
              --probability, --grounded, --min-height,
@@ -500,6 +501,7 @@ def sweep_dynmask(c):
                  ("partners", "--partners", (0, 1, 2, 4)),
                  ("partners-ahead", "--partners-ahead", (0, 2, 4, 6)),
                  ("ahead-veto", "--ahead-veto", (0, 0.5, 1)),
+                 ("partners-veto", "--partners-veto", (0, 0.5, 1, 2)),
                  # photos of the same drive farther along are a cue only without partners (with
                  # them, a veto: --ahead-veto above): drive A as a road of one drive
                  ("ahead (--partners 0)", "--ahead", (0, 2, 4), ["--partners", 0]),
@@ -521,7 +523,7 @@ def sweep_dynmask(c):
                 "--no-colour": False, "--colour-threshold": 0.065,
                 "--flow-relative": 0,
                 "--neighbours": 4, "--partners": 2, "--partners-ahead": 4, "--ahead": 2,
-                "--ahead-veto": 0.5, "--ahead-min-share": 0.1,
+                "--ahead-veto": 0.5, "--partners-veto": 1, "--ahead-min-share": 0.1,
                 "--region-depth": 0.5,
                 "--min-baseline": 0.25, "--passes": 2, "--occludes": 0.2, "--occlusion-gap": 0.25,
                 "--segments": 300,

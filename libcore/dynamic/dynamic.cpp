@@ -273,6 +273,8 @@ void DynamicOptions::Check() const {
     throw UsageError("--flow-threshold must be above 0, got " + std::to_string(flow_threshold));
   if (!(quantile >= 0 && quantile <= 1))
     throw UsageError("--quantile must be in [0, 1], got " + std::to_string(quantile));
+  if (!(partners_veto >= 0 && partners_veto <= 10))
+    throw UsageError("--partners-veto must be in [0, 10], got " + std::to_string(partners_veto));
   if (!(ahead_veto >= 0 && ahead_veto <= 10))
     throw UsageError("--ahead-veto must be in [0, 10], got " + std::to_string(ahead_veto));
   if (!(depth_tolerance > 0 && depth_tolerance < 1))
@@ -474,6 +476,11 @@ DynamicEvidence EstimateDynamic(const DynamicView& t,
   if (!partners.empty())
     ev.partners =
         ReducedResiduals(t, partners, photometric_only, "partner view", ev.across, no_flow);
+  if (o.partners_veto > 0 && !ev.across.empty() && !ev.flow.empty()) {
+    // Another drive saw the static point as this photo does: the motion this drive's own
+    // neighbours show there is view-dependent light (NaN, seen by no partner, compares false).
+    ev.flow.setTo(kNaN, ev.across < o.partners_veto * o.threshold);
+  }
   cv::Mat ahead_cue;
   if (o.ahead_veto > 0 && !ev.across.empty() && !ahead.empty()) {
     // The photo's own drive, farther along, saw these pixels as they are: what another drive's

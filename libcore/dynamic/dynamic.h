@@ -94,6 +94,9 @@ struct DynamicOptions {
   double texture = 0.02;            // luma gradient (per pixel) at which a pixel's evidence is full
   double region_depth = 0.5;        // a pixel without depth takes its region's probability when
                                     // more than this share of the region has depth, [0, 1]; 1 never
+  double partners_veto = 1;         // with partners and flow: where they agree with the target
+                                    // (residual under this × threshold), the flow residual is
+                                    // dropped (view-dependent light); 0 off, [0, 10]
   double ahead_veto = 0.5;          // with partners: the photos farther along veto the partners'
                                     // residual where theirs is under this × threshold; 0 off
 
@@ -128,6 +131,16 @@ struct DynamicEvidence {
 // (what it photographed, the parked vehicle included) hides the road point behind it, so give
 // partners their own depth maps where they exist. A pixel seen by no partner has no evidence from
 // them.
+//
+// Where the partners agree with the target (their reduced residual under partners_veto ×
+// threshold), the static point looked as it does now minutes or days later from another lane:
+// the motion the target's own neighbours show there (the flow residual) is light that changes
+// with the viewpoint, not something that moved: the sky mirrored in a shop window or on a wet
+// road moves in the flow as a point far behind the surface would, just as a vehicle moving
+// along the road does. The flow residual is dropped there (NaN); the photometric residual of the
+// neighbours stays (dropping it too lost near vehicles whose paint is the road's on mkroad's
+// 12-photo roads). A vehicle of this drive is not there in the other drive's photos, so they
+// disagree with it and veto nothing; a pixel no partner saw (NaN) is not vetoed.
 //
 // Photos farther along (optional, `ahead`) are photos of the target's own drive taken metres
 // farther along the road, each with its `beyond` set: a vehicle keeping its distance ahead of

@@ -195,6 +195,12 @@ void DeclareEvidenceOptions(OptionTable& t, DynmaskOptions& o) {
   t.Real("--texture", &o.evidence.texture,
          "Luma gradient per pixel at which a pixel's own evidence counts fully")
       .Above(0);
+  t.Real("--partners-veto", &o.evidence.partners_veto,
+         "Where the partners (other drives) saw the pixel's static point as the photo does "
+         "(residual under F x --threshold), the motion its own neighbours show there is light "
+         "that changes with the viewpoint (a reflection in a window or on a wet road): its flow "
+         "residual is dropped (0: off)")
+      .Range(0, 10);
   t.Real("--ahead-veto", &o.evidence.ahead_veto,
          "Photos with partners also get --ahead photos of their own drive farther along (with "
          "none farther along, such as a drive's last photo: the --ahead photos just behind it, "
