@@ -93,18 +93,23 @@ static void WriteAtomic(const fs::path& path, std::ios::openmode mode,
   AtomicFile out(path);
   {
     std::ofstream f(out.temp_path(), mode | std::ios::trunc);
-    if (!f) throw Error(path.string(), 0, "cannot open for writing");
+    if (!f)
+      throw Error(path.string(), 0, std::string("cannot open for writing: ") + strerror(errno));
     f.imbue(std::locale::classic());
     f.precision(17);
+    // The stream keeps no reason: the system call that failed (write(2) from the stream's
+    // buffer, or close(2) flushing it) leaves it in errno. The first failure's is kept: the
+    // callback may make other calls after it.
     errno = 0;
     write(f);
+    int err = f.fail() ? errno : 0;
+    errno = 0;
     f.close();
-    // The stream keeps no reason; the system call that failed (write(2) in the stream's buffer,
-    // or close(2)) left it in errno, which nothing in between resets.
+    if (err == 0) err = errno;
     if (f.fail())
       throw Error(path.string(), 0,
-                  errno != 0 ? std::string("write failed: ") + strerror(errno)
-                             : std::string("write failed (disk full?)"));
+                  err != 0 ? std::string("write failed: ") + strerror(err)
+                           : std::string("write failed (disk full?)"));
   }
   out.Commit();
 }

@@ -106,7 +106,8 @@ struct DynamicOptions {
 struct DynamicEvidence {
   cv::Mat probability;  // CV_32F 0..1: "not static"
   cv::Mat photometric;  // CV_32F: the reduced photometric residual, NaN where no evidence
-  cv::Mat flow;         // CV_32F: the reduced flow residual in pixels (empty when flow is off)
+  cv::Mat flow;         // CV_32F: the reduced flow residual in pixels (empty when flow is off;
+                        // NaN where the partners veto it, partners_veto)
   cv::Mat across;       // CV_32F: the photometric residual reduced over the partners (NaN where
                         // none saw the pixel; empty without partners)
   cv::Mat ahead_photo;  // CV_32F: the photometric residual reduced over the photos of the drive
@@ -139,8 +140,11 @@ struct DynamicEvidence {
 // road moves in the flow as a point far behind the surface would, just as a vehicle moving
 // along the road does. The flow residual is dropped there (NaN); the photometric residual of the
 // neighbours stays (dropping it too lost near vehicles whose paint is the road's on mkroad's
-// 12-photo roads). A vehicle of this drive is not there in the other drive's photos, so they
-// disagree with it and veto nothing; a pixel no partner saw (NaN) is not vetoed.
+// 12-photo roads). "Agree" is the reduced residual (the smallest over the partners, at the
+// default quantile): one partner that saw the point alike vetoes. A vehicle of this drive is not
+// there in the other drive's photos, so they disagree with it and veto it only where its paint
+// has the grey of the road they saw (by chance: about 12 % of the unit test's blocky car); a
+// pixel no partner saw (NaN), or one a partner's first pass marked, is not vetoed.
 //
 // Photos farther along (optional, `ahead`) are photos of the target's own drive taken metres
 // farther along the road, each with its `beyond` set: a vehicle keeping its distance ahead of

@@ -260,10 +260,10 @@ Reconstruction SubModel(const Reconstruction& rec, const std::vector<const Image
 // Hard-links `from` to `to` (a copy across file systems); false when `from` does not exist.
 bool LinkFile(const fs::path& from, const fs::path& to, RoadSplitReport& rep) {
   if (!fs::exists(from)) return false;
-  fs::create_directories(to.parent_path());
+  CreateFolder(to.parent_path());
   std::error_code ec;
   const bool linked = LinkOrCopy(from, to, ec);
-  if (ec) throw Error(to.string() + ": cannot copy " + from.string() + ": " + ec.message());
+  if (ec) throw Error(to.string(), 0, "cannot copy " + from.string() + ": " + ec.message());
   ++(linked ? rep.linked : rep.copied);
   return true;
 }
@@ -366,7 +366,7 @@ void WriteFragments(const RoadSplitOptions& o, const Workspace& ws, const Recons
     RoadFragment& f = p.fragments[k];
     f.dir = tmp / "Models" / f.id;
     const Workspace dst(f.dir);
-    fs::create_directories(dst.SparseDir());
+    CreateFolder(dst.SparseDir());
     WriteColmapText(SubModel(rec, images, p.members[k]), dst.SparseDir().string());
     std::vector<ExposureRow> rows;
     for (size_t i : p.members[k]) {
