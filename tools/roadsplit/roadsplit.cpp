@@ -413,6 +413,22 @@ std::vector<fs::path> RoadInputs(const Workspace& ws,
   return in;
 }
 
+// Rethrows the exception being handled. An Error naming a file of the road under construction
+// (inside `tmp`, gone by now) names it where the road would have it: ROAD/...
+[[noreturn]] void RethrowNamedInRoad(const fs::path& tmp, const fs::path& road) {
+  try {
+    throw;
+  } catch (const UsageError&) {
+    throw;
+  } catch (const Error& e) {
+    const std::string built = tmp.string(), file = e.file();
+    if (file.compare(0, built.size(), built) != 0) throw;
+    const fs::path rel = fs::path(file).lexically_relative(tmp);
+    throw Error((rel == "." ? road : road / rel).string(), e.line(),
+                std::string(e.what()).substr(Located(file, e.line(), "").size()));
+  }
+}
+
 }  // namespace
 
 RoadSplitReport RunRoadSplit(const RoadSplitOptions& o) {
@@ -460,20 +476,10 @@ RoadSplitReport RunRoadSplit(const RoadSplitOptions& o) {
     fs::rename(tmp, road);
     ledger.Done(graph);
     ledger.Write({{"fragments", rep.fragments}, {"junctions", rep.junctions}});
-  } catch (const Error& e) {
-    std::error_code ec;
-    fs::remove_all(tmp, ec);
-    // A file of the road under construction is named where it would have been: ROAD/..., not
-    // the temporary folder that is gone now.
-    const std::string built = tmp.string(), file = e.file();
-    if (dynamic_cast<const UsageError*>(&e) || file.compare(0, built.size(), built) != 0) throw;
-    const fs::path rel = fs::path(file).lexically_relative(tmp);
-    throw Error((rel == "." ? road : road / rel).string(), e.line(),
-                std::string(e.what()).substr(Located(file, e.line(), "").size()));
   } catch (...) {
     std::error_code ec;
     fs::remove_all(tmp, ec);
-    throw;
+    RethrowNamedInRoad(tmp, road);
   }
   return rep;
 }
