@@ -33,7 +33,7 @@ uniform vec2 u_proj_exposure[MVTM_MAX_PROJECTORS];  // gain, offset/255 of I = g
 #ifdef MVTM_BLEND
 uniform float u_blend_power;   // p: weight ∝ (1 / (penalty + 1e-3 rad))^p; larger = sharper
 uniform float u_feather;       // pixels over which a projector fades out towards its border
-uniform float u_res_weight;    // radians of penalty for a projector twice as far as the camera
+uniform float u_res_weight;    // R: penalty R·(1 − d_render/d_proj) rad (R/2 at twice as far)
 uniform float u_soft;          // soft occlusion: visibility falls from 1 at z = d·(1 + bias)
                                // to 0 at z = d·(1 + bias + soft)
 #endif

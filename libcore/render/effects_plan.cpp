@@ -164,7 +164,9 @@ nlohmann::json ExplainEffects(const SceneSurvey& s, const EffectsPlan& plan) {
               "several projectors see most points: each pixel blends those that see it, "
               "weighted by the angle between its ray and theirs (power " +
                   ShortDouble(plan.weights.power) + "), resolution (" +
-                  ShortDouble(plan.weights.res_weight) + " rad per halving), border feathering (" +
+                  ShortDouble(plan.weights.res_weight) +
+                  " x (1 - the camera's distance / the projector's) rad), border "
+                  "feathering (" +
                   ShortDouble(plan.weights.feather) + " px) and soft occlusion (" +
                   ShortDouble(plan.weights.soft) + ")",
               !s.ptm       ? vertex_mode

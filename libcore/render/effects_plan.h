@@ -28,7 +28,7 @@ namespace mvtm {
 struct BlendWeights {
   double power = 2;         // sharpness p (large: the best-angle projector alone)
   double feather = 16;      // pixels over which a projector fades out at its image border
-  double res_weight = 0.1;  // radians of penalty for a projector twice as far as the camera
+  double res_weight = 0.1;  // R: R·(1 − d_render/d_proj) rad for a farther projector (R/2 at 2×)
   double soft = 0.01;       // soft occlusion width, relative (visibility 1 → 0 over d·soft)
 };
 

@@ -107,7 +107,8 @@ OptionTable DeclareOptions(PtmRenderOptions& o) {
          "Pixels over which a projector fades out at its image border")
       .Range(0, 1000);
   t.Real("--res-weight", &o.blend.res_weight,
-         "Blending: radians of penalty for a projector twice as far from a point as the camera")
+         "Blending: R x (1 - d_camera / d_projector) radians of penalty for a projector "
+         "farther from a point than the camera (R/2 at twice as far)")
       .Range(0, 100);
   t.Real("--soft", &o.blend.soft,
          "Blending: soft occlusion width, relative (visibility 1 to 0 over depth*(1+bias..+soft))")

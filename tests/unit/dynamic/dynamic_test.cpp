@@ -462,6 +462,46 @@ TEST(Dynamic, PartnersThatSawTheRoadAsThePhotoDidVetoItsNeighboursFlow) {
   EXPECT_EQ(cv::countNonZero(a != b), 0);
 }
 
+TEST(Dynamic, PartnersVetoTheFlowUnderFTimesTheThresholdBeforeTheAheadVetoDropsTheirResidual) {
+  // The rule of --partners-veto F, checked pixel by pixel against the partners' residual made
+  // without it: the flow becomes NaN exactly where that residual is under F x --threshold. A photo
+  // of the drive 3 m farther along (the ahead veto, on by default) saw the road bare too and drops
+  // the partners' residual where it agrees; the partners' veto is applied before that, so the
+  // pixels both witnesses saw alike lose their flow as well (the other order would keep it).
+  const Box at_t{100, 70, 40, 25}, at_n{60, 72, 40, 25};
+  const DynamicView t = MakeView(10, &at_t), n = MakeView(9, &at_n),
+                    partner = MakeView(10.5, nullptr, 1.0, -1.5), ahead = MakeView(13, nullptr);
+  DynamicOptions off;
+  off.partners_veto = 0;
+  const DynamicEvidence raw = EstimateDynamic(t, {&n}, off, {&partner});
+  const DynamicEvidence base = EstimateDynamic(t, {&n}, off, {&partner}, {&ahead});
+  int dropped_by_ahead = 0;
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x)
+      dropped_by_ahead +=
+          std::isfinite(raw.across.at<float>(y, x)) && std::isnan(base.across.at<float>(y, x));
+  EXPECT_GE(dropped_by_ahead, 3000);  // the order matters on these pixels
+  int last = -1;
+  for (const double f : {0.5, 1.0, 2.0}) {
+    DynamicOptions o;
+    o.partners_veto = f;
+    const DynamicEvidence e = EstimateDynamic(t, {&n}, o, {&partner}, {&ahead});
+    int vetoed = 0, wrong = 0;
+    for (int y = 0; y < kH; ++y)
+      for (int x = 0; x < kW; ++x) {
+        const float f0 = base.flow.at<float>(y, x);
+        if (!std::isfinite(f0)) continue;
+        const bool veto = raw.across.at<float>(y, x) < f * o.threshold;  // NaN: false
+        const float f1 = e.flow.at<float>(y, x);
+        vetoed += veto;
+        wrong += veto ? !std::isnan(f1) : f1 != f0;
+      }
+    EXPECT_EQ(wrong, 0) << "F = " << f;
+    EXPECT_GT(vetoed, last) << "F = " << f;  // a larger F vetoes more
+    last = vetoed;
+  }
+}
+
 TEST(Dynamic, AVehicleOfTheRoadsLumaIsFoundByItsColour) {
   // Boxes of the road's own luma, tinted blue, at other pixels in each neighbour (moving): in
   // the luma the photos are the bare road; in colour, the red channel differs by 0.4 x the luma
