@@ -19,10 +19,11 @@ tool and OUT/index.html, the page to read before choosing settings. Work folders
              --passes, --segments,
              --region-depth,
              --probability, --grounded, --min-height,
-             --occludes, --occlusion-gap, --min-ratio, --max-gap, --gap-support
-             (no labels; the fixture's true mesh, no densify maps, so --seen-tolerance has nothing
-             to compare: its rows are the road build's, issue 21's note), and --max-fill,
-             --complete, --driven, --driven-agree and --no-driven-grow on a mesh densify + roadmesh
+             --occludes, --occlusion-gap, --min-ratio, --max-gap, --gap-support,
+             --max-width, --window, --slack, --quantile, --texture, --depth-tolerance, --open,
+             --close, --min-area
+             (no labels; the fixture's true mesh, no densify maps), and --max-fill,
+             --complete, --driven, --driven-agree, --no-driven-grow and --seen-tolerance on a mesh densify + roadmesh
              --dense make of the same photos (with their
              densify maps): mask IoU against truth/masks and
              the share of drive B masked, against whole-process milliseconds per image
@@ -31,11 +32,14 @@ tool and OUT/index.html, the page to read before choosing settings. Work folders
   bakedepth  --scale: share of the truth's surface pixels whose looked-up depth is within 1 %,
              against bakedepth's own milliseconds per map (render + write)
   ptmrender  --projectors, --bias, baked depth scale or a depth pre-pass, effects off, blending
-             weights (--blend-power, --feather, --res-weight, --soft), --sky-distance, seen
+             weights (--blend-power, --feather, --res-weight, --soft), --sky-distance,
+             --max-heading, --ahead-weight, seen
              surfaces on densify's maps (--seen-reach, --seen-projectors, --seen-front,
              --seen-ground-conf): SSIM
              against the ray-traced off-path truth, against ptmrender's own ms per frame
   densify    (examples/sweep_densify.py) depth within 2 % against densify's ms per image
+  exposure   --iterations, --outlier-mads, --min-points, --offsets on the road's photos with a
+             known gain applied to each: RMS error of the fitted gains, against whole-process ms
   boresight  --conditioning, --max-error, --min-angle, --min-track, --min-gain on the road's model turned
              into a record with a known mount rotation: degrees from it, against whole-process ms
 
@@ -423,6 +427,8 @@ def sweep_ptmrender(c):
         settings += [("blend", f"soft occlusion {x}", ["--soft", x], 1) for x in (0, 0.05)]
         settings += [("sky", f"sky distance {d}", ["--sky-distance", d], 1)
                      for d in (0, 20, 200)]
+        settings += [("choice", f"max heading {h}", ["--max-heading", h], 1) for h in (30, 90)]
+        settings += [("choice", f"ahead weight {w}", ["--ahead-weight", w], 1) for w in (0, 3)]
         # Seen surfaces need densify's maps: made once before these rows (the rows above have
         # none, as the fixture's workspace has none).
         settings += [("seen", "seen surfaces (densify's maps)", [], 1),
@@ -458,7 +464,8 @@ def sweep_ptmrender(c):
         "weights (<code>--blend-power</code>, <code>--feather</code>, <code>--res-weight</code>, "
         "<code>--soft</code>), the skybox's distance (<code>--sky-distance</code>: 0 at "
         "infinity; by default the scene's far end, the 98th percentile of the sparse points' "
-        "distances), the seen surfaces on densify's maps (group &ldquo;seen&rdquo;, after "
+        "distances), the projectors' choice (<code>--max-heading</code>, the heading gate; "
+        "<code>--ahead-weight</code>, the cost per metre ahead of the pose), the seen surfaces on densify's maps (group &ldquo;seen&rdquo;, after "
         "<code>densify</code>: <code>--seen-reach</code>, <code>--seen-projectors</code>, "
         "<code>--seen-front</code>, <code>--seen-ground-conf</code>, "
         "<code>--no-seen-surfaces</code>; on this true mesh they "
@@ -470,12 +477,78 @@ def sweep_ptmrender(c):
         f"milliseconds per frame (render + depth + load; PNG encoding excluded, it overlaps "
         f"rendering), fastest of {c.repeat} runs. <b>Read:</b> "
         "higher is better, left is faster; the default (K=4, bias 0.005, baked depth at scale 1, "
-        "blend power 2, feather 16 px, res weight 0.1, soft 0.01, every effect the scene needs) "
+        "blend power 2, feather 16 px, res weight 0.1, soft 0.01, max heading 45, ahead weight 1, "
+        "every effect the scene needs) "
         "is ringed. This road renders on its exact mesh, where blending costs a little; on meshes "
         "built from photos it gains (ptmrender(1), EFFECTS PLAN).")
     return sl.emit(c.out, s, "ms_per_frame", "ssim", xlabel="milliseconds per frame "
                    "(ptmrender's own timing: render + depth + load)",
                    ylabel="mean SSIM against the ray-traced truth")
+
+
+def sweep_exposure(c):
+    """exposure's knobs on the road's photos with a known gain applied to each (log-normal,
+    sigma 0.15, within 0.7..1.4; a pixel pushed over 255 clips, as a real sensor's does): the
+    RMS (percent) of the fitted gains' ratio to the applied ones, the common scale taken out,
+    against whole-process milliseconds per image."""
+    ws = sl.copy_workspace(c.road, os.path.join(c.work, "exposure", "ws"))
+    rng = np.random.default_rng(11)
+    names = sorted(os.listdir(os.path.join(ws, "images")))
+    applied = {}
+    for n in names:
+        p = os.path.join(ws, "images", n)
+        g = float(np.clip(np.exp(rng.normal(0, 0.15)), 0.7, 1.4))
+        img = imageio.imread(p).astype(np.float64)
+        rgb = img[..., :3] if img.ndim == 3 else img
+        rgb[...] = np.clip(np.rint(rgb * g), 0, 255)
+        imageio.imwrite(p, img.astype(np.uint8))
+        applied[n] = g
+    spread = 100 * float(np.std(np.log(list(applied.values()))))
+    if c.short:
+        knobs = [("iterations", "--iterations", (3, 30))]
+    else:
+        knobs = [("iterations", "--iterations", (1, 3, 10, 30, 100)),
+                 ("outlier-mads", "--outlier-mads", (1.5, 3, 6, 1000)),
+                 ("min-points", "--min-points", (5, 20, 80)),
+                 ("offsets", "--offsets", (False, True))]
+    defaults = {"--iterations": 30, "--outlier-mads": 3, "--min-points": 20, "--offsets": False}
+    rows = []
+    for group, opt, values in knobs:
+        for v in values:
+            args = ([opt] if v else []) if opt == "--offsets" else [opt, v]
+            (_, _, wall), _ = c.tools.best_wall(c.repeat, "exposure", "-q", "--force", *args, ws)
+            fit = {}
+            with open(os.path.join(ws, "exposure.tsv")) as f:
+                for line in f.read().splitlines()[1:]:
+                    name, gain = line.split("\t")[:2]
+                    fit[name] = float(gain)
+            e = np.array([np.log(fit[n] / applied[n]) for n in names])
+            rms = 100 * float(np.sqrt(np.mean((e - e.mean()) ** 2)))
+            rows.append({"group": group, "setting": f"{group}={v}", "default": v == defaults[opt],
+                         "gain_error_percent": round(rms, 3),
+                         "ms_per_image": round(1000 * wall / len(names), 2)})
+            sl.log("exposure", rows[-1]["setting"], f"gain error {rms:.3f} %  "
+                   f"{rows[-1]['ms_per_image']:7.2f} ms/image")
+    best = min(r["gain_error_percent"] for r in rows if r["default"])
+    c.checks(best < 0.25 * spread, f"exposure defaults: gains within {best:.3f} % of the applied "
+             f"ones (applied spread {spread:.1f} %)")
+    sec = sl.Section(
+        "exposure", "exposure: error of the fitted gains against milliseconds per image", rows,
+        ["group", "setting", "default", "gain_error_percent", "ms_per_image"],
+        f"<b>Knobs:</b> <code>--iterations</code> (alternating least-squares rounds), "
+        f"<code>--outlier-mads</code> (observations that far from the fit dropped), "
+        f"<code>--min-points</code> (observations an image needs to be fitted), "
+        f"<code>--offsets</code> (fit a black level too). The road's {len(names)} photos, each "
+        f"with a known gain applied (log-normal, {spread:.1f} % spread; pixels pushed over 255 "
+        f"clip). <b>Accuracy:</b> RMS of the fitted gain's ratio to the applied one, percent, "
+        f"the common scale (a fit's choice) taken out; on this road it is mostly a slow drift "
+        f"along each drive (measured 7 Dec 2026 at the defaults: +2 % at a drive's start to -3 % "
+        f"at its end), as the photos share points only with their neighbours. "
+        f"<b>Time:</b> whole process per image, "
+        f"fastest of {c.repeat} runs. <b>Read:</b> lower is better.")
+    return sl.emit(c.out, sec, "ms_per_image", "gain_error_percent",
+                   xlabel="milliseconds per image (whole process)",
+                   ylabel="gain error against the applied gains (RMS, %)")
 
 
 def sweep_dynmask(c):
@@ -518,7 +591,16 @@ def sweep_dynmask(c):
                  ("occlusion-gap", "--occlusion-gap", (0.1, 0.25, 0.5)),
                  ("min-ratio", "--min-ratio", (0.3, 0.4, 0.5)),
                  ("max-gap", "--max-gap", (1, 3, 10)),
-                 ("gap-support", "--gap-support", (0, 0.05, 0.1))]
+                 ("gap-support", "--gap-support", (0, 0.05, 0.1)),
+                 ("max-width", "--max-width", (320, 480, 640)),
+                 ("window", "--window", (3, 5, 9)),
+                 ("slack", "--slack", (0, 1, 2)),
+                 ("quantile", "--quantile", (0, 0.5)),
+                 ("texture", "--texture", (0.01, 0.02, 0.05)),
+                 ("depth-tolerance", "--depth-tolerance", (0.02, 0.05, 0.1)),
+                 ("open", "--open", (0, 1, 2)),
+                 ("close", "--close", (0, 0.02, 0.05)),
+                 ("min-area", "--min-area", (1e-4, 2e-4, 1e-3))]
     defaults = {"--threshold": 0.05, "--flow-threshold": 2.5, "--no-flow": False,
                 "--no-colour": False, "--colour-threshold": 0.065,
                 "--flow-relative": 0,
@@ -529,7 +611,10 @@ def sweep_dynmask(c):
                 "--segments": 300,
                 "--probability": 0.4, "--grounded": 0.25, "--min-height": 0.5,
                 "--min-ratio": 0.5, "--max-gap": 3, "--gap-support": 0.05, "--max-fill": 0.5, "--complete": 3,
-                "--driven": 1, "--driven-agree": 0.1, "--no-driven-grow": False}
+                "--driven": 1, "--driven-agree": 0.1, "--no-driven-grow": False,
+                "--max-width": 640, "--window": 5, "--slack": 1, "--quantile": 0, "--texture": 0.02,
+                "--depth-tolerance": 0.05, "--open": 1, "--close": 0.02, "--min-area": 2e-4,
+                "--seen-tolerance": 0.05}
     rows = []
 
     def measure(group, opt, v, args, where):
@@ -572,6 +657,11 @@ def sweep_dynmask(c):
         for v in (False, True):
             measure("no-driven-grow (photo-built mesh)", "--no-driven-grow", v,
                     ["--no-driven-grow"] if v else [], photo)
+        # --seen-tolerance compares densify's map of each photo with the static depth: only
+        # this workspace has the maps.
+        for v in (0, 0.05, 0.1):
+            measure("seen-tolerance (photo-built mesh)", "--seen-tolerance", v,
+                    ["--seen-tolerance", v], photo)
     best_default = max(r["iou"] for r in rows if r["default"])
     c.checks(best_default > 0.2, f"dynmask defaults: IoU {best_default:.4f} above 0.2")
     s = sl.Section(
@@ -607,7 +697,15 @@ def sweep_dynmask(c):
         f"left alone; CamVid 0016E5 is where it finds parked and waiting vehicles), "
         f"<code>--min-ratio</code>, "
         f"<code>--max-gap</code> (tracking), <code>--gap-support</code> (a gap fill kept only "
-        f"where the probability supports it). Each varied alone on the "
+        f"where the probability supports it), <code>--max-width</code> (the working "
+        f"resolution: the images scaled down to that width), <code>--window</code> (the box "
+        f"averaging the photometric residual), <code>--slack</code> (misalignment forgiven), "
+        f"<code>--quantile</code> (of the residuals over the neighbours), <code>--texture</code> "
+        f"(the gradient at which a pixel's own evidence counts fully), "
+        f"<code>--depth-tolerance</code> (hides a point in a neighbour), <code>--open</code>, "
+        f"<code>--close</code>, <code>--min-area</code> (the blobs' morphology), "
+        f"<code>--seen-tolerance</code> (pixels densify's map puts on the static surface are "
+        f"static; on the photo-built workspace, which has the maps). Each varied alone on the "
         f"fixture's photos and true mesh ({len(a_names)} frames per drive, 640x192). "
         f"<b>Accuracy:</b> IoU of drive A's masks against truth/masks, pooled (the column "
         f"pass_b_masked: the share of drive B, which has no vehicle, masked: lower is better). "
@@ -746,7 +844,7 @@ SWEEPS = {"pickview": sweep_pickview, "segtrack": sweep_segtrack, "inpaint3d": s
           "dynmask": sweep_dynmask,
           "bakedepth": sweep_bakedepth, "ptmrender": sweep_ptmrender,
           "densify": sweep_densify.sweep, "simulate": sweep_simulate,
-          "boresight": sweep_boresight}
+          "boresight": sweep_boresight, "exposure": sweep_exposure}
 
 
 def main():

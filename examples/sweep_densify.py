@@ -14,8 +14,10 @@ Knobs: --planes (16, 32, 48, 96), --window (5, 7, 11), --neighbours (2, 4, 6), -
 --scale (0.25, 0.5, 1; the default is 0: from --map-focal), --map-focal (180, 360, 720),
 --min-score (0.3, 0.5, 0.7), --refine (0, 2, 4, 8), sweep directions
 (fronto only, no facade), and the fused mesh of the default setting (roadmesh --dense, baked
-back with bakedepth; also with --strict-agree, --agree-tolerance 0.02, --walls-gap 1, --no-seen-walls and --walls-reach 8) beside the corridor proxy
-alone (in the CSV and the page's table; they have no time of their own).
+back with bakedepth; also with --strict-agree, --agree-tolerance 0.02, --walls-gap 1, --no-seen-walls,
+--walls-reach 8, --voxel 0.05 and 0.2, --min-agree 1 and 3, --max-depth 20 and 80, --walls-behind -1)
+beside the corridor proxy alone (in the CSV and the page's table, their time roadmesh's
+whole-process wall time per image; not in the plot, whose time is densify's).
 """
 import os
 import re
@@ -89,14 +91,24 @@ def sweep(c):
                             ("fused, --agree-tolerance 0.02", ["--dense", "--agree-tolerance", 0.02]),
                             ("fused, --walls-gap 1", ["--dense", "--walls-gap", 1]),
                             ("fused, --no-seen-walls", ["--dense", "--no-seen-walls"]),
-                            ("fused, --walls-reach 8", ["--dense", "--walls-reach", 8])):
-            c.tools.run("roadmesh", "--force", "--no-colours", *extra, ws)
+                            ("fused, --walls-reach 8", ["--dense", "--walls-reach", 8]),
+                            ("fused, --voxel 0.05", ["--dense", "--voxel", 0.05]),
+                            ("fused, --voxel 0.2", ["--dense", "--voxel", 0.2]),
+                            ("fused, --min-agree 1", ["--dense", "--min-agree", 1]),
+                            ("fused, --min-agree 3", ["--dense", "--min-agree", 3]),
+                            ("fused, --max-depth 20", ["--dense", "--max-depth", 20]),
+                            ("fused, --max-depth 80", ["--dense", "--max-depth", 80]),
+                            ("fused, --walls-behind -1 (no walls)",
+                             ["--dense", "--walls-behind", -1])):
+            _, _, wall = c.tools.run("roadmesh", "--force", "--no-colours", *extra, ws)
             c.tools.run("bakedepth", "--force", ws)
             within2, coverage = score(ws, os.path.join(ws, "depth"))
+            ms = round(1000 * wall / len(os.listdir(os.path.join(ws, "images"))), 1)
             rows.append({"group": "mesh", "setting": name, "default": False,
                          "within2": round(within2, 4), "good_coverage": round(coverage, 4),
-                         "ms_per_image": ""})
-            sl.log("densify", name, f"within 2 % {within2:.3f}  good coverage {coverage:.3f}")
+                         "ms_per_image": ms})
+            sl.log("densify", name, f"within 2 % {within2:.3f}  good coverage {coverage:.3f}  "
+                   f"{ms:7.0f} ms/image (roadmesh, whole process)")
     s = sl.Section(
         "densify", "densify: dense depth, good coverage against milliseconds per image", rows,
         ["group", "setting", "default", "within2", "good_coverage", "ms_per_image"],
@@ -110,7 +122,11 @@ def sweep(c):
         f"&ldquo;good coverage&rdquo;, the share of the ray-traced truth's surface pixels that "
         f"get a depth within 2 % of the truth (the CSV also gives the share of the depths "
         f"written that are within 2 %, and, in full mode, the corridor proxy and the mesh fused "
-        f"from the default maps, baked back with bakedepth). <b>Time:</b> densify's own "
+        f"from the default maps, baked back with bakedepth, with roadmesh's knobs <code>--voxel</code>, "
+        f"<code>--min-agree</code>, <code>--max-depth</code>, <code>--strict-agree</code>, "
+        f"<code>--agree-tolerance</code>, the walls' <code>--walls-gap</code>, "
+        f"<code>--walls-reach</code>, <code>--walls-behind</code>, <code>--no-seen-walls</code>; "
+        f"their time: roadmesh's whole-process milliseconds per image). <b>Time:</b> densify's own "
         f"milliseconds per image. <b>Read:</b> higher is better; the default is ringed.")
     return sl.emit(c.out, s, "ms_per_image", "good_coverage",
                    plot_rows=[r for r in rows if r["group"] != "mesh"],
