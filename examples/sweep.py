@@ -541,9 +541,10 @@ def sweep_exposure(c):
         f"<code>--offsets</code> (fit a black level too). The road's {len(names)} photos, each "
         f"with a known gain applied (log-normal, {spread:.1f} % spread; pixels pushed over 255 "
         f"clip). <b>Accuracy:</b> RMS of the fitted gain's ratio to the applied one, percent, "
-        f"the common scale (a fit's choice) taken out; on this road it is mostly a slow drift "
-        f"along each drive (measured 7 Dec 2026 at the defaults: +2 % at a drive's start to -3 % "
-        f"at its end), as the photos share points only with their neighbours. "
+        f"the common scale (a fit's choice) taken out; it is mostly a slow drift along each "
+        f"drive (measured 7 Dec 2026 on 16 photos a drive at the defaults: +2 % at its start to "
+        f"-3 % at its end), whose cause is not known (leaving out clipped samples or sampling a "
+        f"blurred image does not remove it). "
         f"<b>Time:</b> whole process per image, "
         f"fastest of {c.repeat} runs. <b>Read:</b> lower is better.")
     return sl.emit(c.out, sec, "ms_per_image", "gain_error_percent",
