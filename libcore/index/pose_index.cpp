@@ -17,8 +17,6 @@ namespace mvtm {
 
 namespace {
 
-constexpr size_t kNone = static_cast<size_t>(-1);
-
 // The K best candidates so far, in CandidateBefore order (K is small: insertion into a sorted run).
 class TopK {
  public:
