@@ -1,6 +1,9 @@
 // PLY through OpenMesh (http://paulbourke.net/dataformats/ply/).
-// GCC 12 reports a false maybe-uninitialized inside OpenMesh's property templates.
+// GCC 12 reports a false maybe-uninitialized inside OpenMesh's property templates (clang has
+// no such warning and would warn of the unknown option).
+#if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
 #include "io/mesh_io.h"
 
 #include <Eigen/Geometry>

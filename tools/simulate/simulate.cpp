@@ -3,9 +3,11 @@
 #include <SDL2/SDL.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <limits>
 #include <memory>
@@ -328,16 +330,22 @@ class Recorder {
     if (!on()) return;
     Flush();
     controls_ << "# " << text << '\n';
+    Check(controls_, "controls.tsv");
   }
   void Pose(double t, const Rigid3d& c2w, double display) {
     if (!on()) return;
     const std::string row = TumRow(t, c2w);
     poses_ << row << ' ' << FormatDouble(display) << '\n';
+    Check(poses_, "poses.tsv");
     tum_ << row << '\n';
+    Check(tum_, "poses.tum");
     if (Clock::now() - flushed_ > std::chrono::seconds(1)) {  // a crash keeps all but a second
       controls_.flush();
+      Check(controls_, "controls.tsv");
       poses_.flush();
+      Check(poses_, "poses.tsv");
       tum_.flush();
+      Check(tum_, "poses.tum");
       flushed_ = Clock::now();
     }
   }
@@ -358,10 +366,12 @@ class Recorder {
     if (!on()) return;
     Flush();
     writer_.Finish();
-    for (auto* f : {&controls_, &poses_, &tum_}) {
-      f->close();
-      if (f->fail()) throw Error(dir_.string(), 0, "write failed (disk full?)");
-    }
+    controls_.close();
+    Check(controls_, "controls.tsv");
+    poses_.close();
+    Check(poses_, "poses.tsv");
+    tum_.close();
+    Check(tum_, "poses.tum");
     for (const char* n : {"controls.tsv", "poses.tsv", "poses.tum"}) {
       std::error_code ec;
       fs::rename(Partial(n), dir_ / n, ec);
@@ -375,6 +385,17 @@ class Recorder {
   void Flush() {
     if (pending_) controls_ << pending_row_;
     pending_ = false;
+    Check(controls_, "controls.tsv");
+  }
+  // A file stream keeps no reason for a failure: the write(2) or close(2) that failed (when the
+  // stream's buffer went out) left it in errno, read here right after the call that failed.
+  // The session stops there: a record with rows missing is no record of it.
+  void Check(const std::ofstream& f, const char* name) {
+    if (!f.fail()) return;
+    const int err = errno;
+    throw Error(
+        (dir_ / name).string(), 0,
+        err != 0 ? std::string("write failed: ") + strerror(err) : std::string("write failed"));
   }
   fs::path dir_;
   bool pending_ = false;
