@@ -70,6 +70,10 @@ std::vector<TimedName> ReadTimestamps(std::istream& in, const std::string& name)
 // KITTI calib.txt: the pinhole camera of projection matrix Pn (fx=P[0][0], fy=P[1][1],
 // cx=P[0][2], cy=P[1][2]) with the given image size.
 Camera ReadKittiCalib(const std::string& path, int cam_index, uint64_t width, uint64_t height);
+// KITTI's rectified cameras share one orientation and differ by a translation: Pn = K [I | tn],
+// so a point x0 in camera 0's coordinates is x0 + tn in camera n's. Returns tn = K⁻¹ Pn[:, 3]
+// (metres; camera 1, 0.54 m right of camera 0, has tn ≈ (−0.54, 0, 0)).
+Eigen::Vector3d ReadKittiCameraOffset(const std::string& path, int cam_index);
 
 // ORB-SLAM2 settings YAML (Camera.fx/fy/cx/cy/k1/k2/p1/p2[/k3], Camera.width/height), read with
 // cv::FileStorage. PINHOLE when all distortion terms are zero, else OPENCV (k3 must be zero;

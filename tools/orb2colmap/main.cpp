@@ -1,4 +1,6 @@
 // orb2colmap — thin main: the declared option table, then RunOrb2Colmap().
+#include <cmath>
+#include <cstdio>
 #include <iostream>
 
 #include "cli/app.h"
@@ -29,6 +31,16 @@ int RunAndReport(mvtm::Orb2ColmapOptions& o) {
     if (r.dropped) std::cerr << "; " << r.dropped << " outside the pose time span dropped";
     if (r.clamped) std::cerr << "; " << r.clamped << " outside the pose time span clamped";
     if (r.reordered) std::cerr << "; " << r.reordered << " poses were out of time order (sorted)";
+    if (r.from_cam != r.to_cam) {
+      // The centre of camera N in camera M's frame is −offset (+ 0.0: no "-0.0000").
+      auto mm = [](double v) { return std::round(-v * 1e4) / 1e4 + 0.0; };
+      char buf[160];
+      std::snprintf(buf, sizeof buf,
+                    "; the poses of camera P%d moved to P%d: (%.4f, %.4f, %.4f) m from it (x "
+                    "right, y down, z forward)",
+                    r.from_cam, r.to_cam, mm(r.offset.x()), mm(r.offset.y()), mm(r.offset.z()));
+      std::cerr << buf;
+    }
     if (!r.why.empty()) std::cerr << " [" << r.why << "]";
     std::cerr << "\n";
   }

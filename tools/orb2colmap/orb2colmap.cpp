@@ -51,6 +51,11 @@ OptionTable DeclareOptions(Orb2ColmapOptions& o) {
       .Excludes("--kitti-calib");
   t.Text("--kitti-calib", &o.kitti_calib, "Intrinsics from a KITTI calib.txt").File();
   t.Integer("--kitti-cam", &o.kitti_cam, "Which projection matrix Pn of --kitti-calib").Range(0, 3);
+  t.Integer("--kitti-poses-cam", &o.kitti_poses_cam,
+            "Which camera Pn of --kitti-calib a TUM or KITTI TRAJECTORY's poses are of; they are "
+            "moved to --kitti-cam's by the offset between the two (-1: 0 for a KITTI-format "
+            "TRAJECTORY, KITTI's ground truth being the left grey camera's, else --kitti-cam)")
+      .Range(-1, 3);
   t.Text("--size", &o.size,
          "Image size WxH when the intrinsics source has none (else read from --images)")
       .Alternative("40x12")
@@ -85,6 +90,9 @@ void Orb2ColmapOptions::Check() const {
     throw UsageError(
         "a COLMAP model or transforms.json names its images: no --frames, --trajectory-times or "
         "--input-format");
+  if (kitti_poses_cam >= 0 &&
+      (kitti_calib.empty() || HasNamedPoses(trajectory) || trajectory == kNoTrajectory))
+    throw UsageError("--kitti-poses-cam: needs --kitti-calib and a TUM or KITTI TRAJECTORY");
   if (!images.empty() && !fs::is_directory(images))
     throw UsageError("--images: '" + images + "' is not a folder");
   if (trajectory == kNoTrajectory) {
@@ -93,6 +101,11 @@ void Orb2ColmapOptions::Check() const {
     if (!frames.empty() || !trajectory_times.empty())
       throw UsageError("TRAJECTORY '-' (no poses) takes no --frames or --trajectory-times");
   }
+}
+
+int KittiPosesCamera(const Orb2ColmapOptions& o, TrajectoryFormat fmt) {
+  if (o.kitti_poses_cam >= 0) return o.kitti_poses_cam;
+  return fmt == TrajectoryFormat::kKitti ? 0 : o.kitti_cam;
 }
 
 namespace {
@@ -278,6 +291,18 @@ std::vector<Posed> PoseFrames(const Orb2ColmapOptions& o, const std::vector<Stam
   return posed;
 }
 
+// KITTI's rectified cameras differ by a translation only (ReadKittiCameraOffset): a pose of
+// camera M becomes camera N's by adding tN − tM to its world-to-camera translation.
+void MoveToKittiCamera(const Orb2ColmapOptions& o, TrajectoryFormat fmt, std::vector<Posed>& posed,
+                       Orb2ColmapReport& rep) {
+  rep.from_cam = KittiPosesCamera(o, fmt);
+  rep.to_cam = o.kitti_cam;
+  if (rep.from_cam == rep.to_cam) return;
+  rep.offset = ReadKittiCameraOffset(o.kitti_calib, rep.to_cam) -
+               ReadKittiCameraOffset(o.kitti_calib, rep.from_cam);
+  for (Posed& p : posed) p.w2c->t += rep.offset;
+}
+
 // The model of the posed frames, images numbered from 1; with --database, the camera and the
 // images (with their pose priors) go into the database too, and the model takes its ids.
 Reconstruction BuildModel(const Orb2ColmapOptions& o, Camera cam, const std::vector<Posed>& posed) {
@@ -368,6 +393,7 @@ Orb2ColmapReport RunOrb2Colmap(const Orb2ColmapOptions& o) {
     frames = ReadFrames(o, keys, image_files, fmt);
     // Poses first, so that nothing is written (model or database) when the input is unusable.
     posed = PoseFrames(o, keys, frames, rep);
+    if (!o.kitti_calib.empty()) MoveToKittiCamera(o, fmt, posed, rep);
   }
   rep.frames = frames.size();
   Camera cam;

@@ -35,6 +35,7 @@ struct Orb2ColmapOptions {
   std::string orb_settings;          // ORB-SLAM2 settings YAML
   std::string kitti_calib;           // KITTI calib.txt
   int kitti_cam = 0;                 // which Pn of calib.txt
+  int kitti_poses_cam = -1;          // whose poses TRAJECTORY holds (-1: KittiPosesCamera)
   std::string size;                  // WxH when the intrinsics source has no image size
   bool binary = false;               // write .bin instead of .txt
   std::string database;              // create or fill a COLMAP database.db with pose priors
@@ -49,8 +50,17 @@ struct Orb2ColmapOptions {
 // and the staleness key of the model (and database).
 OptionTable DeclareOptions(Orb2ColmapOptions& o);
 
+// The camera of --kitti-calib whose poses a TUM or KITTI TRAJECTORY holds: --kitti-poses-cam,
+// or by default 0 for a KITTI-format trajectory (the KITTI benchmark's poses are the left grey
+// camera's) and --kitti-cam's for a TUM one (a SLAM run on those images).
+int KittiPosesCamera(const Orb2ColmapOptions& o, TrajectoryFormat fmt);
+
 struct Orb2ColmapReport {
   size_t keyframes = 0, frames = 0, written = 0, dropped = 0, clamped = 0, reordered = 0;
+  // Each pose moved from camera `from` of --kitti-calib to camera `to` (--kitti-cam) by `offset`
+  // (metres, in the camera's frame: x right, y down, z forward); from == to: not moved.
+  int from_cam = 0, to_cam = 0;
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();
   bool up_to_date = false;  // nothing done: the model (and database) are up to date
   std::string why;          // why existing outputs were rewritten ("3 redone: --outside changed")
 };
