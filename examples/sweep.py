@@ -543,8 +543,11 @@ def sweep_exposure(c):
         f"clip). <b>Accuracy:</b> RMS of the fitted gain's ratio to the applied one, percent, "
         f"the common scale (a fit's choice) taken out; it is mostly a slow drift along each "
         f"drive (measured 7 Dec 2026 on 16 photos a drive at the defaults: +2 % at its start to "
-        f"-3 % at its end), whose cause is not known (leaving out clipped samples or sampling a "
-        f"blurred image does not remove it). "
+        f"-3 % at its end). It is there with no gain applied (the photos as mkroad made them, "
+        f"gains fitted 1.03 to 0.95: 1.9 % RMS), and half of it is the fixture's wet road, whose "
+        f"reflection of the sky grows towards grazing views (Fresnel), so a road point darkens "
+        f"as the camera nears it (mkroad built with that reflection off: 0.9 % RMS; leaving out "
+        f"clipped samples or sampling a blurred image does not remove it). "
         f"<b>Time:</b> whole process per image, "
         f"fastest of {c.repeat} runs. <b>Read:</b> lower is better.")
     return sl.emit(c.out, sec, "ms_per_image", "gain_error_percent",
