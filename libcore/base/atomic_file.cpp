@@ -13,6 +13,7 @@
 #include <cstring>
 #include <fstream>
 #include <locale>
+#include <memory>
 
 #include "base/error.h"
 
@@ -88,9 +89,10 @@ void AtomicFile::Commit() {
   committed_ = true;
 }
 
-static void WriteAtomic(const fs::path& path, std::ios::openmode mode,
-                        const std::function<void(std::ostream&)>& write) {
-  AtomicFile out(path);
+// Writes the temporary of `out` through `write`; errors name `out`'s final path.
+static void WriteTemporary(const AtomicFile& out, std::ios::openmode mode,
+                           const std::function<void(std::ostream&)>& write) {
+  const fs::path& path = out.final_path();
   {
     std::ofstream f(out.temp_path(), mode | std::ios::trunc);
     if (!f)
@@ -111,7 +113,25 @@ static void WriteAtomic(const fs::path& path, std::ios::openmode mode,
                   err != 0 ? std::string("write failed: ") + strerror(err)
                            : std::string("write failed (disk full?)"));
   }
+}
+
+static void WriteAtomic(const fs::path& path, std::ios::openmode mode,
+                        const std::function<void(std::ostream&)>& write) {
+  AtomicFile out(path);
+  WriteTemporary(out, mode, write);
   out.Commit();
+}
+
+void WriteTogetherAtomic(const std::vector<FileWriter>& files, bool binary,
+                         const std::function<void()>& before_rename) {
+  const std::ios::openmode mode = binary ? std::ios::binary : std::ios::openmode{};
+  std::vector<std::unique_ptr<AtomicFile>> outs;
+  for (const FileWriter& w : files) {
+    outs.push_back(std::make_unique<AtomicFile>(w.path));
+    WriteTemporary(*outs.back(), mode, w.write);
+  }
+  if (before_rename) before_rename();
+  for (auto& out : outs) out->Commit();
 }
 
 void WriteBytesAtomic(const fs::path& path, const void* data, size_t size) {

@@ -46,6 +46,18 @@ void WriteTextAtomic(const fs::path& path, const std::function<void(std::ostream
 // Same for binary content.
 void WriteBinaryAtomic(const fs::path& path, const std::function<void(std::ostream&)>& write);
 
+// Files that only make sense together (a COLMAP model's cameras, images and points3D): each is
+// written to its temporary, and only when every one is complete are they renamed into place, in
+// order, after `before_rename` (optional). So a failed write (a full disk) leaves every final file
+// as it was, never a new file beside an old one. (The renames themselves are not one atomic step:
+// a crash between two of them can still leave a mixed set.)
+struct FileWriter {
+  fs::path path;
+  std::function<void(std::ostream&)> write;
+};
+void WriteTogetherAtomic(const std::vector<FileWriter>& files, bool binary,
+                         const std::function<void()>& before_rename = {});
+
 // Writes `size` bytes to a temporary file and renames it to `path`. Every write() and the
 // close() are checked, so a full disk is an Error and nothing is renamed into place.
 void WriteBytesAtomic(const fs::path& path, const void* data, size_t size);

@@ -322,17 +322,19 @@ void RemoveOtherFormat(const fs::path& dir, bool writing_binary) {
 
 }  // namespace
 
+static void WriteCamerasText(std::ostream& f, const std::map<uint32_t, Camera>& cameras) {
+  f << "# Camera list with one line of data per camera:\n"
+    << "#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n"
+    << "# Number of cameras: " << cameras.size() << "\n";
+  for (const auto& [id, c] : cameras) {
+    f << id << ' ' << CameraModelName(c.model) << ' ' << c.width << ' ' << c.height;
+    for (double p : c.params) f << ' ' << p;
+    f << '\n';
+  }
+}
+
 void WriteColmapCamerasText(const std::map<uint32_t, Camera>& cameras, const std::string& file) {
-  WriteTextAtomic(file, [&](std::ostream& f) {
-    f << "# Camera list with one line of data per camera:\n"
-      << "#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n"
-      << "# Number of cameras: " << cameras.size() << "\n";
-    for (const auto& [id, c] : cameras) {
-      f << id << ' ' << CameraModelName(c.model) << ' ' << c.width << ' ' << c.height;
-      for (double p : c.params) f << ' ' << p;
-      f << '\n';
-    }
-  });
+  WriteTextAtomic(file, [&](std::ostream& f) { WriteCamerasText(f, cameras); });
 }
 
 void WriteColmapImagesHeader(std::ostream& f, size_t images, size_t observations) {
@@ -374,23 +376,27 @@ void WriteColmapPointText(std::ostream& f, uint64_t id, const Point3D& p) {
   f << '\n';
 }
 
+// The three files are renamed into place together, and the other format's are removed only
+// then: a failed write (a full disk) leaves the model that was there whole.
 void WriteColmapText(const Reconstruction& r, const std::string& dir) {
   fs::path d(dir);
-  RemoveOtherFormat(d, false);
-  WriteColmapCamerasText(r.cameras, (d / "cameras.txt").string());
   size_t observations = 0;
   for (const auto& [id, im] : r.images)
     for (const auto& p : im.points2D) observations += p.point3D_id != kInvalidPoint3DId;
-  WriteTextAtomic(d / "images.txt", [&](std::ostream& f) {
+  const auto cameras = [&](std::ostream& f) { WriteCamerasText(f, r.cameras); };
+  const auto images = [&](std::ostream& f) {
     WriteColmapImagesHeader(f, r.images.size(), observations);
     for (const auto& [id, im] : r.images) WriteColmapImageText(f, id, im);
-  });
-  WriteTextAtomic(d / "points3D.txt", [&](std::ostream& f) {
+  };
+  const auto points = [&](std::ostream& f) {
     size_t track_sum = 0;
     for (const auto& [id, p] : r.points3D) track_sum += p.track.size();
     WriteColmapPointsHeader(f, r.points3D.size(), track_sum);
     for (const auto& [id, p] : r.points3D) WriteColmapPointText(f, id, p);
-  });
+  };
+  WriteTogetherAtomic(
+      {{d / "cameras.txt", cameras}, {d / "images.txt", images}, {d / "points3D.txt", points}},
+      false, [&] { RemoveOtherFormat(d, false); });
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -552,10 +558,10 @@ Reconstruction ReadColmapBinary(const std::string& dir) {
   return r;
 }
 
+// As WriteColmapText: the three files renamed into place together.
 void WriteColmapBinary(const Reconstruction& r, const std::string& dir) {
   fs::path d(dir);
-  RemoveOtherFormat(d, true);
-  WriteBinaryAtomic(d / "cameras.bin", [&](std::ostream& o) {
+  const auto cameras = [&](std::ostream& o) {
     Put<uint64_t>(o, r.cameras.size());
     for (const auto& [id, c] : r.cameras) {
       Put<uint32_t>(o, id);
@@ -564,8 +570,8 @@ void WriteColmapBinary(const Reconstruction& r, const std::string& dir) {
       Put<uint64_t>(o, c.height);
       for (double p : c.params) Put<double>(o, p);
     }
-  });
-  WriteBinaryAtomic(d / "images.bin", [&](std::ostream& o) {
+  };
+  const auto images = [&](std::ostream& o) {
     Put<uint64_t>(o, r.images.size());
     for (const auto& [id, im] : r.images) {
       Put<uint32_t>(o, id);
@@ -581,8 +587,8 @@ void WriteColmapBinary(const Reconstruction& r, const std::string& dir) {
         Put<uint64_t>(o, p.point3D_id);
       }
     }
-  });
-  WriteBinaryAtomic(d / "points3D.bin", [&](std::ostream& o) {
+  };
+  const auto points = [&](std::ostream& o) {
     Put<uint64_t>(o, r.points3D.size());
     for (const auto& [id, p] : r.points3D) {
       Put<uint64_t>(o, id);
@@ -595,7 +601,10 @@ void WriteColmapBinary(const Reconstruction& r, const std::string& dir) {
         Put<uint32_t>(o, el.point2D_idx);
       }
     }
-  });
+  };
+  WriteTogetherAtomic(
+      {{d / "cameras.bin", cameras}, {d / "images.bin", images}, {d / "points3D.bin", points}},
+      true, [&] { RemoveOtherFormat(d, true); });
 }
 
 }  // namespace mvtm

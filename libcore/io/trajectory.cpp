@@ -300,8 +300,8 @@ Eigen::Vector3d ReadKittiCameraOffset(const std::string& path, int cam_index) {
         // A rectified camera: K upper triangular with K[2][2] = 1 (KITTI writes it so).
         if (q[4] != 0 || q[8] != 0 || q[9] != 0 || !(std::abs(q[10] - 1) < 1e-9))
           in.Fail(key +
-                  " is not a rectified camera's K [I | t] (row 2 must be 0 p6 .. and row "
-                  "3 0 0 1 ..)");
+                  " is not a rectified camera's K [I | t] (row 2 must begin 0 fy cy, row "
+                  "3 0 0 1)");
       });
   Eigen::Matrix3d k;
   k << p[0], p[1], p[2], 0, p[5], p[6], 0, 0, 1;
