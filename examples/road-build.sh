@@ -15,7 +15,8 @@
 #               photos (sequential matching, one shared camera), georef turns the model upright
 #               and, with CAMERA_HEIGHT, metric
 #   OUT         working folder; the workspace is OUT/ws
-#   INTRINSICS  orb2colmap's intrinsics options, e.g. --kitti-calib calib.txt, or
+#   INTRINSICS  orb2colmap's intrinsics options, e.g. --kitti-calib calib.txt (add
+#               --kitti-cam 1 for KITTI's image_1: poses.txt is then moved to that camera), or
 #               --camera "PINHOLE W H fx fy cx cy", or --orb-settings TUM1.yaml [--frames rgb.txt];
 #               with POSES -, optional: without them COLMAP self-calibrates a SIMPLE_RADIAL
 #               camera (CAMERA_MODEL to choose another, e.g. OPENCV), or CALIB gives them
