@@ -89,6 +89,12 @@ void AtomicFile::Commit() {
   committed_ = true;
 }
 
+Error WriteFailed(const fs::path& path, int err) {
+  return Error(path.string(), 0,
+               err != 0 ? std::string("write failed: ") + strerror(err)
+                        : std::string("write failed (disk full?)"));
+}
+
 // Writes the temporary of `out` through `write`; errors name `out`'s final path.
 static void WriteTemporary(const AtomicFile& out, std::ios::openmode mode,
                            const std::function<void(std::ostream&)>& write) {
@@ -108,10 +114,7 @@ static void WriteTemporary(const AtomicFile& out, std::ios::openmode mode,
     errno = 0;
     f.close();
     if (err == 0) err = errno;
-    if (f.fail())
-      throw Error(path.string(), 0,
-                  err != 0 ? std::string("write failed: ") + strerror(err)
-                           : std::string("write failed (disk full?)"));
+    if (f.fail()) throw WriteFailed(path, err);
   }
 }
 
@@ -147,13 +150,12 @@ void WriteBytesAtomic(const fs::path& path, const void* data, size_t size) {
     if (n <= 0) {
       int err = n < 0 ? errno : ENOSPC;
       ::close(fd);
-      throw Error(path.string(), 0, std::string("write failed: ") + strerror(err));
+      throw WriteFailed(path, err);
     }
     p += n;
     left -= static_cast<size_t>(n);
   }
-  if (::close(fd) != 0)
-    throw Error(path.string(), 0, std::string("write failed: ") + strerror(errno));
+  if (::close(fd) != 0) throw WriteFailed(path, errno);
   out.Commit();
 }
 

@@ -17,6 +17,8 @@
 #include <string>
 #include <vector>
 
+#include "base/error.h"
+
 namespace mvtm {
 
 namespace fs = std::filesystem;
@@ -45,6 +47,10 @@ class AtomicFile {
 void WriteTextAtomic(const fs::path& path, const std::function<void(std::ostream&)>& write);
 // Same for binary content.
 void WriteBinaryAtomic(const fs::path& path, const std::function<void(std::ostream&)>& write);
+
+// The error for a failed write of `path`: "write failed: REASON", REASON the system's for `err`
+// (an errno: the failed write(2) or close(2)'s), or "write failed (disk full?)" when err is 0.
+Error WriteFailed(const fs::path& path, int err);
 
 // Files that only make sense together (a COLMAP model's cameras, images and points3D): each is
 // written to its temporary, and only when every one is complete are they renamed into place, in

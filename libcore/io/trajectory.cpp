@@ -258,10 +258,15 @@ std::vector<TimedName> ReadTimestamps(const std::string& path) {
 
 namespace {
 
-// The line "Pn: p0 .. p11" of a KITTI calib.txt, row-major, with positive focal lengths; `check`
-// may refuse it (in.Fail).
-template <typename Check>
-std::array<double, 12> ReadKittiProjection(const std::string& path, int cam_index, Check check) {
+// The line "Pn: p0 .. p11" of a KITTI calib.txt (row-major, positive focal lengths), with its
+// line number and key for messages.
+struct KittiProjection {
+  std::array<double, 12> p;
+  long line;
+  std::string key;
+};
+
+KittiProjection ReadKittiProjection(const std::string& path, int cam_index) {
   LineReader in(path);
   std::string line, key = "P" + std::to_string(cam_index) + ":";
   while (in.Next(line)) {
@@ -272,8 +277,7 @@ std::array<double, 12> ReadKittiProjection(const std::string& path, int cam_inde
     std::array<double, 12> p;
     for (int i = 0; i < 12; ++i) p[i] = ParseDouble(tok[1 + i], in, "projection entry");
     if (!(p[0] > 0) || !(p[5] > 0)) in.Fail(key + " focal lengths must be positive");
-    check(p, in, key);
-    return p;
+    return {p, in.line(), key};
   }
   throw Error(path, 0, "no line '" + key + "'");
 }
@@ -281,28 +285,27 @@ std::array<double, 12> ReadKittiProjection(const std::string& path, int cam_inde
 }  // namespace
 
 Camera ReadKittiCalib(const std::string& path, int cam_index, uint64_t width, uint64_t height) {
+  const KittiProjection kp = ReadKittiProjection(path, cam_index);
+  const auto& p = kp.p;
   Camera c;
-  ReadKittiProjection(path, cam_index,
-                      [&](const std::array<double, 12>& p, LineReader& in, const std::string& key) {
-                        c.model = CameraModel::kPinhole;
-                        c.width = width;
-                        c.height = height;
-                        c.params = {p[0], p[5], p[2], p[6]};
-                        std::string problem = CameraProblem(c);
-                        if (!problem.empty()) in.Fail(key + " " + problem);
-                      });
+  c.model = CameraModel::kPinhole;
+  c.width = width;
+  c.height = height;
+  c.params = {p[0], p[5], p[2], p[6]};
+  std::string problem = CameraProblem(c);
+  if (!problem.empty()) throw Error(path, kp.line, kp.key + " " + problem);
   return c;
 }
 
 Eigen::Vector3d ReadKittiCameraOffset(const std::string& path, int cam_index) {
-  const auto p = ReadKittiProjection(
-      path, cam_index, [](const std::array<double, 12>& q, LineReader& in, const std::string& key) {
-        // A rectified camera: K upper triangular with K[2][2] = 1 (KITTI writes it so).
-        if (q[4] != 0 || q[8] != 0 || q[9] != 0 || !(std::abs(q[10] - 1) < 1e-9))
-          in.Fail(key +
-                  " is not a rectified camera's K [I | t] (row 2 must begin 0 fy cy, row "
-                  "3 0 0 1)");
-      });
+  const KittiProjection kp = ReadKittiProjection(path, cam_index);
+  const auto& p = kp.p;
+  // A rectified camera: K upper triangular with K[2][2] = 1 (KITTI writes it so).
+  if (p[4] != 0 || p[8] != 0 || p[9] != 0 || !(std::abs(p[10] - 1) < 1e-9))
+    throw Error(path, kp.line,
+                kp.key +
+                    " is not a rectified camera's K [I | t] (row 2 must begin 0 fy cy, "
+                    "row 3 0 0 1)");
   Eigen::Matrix3d k;
   k << p[0], p[1], p[2], 0, p[5], p[6], 0, 0, 1;
   return k.triangularView<Eigen::Upper>().solve(Eigen::Vector3d(p[3], p[7], p[11]));

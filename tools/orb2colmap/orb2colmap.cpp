@@ -103,12 +103,15 @@ void Orb2ColmapOptions::Check() const {
   }
 }
 
+namespace {
+
+// The camera of --kitti-calib whose poses a TUM or KITTI TRAJECTORY holds: --kitti-poses-cam,
+// or by default 0 for a KITTI-format trajectory (the KITTI benchmark's poses are the left grey
+// camera's) and --kitti-cam's for a TUM one (a SLAM run on those images).
 int KittiPosesCamera(const Orb2ColmapOptions& o, TrajectoryFormat fmt) {
   if (o.kitti_poses_cam >= 0) return o.kitti_poses_cam;
   return fmt == TrajectoryFormat::kKitti ? 0 : o.kitti_cam;
 }
-
-namespace {
 
 Camera ResolveCamera(const Orb2ColmapOptions& o, const std::vector<std::string>& image_files) {
   uint64_t w = 0, h = 0;

@@ -35,7 +35,7 @@ struct Orb2ColmapOptions {
   std::string orb_settings;          // ORB-SLAM2 settings YAML
   std::string kitti_calib;           // KITTI calib.txt
   int kitti_cam = 0;                 // which Pn of calib.txt
-  int kitti_poses_cam = -1;          // whose poses TRAJECTORY holds (-1: KittiPosesCamera)
+  int kitti_poses_cam = -1;          // whose poses TRAJECTORY holds (-1: by its format)
   std::string size;                  // WxH when the intrinsics source has no image size
   bool binary = false;               // write .bin instead of .txt
   std::string database;              // create or fill a COLMAP database.db with pose priors
@@ -49,11 +49,6 @@ struct Orb2ColmapOptions {
 // The option table (run/option_table.h) bound to `o`: --help, the range checks, the provenance
 // and the staleness key of the model (and database).
 OptionTable DeclareOptions(Orb2ColmapOptions& o);
-
-// The camera of --kitti-calib whose poses a TUM or KITTI TRAJECTORY holds: --kitti-poses-cam,
-// or by default 0 for a KITTI-format trajectory (the KITTI benchmark's poses are the left grey
-// camera's) and --kitti-cam's for a TUM one (a SLAM run on those images).
-int KittiPosesCamera(const Orb2ColmapOptions& o, TrajectoryFormat fmt);
 
 struct Orb2ColmapReport {
   size_t keyframes = 0, frames = 0, written = 0, dropped = 0, clamped = 0, reordered = 0;

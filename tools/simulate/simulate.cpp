@@ -3,11 +3,11 @@
 #include <SDL2/SDL.h>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <fstream>
 #include <limits>
 #include <memory>
@@ -296,18 +296,17 @@ class Recorder {
   explicit Recorder(const std::string& dir) : dir_(dir) {
     if (dir_.empty()) return;
     CreateFolder(dir_);
-    controls_.open(Partial("controls.tsv"));
-    poses_.open(Partial("poses.tsv"));
-    tum_.open(Partial("poses.tum"));
-    if (!controls_ || !poses_ || !tum_)
-      throw Error(dir_.string(), 0, "cannot write the session's files");
+    for (Log* l : logs()) {
+      l->out.open(Partial(l->name));
+      if (!l->out) throw Error(dir_.string(), 0, "cannot write the session's files");
+    }
     // A session's frames are its own: an earlier, longer session's are not left beside them.
     std::error_code ec;
     fs::remove_all(dir_ / "frames", ec);
-    controls_ << "time\tsteer\tspeed\tthrottle\tbrake\n";
-    poses_ << "# time tx ty tz qx qy qz qw display_time (camera-to-world; time: simulation "
-              "seconds; display_time: wall seconds since the start)\n";
-    tum_ << "# timestamp tx ty tz qx qy qz qw (camera-to-world)\n";
+    controls_.out << "time\tsteer\tspeed\tthrottle\tbrake\n";
+    poses_.out << "# time tx ty tz qx qy qz qw display_time (camera-to-world; time: simulation "
+                  "seconds; display_time: wall seconds since the start)\n";
+    tum_.out << "# timestamp tx ty tz qx qy qz qw (camera-to-world)\n";
   }
   bool on() const { return !dir_.empty(); }
   // A controls row; one at the time of the row before replaces it (a segment's first sample
@@ -329,23 +328,21 @@ class Recorder {
   void Comment(const std::string& text) {
     if (!on()) return;
     Flush();
-    controls_ << "# " << text << '\n';
-    Check(controls_, "controls.tsv");
+    controls_.out << "# " << text << '\n';
+    Check(controls_);
   }
   void Pose(double t, const Rigid3d& c2w, double display) {
     if (!on()) return;
     const std::string row = TumRow(t, c2w);
-    poses_ << row << ' ' << FormatDouble(display) << '\n';
-    Check(poses_, "poses.tsv");
-    tum_ << row << '\n';
-    Check(tum_, "poses.tum");
+    poses_.out << row << ' ' << FormatDouble(display) << '\n';
+    Check(poses_);
+    tum_.out << row << '\n';
+    Check(tum_);
     if (Clock::now() - flushed_ > std::chrono::seconds(1)) {  // a crash keeps all but a second
-      controls_.flush();
-      Check(controls_, "controls.tsv");
-      poses_.flush();
-      Check(poses_, "poses.tsv");
-      tum_.flush();
-      Check(tum_, "poses.tum");
+      for (Log* l : logs()) {
+        l->out.flush();
+        Check(*l);
+      }
       flushed_ = Clock::now();
     }
   }
@@ -366,16 +363,14 @@ class Recorder {
     if (!on()) return;
     Flush();
     writer_.Finish();
-    controls_.close();
-    Check(controls_, "controls.tsv");
-    poses_.close();
-    Check(poses_, "poses.tsv");
-    tum_.close();
-    Check(tum_, "poses.tum");
-    for (const char* n : {"controls.tsv", "poses.tsv", "poses.tum"}) {
+    for (Log* l : logs()) {
+      l->out.close();
+      Check(*l);
+    }
+    for (Log* l : logs()) {
       std::error_code ec;
-      fs::rename(Partial(n), dir_ / n, ec);
-      if (ec) throw Error((dir_ / n).string(), 0, "cannot write: " + ec.message());
+      fs::rename(Partial(l->name), dir_ / l->name, ec);
+      if (ec) throw Error((dir_ / l->name).string(), 0, "cannot write: " + ec.message());
     }
     WriteTextAtomic(dir_ / "summary.json", [&](std::ostream& f) { f << summary.dump(2) << '\n'; });
   }
@@ -383,25 +378,27 @@ class Recorder {
  private:
   fs::path Partial(const std::string& name) const { return dir_ / ("." + name + ".partial"); }
   void Flush() {
-    if (pending_) controls_ << pending_row_;
+    if (pending_) controls_.out << pending_row_;
     pending_ = false;
-    Check(controls_, "controls.tsv");
+    Check(controls_);
   }
+  // One of the session's logs, written as OUT/.NAME.partial.
+  struct Log {
+    std::ofstream out;
+    const char* name;
+  };
+  std::array<Log*, 3> logs() { return {&controls_, &poses_, &tum_}; }
   // A file stream keeps no reason for a failure: the write(2) or close(2) that failed (when the
   // stream's buffer went out) left it in errno, read here right after the call that failed.
   // The session stops there: a record with rows missing is no record of it.
-  void Check(const std::ofstream& f, const char* name) {
-    if (!f.fail()) return;
-    const int err = errno;
-    throw Error(
-        (dir_ / name).string(), 0,
-        err != 0 ? std::string("write failed: ") + strerror(err) : std::string("write failed"));
+  void Check(const Log& l) {
+    if (l.out.fail()) throw WriteFailed(dir_ / l.name, errno);
   }
   fs::path dir_;
   bool pending_ = false;
   double pending_time_ = 0;
   std::string pending_row_;
-  std::ofstream controls_, poses_, tum_;
+  Log controls_{{}, "controls.tsv"}, poses_{{}, "poses.tsv"}, tum_{{}, "poses.tum"};
   AsyncImageWriter writer_;
   Clock::time_point flushed_ = Clock::now();
 };
