@@ -303,10 +303,13 @@ class Recorder {
     // A session's frames are its own: an earlier, longer session's are not left beside them.
     std::error_code ec;
     fs::remove_all(dir_ / "frames", ec);
-    controls_.out << "time\tsteer\tspeed\tthrottle\tbrake\n";
-    poses_.out << "# time tx ty tz qx qy qz qw display_time (camera-to-world; time: simulation "
-                  "seconds; display_time: wall seconds since the start)\n";
-    tum_.out << "# timestamp tx ty tz qx qy qz qw (camera-to-world)\n";
+    Write(controls_, [](std::ofstream& f) { f << "time\tsteer\tspeed\tthrottle\tbrake\n"; });
+    Write(poses_, [](std::ofstream& f) {
+      f << "# time tx ty tz qx qy qz qw display_time (camera-to-world; time: simulation seconds; "
+           "display_time: wall seconds since the start)\n";
+    });
+    Write(tum_,
+          [](std::ofstream& f) { f << "# timestamp tx ty tz qx qy qz qw (camera-to-world)\n"; });
   }
   bool on() const { return !dir_.empty(); }
   // A controls row; one at the time of the row before replaces it (a segment's first sample
@@ -328,21 +331,15 @@ class Recorder {
   void Comment(const std::string& text) {
     if (!on()) return;
     Flush();
-    controls_.out << "# " << text << '\n';
-    Check(controls_);
+    Write(controls_, [&](std::ofstream& f) { f << "# " << text << '\n'; });
   }
   void Pose(double t, const Rigid3d& c2w, double display) {
     if (!on()) return;
     const std::string row = TumRow(t, c2w);
-    poses_.out << row << ' ' << FormatDouble(display) << '\n';
-    Check(poses_);
-    tum_.out << row << '\n';
-    Check(tum_);
+    Write(poses_, [&](std::ofstream& f) { f << row << ' ' << FormatDouble(display) << '\n'; });
+    Write(tum_, [&](std::ofstream& f) { f << row << '\n'; });
     if (Clock::now() - flushed_ > std::chrono::seconds(1)) {  // a crash keeps all but a second
-      for (Log* l : logs()) {
-        l->out.flush();
-        Check(*l);
-      }
+      for (Log* l : logs()) Write(*l, [](std::ofstream& f) { f.flush(); });
       flushed_ = Clock::now();
     }
   }
@@ -363,10 +360,7 @@ class Recorder {
     if (!on()) return;
     Flush();
     writer_.Finish();
-    for (Log* l : logs()) {
-      l->out.close();
-      Check(*l);
-    }
+    for (Log* l : logs()) Write(*l, [](std::ofstream& f) { f.close(); });
     for (Log* l : logs()) {
       std::error_code ec;
       fs::rename(Partial(l->name), dir_ / l->name, ec);
@@ -378,9 +372,8 @@ class Recorder {
  private:
   fs::path Partial(const std::string& name) const { return dir_ / ("." + name + ".partial"); }
   void Flush() {
-    if (pending_) controls_.out << pending_row_;
+    if (pending_) Write(controls_, [&](std::ofstream& f) { f << pending_row_; });
     pending_ = false;
-    Check(controls_);
   }
   // One of the session's logs, written as OUT/.NAME.partial.
   struct Log {
@@ -388,10 +381,14 @@ class Recorder {
     const char* name;
   };
   std::array<Log*, 3> logs() { return {&controls_, &poses_, &tum_}; }
-  // A file stream keeps no reason for a failure: the write(2) or close(2) that failed (when the
-  // stream's buffer went out) left it in errno, read here right after the call that failed.
+  // Runs `op` on the log's stream. A file stream keeps no reason for a failure: the write(2) or
+  // close(2) that failed (when the stream's buffer went out) left it in errno, cleared before `op`
+  // so that a failure without a system call gives no stale reason ("disk full?" instead).
   // The session stops there: a record with rows missing is no record of it.
-  void Check(const Log& l) {
+  template <class Op>
+  void Write(Log& l, Op op) {
+    errno = 0;
+    op(l.out);
     if (l.out.fail()) throw WriteFailed(dir_ / l.name, errno);
   }
   fs::path dir_;
