@@ -135,11 +135,13 @@ DenseScene LoadDenseScene(const Workspace& ws, const DensifyOptions& o) {
 // the record's entry of the run that made a map says it, since the options alone do not.
 nlohmann::json MapSizes(const DensifyOptions& o, const DenseScene& s) {
   nlohmann::json j = nlohmann::json::object();
-  for (size_t i = 0; i < s.images.size(); ++i)
-    j[std::to_string(s.images[i]->camera_id)] = {
-        {"scale", MapScale(s.rec.cameras.at(s.images[i]->camera_id), o)},
-        {"width", s.cameras[i].width},
-        {"height", s.cameras[i].height}};
+  for (size_t i = 0; i < s.images.size(); ++i) {
+    const std::string key = std::to_string(s.images[i]->camera_id);
+    if (j.contains(key)) continue;  // one entry per camera, not per image
+    j[key] = {{"scale", MapScale(s.rec.cameras.at(s.images[i]->camera_id), o)},
+              {"width", s.cameras[i].width},
+              {"height", s.cameras[i].height}};
+  }
   return j;
 }
 
