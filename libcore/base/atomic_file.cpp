@@ -105,15 +105,10 @@ static void WriteTemporary(const AtomicFile& out, std::ios::openmode mode,
       throw Error(path.string(), 0, std::string("cannot open for writing: ") + strerror(errno));
     f.imbue(std::locale::classic());
     f.precision(17);
-    // The stream keeps no reason: the system call that failed (write(2) from the stream's
-    // buffer, or close(2) flushing it) leaves it in errno. The first failure's is kept: the
-    // callback may make other calls after it.
-    errno = 0;
-    write(f);
-    int err = f.fail() ? errno : 0;
-    errno = 0;
-    f.close();
-    if (err == 0) err = errno;
+    // The first failure's reason is kept: the callback may make other calls after it.
+    int err = StreamFailure(f, [&] { write(f); });
+    const int close_err = StreamFailure(f, [&] { f.close(); });
+    if (err == 0) err = close_err;
     if (f.fail()) throw WriteFailed(path, err);
   }
 }

@@ -11,8 +11,10 @@
 // Thread safety: distinct AtomicFile objects may be used from different threads.
 #pragma once
 
+#include <cerrno>
 #include <filesystem>
 #include <functional>
+#include <ios>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -51,6 +53,17 @@ void WriteBinaryAtomic(const fs::path& path, const std::function<void(std::ostre
 // The error for a failed write of `path`: "write failed: REASON", REASON the system's for `err`
 // (an errno: the failed write(2) or close(2)'s), or "write failed (disk full?)" when err is 0.
 Error WriteFailed(const fs::path& path, int err);
+
+// Runs `op` (a write to, flush or close of stream `f`) and returns the reason of a failure of
+// `f`: a file stream keeps none, but the write(2) or close(2) that failed when its buffer went out
+// left it in errno, cleared before `op` so that it is never an earlier call's. 0 when `f` has not
+// failed, or failed without a system call (WriteFailed then says "disk full?").
+template <class Op>
+int StreamFailure(const std::ios& f, Op&& op) {
+  errno = 0;
+  op();
+  return f.fail() ? errno : 0;
+}
 
 // Files that only make sense together (a COLMAP model's cameras, images and points3D): each is
 // written to its temporary, and only when every one is complete are they renamed into place, in

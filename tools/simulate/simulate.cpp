@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <array>
-#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -381,15 +380,12 @@ class Recorder {
     const char* name;
   };
   std::array<Log*, 3> logs() { return {&controls_, &poses_, &tum_}; }
-  // Runs `op` on the log's stream. A file stream keeps no reason for a failure: the write(2) or
-  // close(2) that failed (when the stream's buffer went out) left it in errno, cleared before `op`
-  // so that a failure without a system call gives no stale reason ("disk full?" instead).
-  // The session stops there: a record with rows missing is no record of it.
+  // Runs `op` on the log's stream; a failure (with its reason, StreamFailure) stops the session
+  // there: a record with rows missing is no record of it.
   template <class Op>
   void Write(Log& l, Op op) {
-    errno = 0;
-    op(l.out);
-    if (l.out.fail()) throw WriteFailed(dir_ / l.name, errno);
+    const int err = StreamFailure(l.out, [&] { op(l.out); });
+    if (l.out.fail()) throw WriteFailed(dir_ / l.name, err);
   }
   fs::path dir_;
   bool pending_ = false;
