@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cctype>
 #include <cerrno>
@@ -120,16 +121,171 @@ static void WriteAtomic(const fs::path& path, std::ios::openmode mode,
   out.Commit();
 }
 
+namespace {
+
+std::function<void(size_t)>& AfterRenameHook() {
+  static std::function<void(size_t)> hook;
+  return hook;
+}
+
+constexpr const char* kJournalPrefix = ".mvtm-journal-";
+constexpr const char* kJournalHead = "mvtm-journal 1";
+
+// A journal's steps: the files to remove, then the temporaries to rename (names in its folder).
+struct Journal {
+  std::vector<std::string> removals;
+  std::vector<std::pair<std::string, std::string>> renames;  // temporary, final
+};
+
+void WriteJournal(const fs::path& path, const Journal& j) {
+  WriteAtomic(path, std::ios::out, [&](std::ostream& f) {
+    f << kJournalHead << '\n';
+    for (const auto& n : j.removals) f << "remove\n" << n << '\n';
+    for (const auto& [from, to] : j.renames) f << "rename\n" << from << '\n' << to << '\n';
+  });
+}
+
+// Throws when the journal is not one this code wrote whole (an empty or foreign file).
+Journal ReadJournal(const fs::path& path) {
+  std::ifstream in(path);
+  std::string line;
+  if (!std::getline(in, line) || line != kJournalHead)
+    throw Error(path.string(), 1, "not an mvtm commit journal");
+  Journal j;
+  long no = 1;
+  const auto next = [&] {
+    ++no;
+    if (!std::getline(in, line) || line.empty() || line.find('/') != std::string::npos)
+      throw Error(path.string(), no, "truncated or damaged commit journal");
+    return line;
+  };
+  while (std::getline(in, line)) {
+    ++no;
+    if (line == "remove") {
+      j.removals.push_back(next());
+    } else if (line == "rename") {
+      std::string from = next();
+      j.renames.emplace_back(from, next());
+    } else {
+      throw Error(path.string(), no, "unknown step '" + line + "' in a commit journal");
+    }
+  }
+  return j;
+}
+
+// The owner of a name "...PID-N@SPACE..." whose "PID" starts at `pid_at` is gone: this host's
+// process PID is not alive, or (another host's or namespace's) the entry is an hour old.
+bool OwnerGone(const fs::directory_entry& e, const std::string& n, size_t pid_at) {
+  char* pid_end = nullptr;
+  const long pid = std::strtol(n.c_str() + pid_at, &pid_end, 10);
+  // A name without "@SPACE" is from this machine (older mvtm).
+  const size_t at = n.find('@', size_t(pid_end - n.c_str()));
+  const std::string space =
+      at == std::string::npos ? ProcessSpace() : n.substr(at + 1, n.find('.', at) - at - 1);
+  if (space == ProcessSpace()) return !ProcessAlive(pid);
+  std::error_code ec;
+  const auto written = e.last_write_time(ec);
+  return !ec && fs::file_time_type::clock::now() - written > kForeignTemporaryAge;
+}
+
+// Rolls a dead writer's journal forward: its temporaries (complete when the journal was written)
+// are renamed into place and the files it was replacing removed, so the set it was committing
+// appears whole. Where a final file changed after the journal (another program wrote it since),
+// the journal's set is stale and dropped instead: its temporaries are removed, nothing renamed.
+void FinishJournal(const fs::path& path) {
+  const fs::path dir = path.parent_path();
+  const Journal j = ReadJournal(path);
+  std::error_code ec;
+  const auto journal_time = fs::last_write_time(path, ec);
+  bool pending = false, superseded = false;
+  for (const auto& [from, to] : j.renames) {
+    pending = pending || fs::exists(dir / from);
+    std::error_code tec;
+    const auto t = fs::last_write_time(dir / to, tec);
+    superseded = superseded || (!tec && !ec && t > journal_time);
+  }
+  if (pending && !superseded) {
+    for (const auto& n : j.removals) {
+      std::error_code rec;
+      fs::remove(dir / n, rec);
+      if (rec)
+        throw Error((dir / n).string(), 0, "cannot finish an interrupted write: " + rec.message());
+    }
+    for (const auto& [from, to] : j.renames) {
+      if (!fs::exists(dir / from)) continue;  // renamed before the writer died
+      std::error_code rec;
+      fs::rename(dir / from, dir / to, rec);
+      if (rec)
+        throw Error((dir / to).string(), 0, "cannot finish an interrupted write: " + rec.message());
+    }
+  } else {
+    for (const auto& [from, to] : j.renames) fs::remove(dir / from, ec);
+  }
+  std::error_code rec;
+  fs::remove(path, rec);
+  if (rec)
+    throw Error(path.string(), 0, "cannot remove a finished commit journal: " + rec.message());
+}
+
+}  // namespace
+
+void SetAfterRenameHookForTest(std::function<void(size_t)> hook) {
+  AfterRenameHook() = std::move(hook);
+}
+
+void FinishInterruptedWrites(const fs::path& dir) {
+  std::error_code ec;
+  std::vector<fs::path> journals;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string n = it->path().filename().string();
+    if (n.rfind(kJournalPrefix, 0) != 0) continue;
+    if (OwnerGone(*it, n, std::string(kJournalPrefix).size())) journals.push_back(it->path());
+  }
+  std::sort(journals.begin(), journals.end());
+  for (const auto& j : journals) FinishJournal(j);
+}
+
 void WriteTogetherAtomic(const std::vector<FileWriter>& files, bool binary,
-                         const std::function<void()>& before_rename) {
+                         const std::vector<fs::path>& replaced) {
+  if (files.empty()) return;
   const std::ios::openmode mode = binary ? std::ios::binary : std::ios::openmode{};
+  const fs::path dir = files.front().path.parent_path();
   std::vector<std::unique_ptr<AtomicFile>> outs;
   for (const FileWriter& w : files) {
+    if (w.path.parent_path() != dir)
+      throw Error(w.path.string(), 0, "files committed together must share one folder");
     outs.push_back(std::make_unique<AtomicFile>(w.path));
     WriteTemporary(*outs.back(), mode, w.write);
   }
-  if (before_rename) before_rename();
-  for (auto& out : outs) out->Commit();
+  FinishInterruptedWrites(dir);  // an earlier, killed commit here goes first
+  // The journal makes the renames one step: a kill between two of them leaves it, and the next
+  // reader or writer of the folder (FinishInterruptedWrites) completes them.
+  Journal j;
+  for (const fs::path& r : replaced) {
+    if (r.parent_path() != dir)
+      throw Error(r.string(), 0, "files committed together must share one folder");
+    std::error_code ec;
+    if (fs::exists(fs::symlink_status(r, ec))) j.removals.push_back(r.filename().string());
+  }
+  for (const auto& out : outs)
+    j.renames.emplace_back(out->temp_path().filename().string(),
+                           out->final_path().filename().string());
+  const fs::path journal = dir / (kJournalPrefix + std::to_string(getpid()) + "-" +
+                                  std::to_string(g_counter++) + "@" + ProcessSpace());
+  WriteJournal(journal, j);
+  for (const auto& n : j.removals) {
+    std::error_code ec;
+    fs::remove(dir / n, ec);
+    if (ec)
+      throw Error((dir / n).string(), 0, "cannot remove the file it replaces: " + ec.message());
+  }
+  size_t renamed = 0;
+  for (auto& out : outs) {
+    out->Commit();
+    if (AfterRenameHook()) AfterRenameHook()(++renamed);
+  }
+  std::error_code ec;
+  fs::remove(journal, ec);
 }
 
 void WriteBytesAtomic(const fs::path& path, const void* data, size_t size) {
@@ -176,24 +332,13 @@ bool IsUpToDate(const fs::path& output, const std::vector<fs::path>& inputs) {
 }
 
 void RemoveStaleTemporaries(const fs::path& dir) {
+  FinishInterruptedWrites(dir);  // a dead commit's temporaries are its new files: renamed first
   std::error_code ec;
   for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
     std::string n = it->path().filename().string();
     auto p = n.find(".tmp-");
     if (n.empty() || n[0] != '.' || p == std::string::npos) continue;
-    char* pid_end = nullptr;
-    const long pid = std::strtol(n.c_str() + p + 5, &pid_end, 10);
-    // ".tmp-PID-N@SPACE.EXT"; a name without "@SPACE" is from this machine (older mvtm).
-    const size_t at = n.find('@', size_t(pid_end - n.c_str()));
-    const std::string space =
-        at == std::string::npos ? ProcessSpace() : n.substr(at + 1, n.find('.', at) - at - 1);
-    std::error_code age_ec;
-    bool dead = !ProcessAlive(pid);
-    if (space != ProcessSpace()) {
-      const auto written = it->last_write_time(age_ec);
-      dead = !age_ec && fs::file_time_type::clock::now() - written > kForeignTemporaryAge;
-    }
-    if (dead) fs::remove_all(it->path(), ec);
+    if (OwnerGone(*it, n, p + 5)) fs::remove_all(it->path(), ec);
   }
 }
 

@@ -65,17 +65,31 @@ int StreamFailure(const std::ios& f, Op&& op) {
   return f.fail() ? errno : 0;
 }
 
-// Files that only make sense together (a COLMAP model's cameras, images and points3D): each is
-// written to its temporary, and only when every one is complete are they renamed into place, in
-// order, after `before_rename` (optional). So a failed write (a full disk) leaves every final file
-// as it was, never a new file beside an old one. (The renames themselves are not one atomic step:
-// a crash between two of them can still leave a mixed set.)
+// Files that only make sense together (a COLMAP model's cameras, images and points3D), in one
+// folder: each is written to its temporary, and only when every one is complete are they renamed
+// into place, after the files in `replaced` (another format's, say) are removed. So a failed write
+// (a full disk) leaves every final file as it was, never a new file beside an old one. The
+// removals and renames are one step: a journal (".mvtm-journal-PID-N@SPACE" in the folder) lists
+// them before the first is made and goes after the last, so a writer killed between two of them
+// leaves the journal, and FinishInterruptedWrites completes its set.
 struct FileWriter {
   fs::path path;
   std::function<void(std::ostream&)> write;
 };
 void WriteTogetherAtomic(const std::vector<FileWriter>& files, bool binary,
-                         const std::function<void()>& before_rename = {});
+                         const std::vector<fs::path>& replaced = {});
+
+// Completes the commits of WriteTogetherAtomic that a dead process left in `dir` (of this host
+// and namespace when its process is gone; of another when the journal is an hour old): the whole
+// new set is put in place, or, where one of its final files was written again since the journal,
+// the stale set is dropped. What every reader of such a set calls first (ReadColmapModel does);
+// RemoveStaleTemporaries calls it before removing a dead process's temporaries. Throws Error when
+// a step cannot be made (a read-only folder).
+void FinishInterruptedWrites(const fs::path& dir);
+
+// For a test of a kill between two renames: called after each rename of WriteTogetherAtomic with
+// how many it has made (a test's forked child kills itself there). Empty by default.
+void SetAfterRenameHookForTest(std::function<void(size_t)> hook);
 
 // Writes `size` bytes to a temporary file and renames it to `path`. Every write() and the
 // close() are checked, so a full disk is an Error and nothing is renamed into place.

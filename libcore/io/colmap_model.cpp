@@ -25,6 +25,7 @@ std::vector<std::string> ColmapModelFileNames(bool binary) {
 }
 
 bool HasColmapModel(const std::string& dir) {
+  FinishInterruptedWrites(dir);
   for (bool binary : {false, true}) {
     bool all = true;
     for (const auto& f : ColmapModelFileNames(binary)) all = all && fs::exists(fs::path(dir) / f);
@@ -34,6 +35,7 @@ bool HasColmapModel(const std::string& dir) {
 }
 
 std::vector<std::string> ColmapModelFiles(const std::string& dir) {
+  FinishInterruptedWrites(dir);
   std::vector<std::string> files;
   for (bool binary : {false, true})
     for (const auto& f : ColmapModelFileNames(binary))
@@ -42,6 +44,7 @@ std::vector<std::string> ColmapModelFiles(const std::string& dir) {
 }
 
 bool IsColmapBinaryModel(const std::string& dir) {
+  FinishInterruptedWrites(dir);
   bool bin = true;
   for (const auto& f : ColmapModelFileNames(true)) bin = bin && fs::exists(fs::path(dir) / f);
   return bin;
@@ -239,6 +242,7 @@ std::map<uint64_t, Point3D> ReadColmapPoints3DText(std::istream& stream, const s
 }
 
 Reconstruction ReadColmapText(const std::string& dir) {
+  FinishInterruptedWrites(dir);  // a writer killed between its renames: its model, whole
   Reconstruction r;
   const std::string cam_file = (fs::path(dir) / "cameras.txt").string();
   const std::string img_file = (fs::path(dir) / "images.txt").string();
@@ -309,15 +313,12 @@ void Join(std::ostream& os, const T& x, bool& first) {
 }
 
 // Removes DIR's model files of the format not being written (see the header).
-void RemoveOtherFormat(const fs::path& dir, bool writing_binary) {
-  for (const std::string& f : ColmapModelFileNames(!writing_binary)) {
-    std::error_code ec;
-    // None there, or DIR is not a folder (the write below says so).
-    if (!fs::exists(fs::symlink_status(dir / f, ec))) continue;
-    fs::remove(dir / f, ec);
-    if (ec)
-      throw Error((dir / f).string() + ": cannot remove the other format's file: " + ec.message());
-  }
+// The other format's files in DIR: a commit removes them (ReadColmapModel prefers binary, so a
+// stale binary model beside a new text one would be the one read).
+std::vector<fs::path> OtherFormat(const fs::path& dir, bool writing_binary) {
+  std::vector<fs::path> out;
+  for (const std::string& f : ColmapModelFileNames(!writing_binary)) out.push_back(dir / f);
+  return out;
 }
 
 }  // namespace
@@ -376,8 +377,8 @@ void WriteColmapPointText(std::ostream& f, uint64_t id, const Point3D& p) {
   f << '\n';
 }
 
-// The three files are renamed into place together, and the other format's are removed only
-// then: a failed write (a full disk) leaves the model that was there whole.
+// The three files are renamed into place together (one journalled step), and the other format's
+// are removed only then: a failed write (a full disk) leaves the model that was there whole.
 void WriteColmapText(const Reconstruction& r, const std::string& dir) {
   fs::path d(dir);
   size_t observations = 0;
@@ -396,7 +397,7 @@ void WriteColmapText(const Reconstruction& r, const std::string& dir) {
   };
   WriteTogetherAtomic(
       {{d / "cameras.txt", cameras}, {d / "images.txt", images}, {d / "points3D.txt", points}},
-      false, [&] { RemoveOtherFormat(d, false); });
+      false, OtherFormat(d, false));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -548,6 +549,7 @@ std::map<uint64_t, Point3D> ReadPoints3DBinary(const std::string& path) {
 }  // namespace
 
 Reconstruction ReadColmapBinary(const std::string& dir) {
+  FinishInterruptedWrites(dir);
   Reconstruction r;
   const std::string img_file = (fs::path(dir) / "images.bin").string();
   const std::string pts_file = (fs::path(dir) / "points3D.bin").string();
@@ -604,7 +606,7 @@ void WriteColmapBinary(const Reconstruction& r, const std::string& dir) {
   };
   WriteTogetherAtomic(
       {{d / "cameras.bin", cameras}, {d / "images.bin", images}, {d / "points3D.bin", points}},
-      true, [&] { RemoveOtherFormat(d, true); });
+      true, OtherFormat(d, true));
 }
 
 }  // namespace mvtm

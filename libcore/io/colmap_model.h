@@ -42,11 +42,12 @@ std::map<uint64_t, Point3D> ReadColmapPoints3DText(std::istream& in, const std::
 // line number of the image's pose line (a trajectory reader keeps the file's order and lines).
 void ForEachColmapImageText(std::istream& in, const std::string& name,
                             const std::function<void(ImageRecord&&, long line)>& each);
-// Writes the three files atomically (each to a temporary name, then renamed). The other format's
-// files in DIR are removed first: a stale binary model beside a new text one would be the one
-// read (ReadColmapModel prefers binary). A kill before the three files are written leaves an
-// incomplete model (readers refuse it) or, over a model of the same format, a mix of old and
-// new files.
+// Writes the three files atomically (each to a temporary name, then renamed; the renames and the
+// removal of the other format's files in DIR are one journalled step, WriteTogetherAtomic). The
+// other format's files go: a stale binary model beside a new text one would be the one read
+// (ReadColmapModel prefers binary). A kill while the files are written leaves the model that was
+// there; a kill between the renames leaves a journal, and the next reader or writer of DIR puts
+// the whole new model in place (the readers below call FinishInterruptedWrites first).
 void WriteColmapText(const Reconstruction& r, const std::string& dir);
 void WriteColmapBinary(const Reconstruction& r, const std::string& dir);
 // The text files' parts, for a writer that makes a model too large to hold piece by piece: the

@@ -2,10 +2,14 @@
 #include "base/atomic_file.h"
 
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <fstream>
+#include <sstream>
 
 #include "base/error.h"
 
@@ -104,6 +108,113 @@ TEST(AtomicFile, TemporaryNamesCarryTheProcessSpaceAndKeepTheExtension) {
   EXPECT_EQ(ProcessSpace().find_first_not_of(
                 "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-~"),
             std::string::npos);
+  fs::remove_all(d);
+}
+
+std::string Slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::vector<FileWriter> NewSet(const fs::path& d) {
+  std::vector<FileWriter> files;
+  for (const char* n : {"a.txt", "b.txt", "c.txt"})
+    files.push_back({d / n, [n](std::ostream& f) { f << "new " << n; }});
+  return files;
+}
+
+// Commits NewSet(d) over the old set in a forked child that SIGKILLs itself right after its
+// first rename (the hook stands for a kill -9 arriving there); true when it died so.
+bool CommitKilledAfterFirstRename(const fs::path& d) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    SetAfterRenameHookForTest([](size_t renamed) {
+      if (renamed == 1) raise(SIGKILL);
+    });
+    WriteTogetherAtomic(NewSet(d), false, {d / "x.bin"});
+    _exit(0);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL;
+}
+
+fs::path OldSetIn(const char* name) {
+  fs::path d = TempDir(name);
+  for (const char* n : {"a.txt", "b.txt", "c.txt", "x.bin"}) std::ofstream(d / n) << "old " << n;
+  return d;
+}
+
+size_t Entries(const fs::path& d) {
+  return size_t(std::distance(fs::directory_iterator(d), fs::directory_iterator()));
+}
+
+// A kill between two renames of a set: the folder holds one new file beside two old ones and a
+// journal; the next reader's FinishInterruptedWrites (or RemoveStaleTemporaries, which would
+// otherwise delete the dead writer's temporaries, its new files) puts the whole new set in place.
+TEST(AtomicFile, KillBetweenRenamesIsFinishedByTheNextReader) {
+  for (int finish_by_sweep : {0, 1}) {
+    fs::path d = OldSetIn("kill");
+    ASSERT_TRUE(CommitKilledAfterFirstRename(d));
+    EXPECT_EQ(Slurp(d / "a.txt"), "new a.txt");  // the mixed set a kill used to leave
+    EXPECT_EQ(Slurp(d / "b.txt"), "old b.txt");
+    EXPECT_FALSE(fs::exists(d / "x.bin"));  // the replaced file went before the renames
+    EXPECT_EQ(Entries(d), 6u);              // a, b, c, b's and c's temporaries, the journal
+    if (finish_by_sweep)
+      RemoveStaleTemporaries(d);
+    else
+      FinishInterruptedWrites(d);
+    for (const char* n : {"a.txt", "b.txt", "c.txt"})
+      EXPECT_EQ(Slurp(d / n), std::string("new ") + n);
+    EXPECT_EQ(Entries(d), 3u);
+    FinishInterruptedWrites(d);  // nothing left to do
+    EXPECT_EQ(Entries(d), 3u);
+    fs::remove_all(d);
+  }
+}
+
+// A final file written again after the dead writer's journal (another program's new output) is
+// never overwritten by the dead set: it is dropped, temporaries and journal with it.
+TEST(AtomicFile, InterruptedSetOlderThanANewerWriteIsDropped) {
+  fs::path d = OldSetIn("superseded");
+  ASSERT_TRUE(CommitKilledAfterFirstRename(d));
+  fs::path journal;
+  for (const auto& e : fs::directory_iterator(d))
+    if (e.path().filename().string().rfind(".mvtm-journal-", 0) == 0) journal = e.path();
+  ASSERT_FALSE(journal.empty());
+  std::ofstream(d / "c.txt") << "later c";
+  fs::last_write_time(d / "c.txt", fs::last_write_time(journal) + std::chrono::seconds(2));
+  FinishInterruptedWrites(d);
+  EXPECT_EQ(Slurp(d / "c.txt"), "later c");
+  EXPECT_EQ(Slurp(d / "b.txt"), "old b.txt");
+  EXPECT_EQ(Entries(d), 3u);
+  fs::remove_all(d);
+}
+
+// A live writer's journal (this process's) is its own business; a damaged journal is an error
+// naming it, not a guess.
+TEST(AtomicFile, LiveOrDamagedJournalsAreNotRolledForward) {
+  fs::path d = TempDir("journal");
+  const std::string mine = ".mvtm-journal-" + std::to_string(getpid()) + "-0@" + ProcessSpace();
+  std::ofstream(d / mine) << "mvtm-journal 1\nrename\n.a.tmp-1\na.txt\n";
+  std::ofstream(d / ".a.tmp-1") << "x";
+  FinishInterruptedWrites(d);
+  EXPECT_TRUE(fs::exists(d / mine));
+  EXPECT_FALSE(fs::exists(d / "a.txt"));
+  const std::string dead = ".mvtm-journal-999999999-0@" + ProcessSpace();
+  std::ofstream(d / dead) << "mvtm-journal 1\nrename\n.a.tmp-1\n";
+  try {
+    FinishInterruptedWrites(d);
+    ADD_FAILURE() << "a truncated journal was followed";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(dead + ":4: truncated or damaged"), std::string::npos)
+        << e.what();
+  }
+  std::ofstream(d / dead) << "mvtm-journal 1\nrename\n../a\nb\n";
+  EXPECT_THROW(FinishInterruptedWrites(d), Error);  // never a name outside its folder
+  EXPECT_FALSE(fs::exists(d / "a.txt"));
   fs::remove_all(d);
 }
 

@@ -3,12 +3,16 @@
 #include "io/colmap_model.h"
 
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <clocale>
 #include <locale>
 #include <random>
 #include <sstream>
 
+#include "base/atomic_file.h"
 #include "base/error.h"
 #include "comma_locale.h"
 #include "test_util.h"
@@ -129,6 +133,37 @@ TEST(ColmapModel, WritingOneFormatRemovesTheOther) {
   EXPECT_FALSE(std::filesystem::exists(d / "cameras.txt"));
   EXPECT_EQ(ColmapModelFiles(d.string()).size(), 3u);
   ExpectSame(old_model, ReadColmapModel(d.string()));
+}
+
+// A writer killed between the three renames (after cameras.txt, a forked child SIGKILLing itself
+// there) leaves a journal: the next ReadColmapModel reads the new model whole, never the mix.
+TEST(ColmapModel, KillBetweenRenamesReadsTheNewModelWhole) {
+  for (bool old_binary : {true, false}) {
+    auto d = test::FreshDir("colmap-kill");
+    const Reconstruction old_model = RandomModel(4, 6, 5), new_model = RandomModel(3, 5, 6);
+    if (old_binary)
+      WriteColmapBinary(old_model, d.string());
+    else
+      WriteColmapText(old_model, d.string());
+    const pid_t pid = fork();
+    if (pid == 0) {
+      SetAfterRenameHookForTest([](size_t renamed) {
+        if (renamed == 1) raise(SIGKILL);
+      });
+      WriteColmapText(new_model, d.string());
+      _exit(0);
+    }
+    int status = 0;
+    waitpid(pid, &status, 0);
+    ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL);
+    // Killed between cameras.txt's rename and images.txt's: the old binary model is gone and the
+    // new one incomplete, or the old text's images and points sit beside the new cameras.
+    EXPECT_EQ(std::filesystem::exists(d / "images.txt"), !old_binary);
+    ExpectSame(new_model, ReadColmapModel(d.string()));
+    EXPECT_EQ(std::distance(std::filesystem::directory_iterator(d),
+                            std::filesystem::directory_iterator()),
+              3);
+  }
 }
 
 TEST(ColmapModel, EmptyPointsLineAndEmptyModel) {
