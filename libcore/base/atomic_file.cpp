@@ -155,7 +155,9 @@ Journal ReadJournal(const fs::path& path) {
   long no = 1;
   const auto next = [&] {
     ++no;
-    if (!std::getline(in, line) || line.empty() || line.find('/') != std::string::npos)
+    // A file of this folder only: never "." or "..", nothing with a '/' or a NUL.
+    if (!std::getline(in, line) || line.empty() || line == "." || line == ".." ||
+        line.find_first_of(std::string("/\0", 2)) != std::string::npos)
       throw Error(path.string(), no, "truncated or damaged commit journal");
     return line;
   };
@@ -165,6 +167,8 @@ Journal ReadJournal(const fs::path& path) {
       j.removals.push_back(next());
     } else if (line == "rename") {
       std::string from = next();
+      if (from.find(".tmp-") == std::string::npos)  // what is renamed is a temporary
+        throw Error(path.string(), no, "a commit journal renames a file that is no temporary");
       j.renames.emplace_back(from, next());
     } else {
       throw Error(path.string(), no, "unknown step '" + line + "' in a commit journal");

@@ -212,8 +212,12 @@ TEST(AtomicFile, LiveOrDamagedJournalsAreNotRolledForward) {
     EXPECT_NE(std::string(e.what()).find(dead + ":4: truncated or damaged"), std::string::npos)
         << e.what();
   }
-  std::ofstream(d / dead) << "mvtm-journal 1\nrename\n../a\nb\n";
-  EXPECT_THROW(FinishInterruptedWrites(d), Error);  // never a name outside its folder
+  // Never a name outside its folder, the folder itself, or a rename of what is no temporary.
+  for (const char* bad : {"rename\n../a\nb\n", "remove\n..\n", "remove\n.\n",
+                          "rename\n.a.tmp-1\n..\n", "rename\nimages.txt\nb\n"}) {
+    std::ofstream(d / dead) << "mvtm-journal 1\n" << bad;
+    EXPECT_THROW(FinishInterruptedWrites(d), Error) << bad;
+  }
   EXPECT_FALSE(fs::exists(d / "a.txt"));
   fs::remove_all(d);
 }
