@@ -284,9 +284,16 @@ void WriteTogetherAtomic(const std::vector<FileWriter>& files, bool binary,
       throw Error((dir / n).string(), 0, "cannot remove the file it replaces: " + ec.message());
   }
   size_t renamed = 0;
-  for (auto& out : outs) {
-    out->Commit();
-    if (AfterRenameHook()) AfterRenameHook()(++renamed);
+  try {
+    for (auto& out : outs) {
+      out->Commit();
+      if (AfterRenameHook()) AfterRenameHook()(++renamed);
+    }
+  } catch (...) {
+    // The journal names the temporaries not yet renamed: they stay, so that the set is finished
+    // once this process is gone (or the error is the next reader's to see).
+    for (auto& out : outs) out->Release();
+    throw;
   }
   std::error_code ec;
   fs::remove(journal, ec);

@@ -37,6 +37,8 @@ class AtomicFile {
   const fs::path& final_path() const { return final_; }
   // Renames the temporary file over the final path (atomic on POSIX within one filesystem).
   void Commit();
+  // Keeps the temporary file (a commit journal names it: FinishInterruptedWrites renames it).
+  void Release() { committed_ = true; }
 
  private:
   fs::path final_;

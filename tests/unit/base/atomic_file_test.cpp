@@ -193,6 +193,31 @@ TEST(AtomicFile, InterruptedSetOlderThanANewerWriteIsDropped) {
   fs::remove_all(d);
 }
 
+// A rename that fails half-way (b.txt is a folder here) leaves the journal and the temporaries
+// not yet renamed: once the writer is gone (its journal renamed to a dead pid's below) and the
+// obstacle too, the next reader finishes the set.
+TEST(AtomicFile, FailedRenameKeepsTheJournalsTemporaries) {
+  fs::path d = OldSetIn("failed");
+  fs::remove(d / "b.txt");
+  fs::create_directories(d / "b.txt" / "in");
+  EXPECT_THROW(WriteTogetherAtomic(NewSet(d), false, {d / "x.bin"}), Error);
+  EXPECT_EQ(Slurp(d / "a.txt"), "new a.txt");
+  EXPECT_EQ(Slurp(d / "c.txt"), "old c.txt");
+  fs::path journal;
+  for (const auto& e : fs::directory_iterator(d))
+    if (e.path().filename().string().rfind(".mvtm-journal-", 0) == 0) journal = e.path();
+  ASSERT_FALSE(journal.empty());
+  FinishInterruptedWrites(d);  // this process's: left alone
+  EXPECT_EQ(Entries(d), 6u);   // a, b/, c, b's and c's temporaries, the journal
+  fs::remove_all(d / "b.txt");
+  fs::rename(journal, d / (".mvtm-journal-999999999-0@" + ProcessSpace()));
+  FinishInterruptedWrites(d);
+  for (const char* n : {"a.txt", "b.txt", "c.txt"})
+    EXPECT_EQ(Slurp(d / n), std::string("new ") + n);
+  EXPECT_EQ(Entries(d), 3u);
+  fs::remove_all(d);
+}
+
 // A live writer's journal (this process's) is its own business; a damaged journal is an error
 // naming it, not a guess.
 TEST(AtomicFile, LiveOrDamagedJournalsAreNotRolledForward) {
