@@ -15,6 +15,7 @@
 #include <fstream>
 #include <locale>
 #include <memory>
+#include <set>
 
 #include "base/error.h"
 
@@ -145,9 +146,10 @@ void WriteJournal(const fs::path& path, const Journal& j) {
   });
 }
 
-// Throws when the journal is not one this code wrote whole (an empty or foreign file).
-Journal ReadJournal(const fs::path& path) {
-  std::ifstream in(path);
+// Throws when the journal is not one this code wrote whole (an empty or foreign file); reads
+// `file`, names `path` in its errors.
+Journal ReadJournal(const fs::path& file, const fs::path& path) {
+  std::ifstream in(file);
   std::string line;
   if (!std::getline(in, line) || line != kJournalHead)
     throw Error(path.string(), 1, "not an mvtm commit journal");
@@ -177,58 +179,88 @@ Journal ReadJournal(const fs::path& path) {
   return j;
 }
 
-// The owner of a name "...PID-N@SPACE..." whose "PID" starts at `pid_at` is gone: this host's
-// process PID is not alive, or (another host's or namespace's) the entry is an hour old.
-bool OwnerGone(const fs::directory_entry& e, const std::string& n, size_t pid_at) {
+// The owner of a name "...PID-N@SPACE..." whose "PID" starts at `pid_at`: "PID@SPACE" (a name
+// without "@SPACE" is from this machine: older mvtm).
+std::string OwnerOf(const std::string& n, size_t pid_at, std::string* space_out = nullptr) {
   char* pid_end = nullptr;
   const long pid = std::strtol(n.c_str() + pid_at, &pid_end, 10);
-  // A name without "@SPACE" is from this machine (older mvtm).
   const size_t at = n.find('@', size_t(pid_end - n.c_str()));
   const std::string space =
       at == std::string::npos ? ProcessSpace() : n.substr(at + 1, n.find('.', at) - at - 1);
-  if (space == ProcessSpace()) return !ProcessAlive(pid);
+  if (space_out) *space_out = space;
+  return std::to_string(pid) + "@" + space;
+}
+
+// That owner is gone: this host's process PID is not alive, or (another host's or namespace's)
+// the entry is an hour old.
+bool OwnerGone(const fs::directory_entry& e, const std::string& n, size_t pid_at) {
+  std::string space;
+  const std::string owner = OwnerOf(n, pid_at, &space);
+  if (space == ProcessSpace()) return !ProcessAlive(std::strtol(owner.c_str(), nullptr, 10));
   std::error_code ec;
   const auto written = e.last_write_time(ec);
   return !ec && fs::file_time_type::clock::now() - written > kForeignTemporaryAge;
 }
 
+// A journal name of this process, unique to the call.
+fs::path NewJournalPath(const fs::path& dir) {
+  return dir / (kJournalPrefix + std::to_string(getpid()) + "-" + std::to_string(g_counter++) +
+                "@" + ProcessSpace());
+}
+
+[[noreturn]] void CannotFinish(const fs::path& p, const std::error_code& e) {
+  throw Error(p.string(), 0, "cannot finish an interrupted write: " + e.message());
+}
+
 // Rolls a dead writer's journal forward: its temporaries (complete when the journal was written)
 // are renamed into place and the files it was replacing removed, so the set it was committing
-// appears whole. Where a final file changed after the journal (another program wrote it since),
-// the journal's set is stale and dropped instead: its temporaries are removed, nothing renamed.
+// appears whole. The journal is claimed first (renamed to a journal name of this process): two
+// finishers never follow one journal (the second finds it gone), and while this one works the
+// others take it for a live writer's. A file of the set written after the journal (modification
+// time: another program's newer output, a model COLMAP wrote there since) is never overwritten or
+// removed: where there is one the journal's set is stale and dropped instead (its temporaries
+// removed, nothing renamed), and each file is checked again just before its step.
 void FinishJournal(const fs::path& path) {
-  const fs::path dir = path.parent_path();
-  const Journal j = ReadJournal(path);
+  const fs::path dir = path.parent_path(), claimed = NewJournalPath(dir);
   std::error_code ec;
-  const auto journal_time = fs::last_write_time(path, ec);
-  bool pending = false, superseded = false;
-  for (const auto& [from, to] : j.renames) {
-    pending = pending || fs::exists(dir / from);
-    std::error_code tec;
-    const auto t = fs::last_write_time(dir / to, tec);
-    superseded = superseded || (!tec && !ec && t > journal_time);
+  fs::rename(path, claimed, ec);
+  if (ec == std::errc::no_such_file_or_directory) return;  // another finisher took it
+  if (ec) CannotFinish(path, ec);
+  Journal j;
+  try {
+    j = ReadJournal(claimed, path);
+  } catch (const Error&) {
+    fs::rename(claimed, path, ec);  // back under its own name, which the error gives
+    throw;
   }
+  const auto journal_time = fs::last_write_time(claimed, ec);
+  if (ec) CannotFinish(claimed, ec);
+  const auto newer = [&](const fs::path& p) {
+    std::error_code e;
+    const auto t = fs::last_write_time(p, e);
+    return !e && t > journal_time;
+  };
+  bool pending = false, superseded = false;
+  for (const auto& [from, to] : j.renames)
+    pending = pending || fs::exists(dir / from), superseded = superseded || newer(dir / to);
+  for (const auto& n : j.removals) superseded = superseded || newer(dir / n);
   if (pending && !superseded) {
     for (const auto& n : j.removals) {
-      std::error_code rec;
-      fs::remove(dir / n, rec);
-      if (rec)
-        throw Error((dir / n).string(), 0, "cannot finish an interrupted write: " + rec.message());
+      std::error_code e;
+      if (!newer(dir / n)) fs::remove(dir / n, e);
+      if (e) CannotFinish(dir / n, e);
     }
     for (const auto& [from, to] : j.renames) {
-      if (!fs::exists(dir / from)) continue;  // renamed before the writer died
-      std::error_code rec;
-      fs::rename(dir / from, dir / to, rec);
-      if (rec)
-        throw Error((dir / to).string(), 0, "cannot finish an interrupted write: " + rec.message());
+      std::error_code e;
+      if (fs::exists(dir / from) && !newer(dir / to)) fs::rename(dir / from, dir / to, e);
+      if (e && e != std::errc::no_such_file_or_directory) CannotFinish(dir / to, e);
     }
-  } else {
-    for (const auto& [from, to] : j.renames) fs::remove(dir / from, ec);
   }
-  std::error_code rec;
-  fs::remove(path, rec);
-  if (rec)
-    throw Error(path.string(), 0, "cannot remove a finished commit journal: " + rec.message());
+  for (const auto& [from, to] : j.renames) fs::remove(dir / from, ec);  // what is left is stale
+  std::error_code e;
+  fs::remove(claimed, e);
+  if (e)
+    throw Error(claimed.string(), 0, "cannot remove a finished commit journal: " + e.message());
 }
 
 }  // namespace
@@ -238,9 +270,10 @@ void SetAfterRenameHookForTest(std::function<void(size_t)> hook) {
 }
 
 void FinishInterruptedWrites(const fs::path& dir) {
+  const fs::path d = dir.empty() ? fs::path(".") : dir;  // a model in the current folder
   std::error_code ec;
   std::vector<fs::path> journals;
-  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+  for (fs::directory_iterator it(d, ec), end; !ec && it != end; it.increment(ec)) {
     const std::string n = it->path().filename().string();
     if (n.rfind(kJournalPrefix, 0) != 0) continue;
     if (OwnerGone(*it, n, std::string(kJournalPrefix).size())) journals.push_back(it->path());
@@ -274,17 +307,16 @@ void WriteTogetherAtomic(const std::vector<FileWriter>& files, bool binary,
   for (const auto& out : outs)
     j.renames.emplace_back(out->temp_path().filename().string(),
                            out->final_path().filename().string());
-  const fs::path journal = dir / (kJournalPrefix + std::to_string(getpid()) + "-" +
-                                  std::to_string(g_counter++) + "@" + ProcessSpace());
+  const fs::path journal = NewJournalPath(dir.empty() ? fs::path(".") : dir);
   WriteJournal(journal, j);
-  for (const auto& n : j.removals) {
-    std::error_code ec;
-    fs::remove(dir / n, ec);
-    if (ec)
-      throw Error((dir / n).string(), 0, "cannot remove the file it replaces: " + ec.message());
-  }
   size_t renamed = 0;
   try {
+    for (const auto& n : j.removals) {
+      std::error_code ec;
+      fs::remove(dir / n, ec);
+      if (ec)
+        throw Error((dir / n).string(), 0, "cannot remove the file it replaces: " + ec.message());
+    }
     for (auto& out : outs) {
       out->Commit();
       if (AfterRenameHook()) AfterRenameHook()(++renamed);
@@ -345,12 +377,25 @@ bool IsUpToDate(const fs::path& output, const std::vector<fs::path>& inputs) {
 void RemoveStaleTemporaries(const fs::path& dir) {
   FinishInterruptedWrites(dir);  // a dead commit's temporaries are its new files: renamed first
   std::error_code ec;
+  std::vector<std::pair<fs::path, std::string>> dead;  // temporary, owner
   for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
     std::string n = it->path().filename().string();
     auto p = n.find(".tmp-");
     if (n.empty() || n[0] != '.' || p == std::string::npos) continue;
-    if (OwnerGone(*it, n, p + 5)) fs::remove_all(it->path(), ec);
+    if (OwnerGone(*it, n, p + 5)) dead.emplace_back(it->path(), OwnerOf(n, p + 5));
   }
+  if (dead.empty()) return;
+  // A journal of the same owner names them (one FinishInterruptedWrites left: another host's,
+  // not an hour old, or one whose writer died after it looked): they stay for it. Gathered after
+  // their owners were found gone, so no journal of theirs can appear later.
+  std::set<std::string> journal_owners;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string n = it->path().filename().string();
+    if (n.rfind(kJournalPrefix, 0) == 0)
+      journal_owners.insert(OwnerOf(n, std::string(kJournalPrefix).size()));
+  }
+  for (const auto& [path, owner] : dead)
+    if (!journal_owners.count(owner)) fs::remove_all(path, ec);
 }
 
 }  // namespace mvtm

@@ -81,12 +81,19 @@ struct FileWriter {
 void WriteTogetherAtomic(const std::vector<FileWriter>& files, bool binary,
                          const std::vector<fs::path>& replaced = {});
 
-// Completes the commits of WriteTogetherAtomic that a dead process left in `dir` (of this host
-// and namespace when its process is gone; of another when the journal is an hour old): the whole
-// new set is put in place, or, where one of its final files was written again since the journal,
-// the stale set is dropped. What every reader of such a set calls first (ReadColmapModel does);
-// RemoveStaleTemporaries calls it before removing a dead process's temporaries. Throws Error when
-// a step cannot be made (a read-only folder).
+// Completes the commits of WriteTogetherAtomic that a dead process left in `dir` ("" is the
+// current folder): of this host and namespace when its process is gone; of another when the
+// journal is an hour old. A live writer's commit is not waited for, and a journal of another host
+// younger than that is left, so a reader may still meet a set half renamed in that window (as it
+// may meet any file that a live run is replacing). Each journal is claimed first (renamed to one
+// of this process), so concurrent finishers never follow one journal twice. The whole new set is
+// put in place; where a file of the set (a final name or one it was to remove) has a modification
+// time after the journal's, another program wrote it since and the stale set is dropped instead
+// (the files as they are: possibly a mix of that program's and the set's). Called first by every
+// COLMAP model reader of libcore/io, by WriteTogetherAtomic in its folder, and by
+// RemoveStaleTemporaries, which also keeps any temporary that a journal of the same owner still
+// names. Throws Error when a step cannot be made (a read-only folder) or a journal is damaged (the
+// error names it: remove it to go on).
 void FinishInterruptedWrites(const fs::path& dir);
 
 // For a test of a kill between two renames: called after each rename of WriteTogetherAtomic with
@@ -118,6 +125,8 @@ fs::path TemporaryPathFor(const fs::path& final_path);
 // left in `dir` by processes that died: of this host and namespace when process PID is gone; of
 // another (a cluster node or a container sharing the folder, where PID says nothing) when
 // untouched for an hour. A name without "@SPACE" counts as this host's.
+// Finishes the folder's interrupted commits first (FinishInterruptedWrites; its Errors pass
+// through) and keeps the temporaries a journal of their owner names.
 void RemoveStaleTemporaries(const fs::path& dir);
 
 // This process's SPACE: host name and pid-namespace inode, letters, digits, '-' and '~'.

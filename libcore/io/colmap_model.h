@@ -47,7 +47,8 @@ void ForEachColmapImageText(std::istream& in, const std::string& name,
 // other format's files go: a stale binary model beside a new text one would be the one read
 // (ReadColmapModel prefers binary). A kill while the files are written leaves the model that was
 // there; a kill between the renames leaves a journal, and the next reader or writer of DIR puts
-// the whole new model in place (the readers below call FinishInterruptedWrites first).
+// the whole new model in place (the readers below, HasColmapModel, IsColmapBinaryModel and
+// ColmapModelFiles too, call FinishInterruptedWrites first, and throw its Errors).
 void WriteColmapText(const Reconstruction& r, const std::string& dir);
 void WriteColmapBinary(const Reconstruction& r, const std::string& dir);
 // The text files' parts, for a writer that makes a model too large to hold piece by piece: the

@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
 #include <fstream>
 #include <sstream>
@@ -133,11 +134,16 @@ bool CommitKilledAfterFirstRename(const fs::path& d) {
     SetAfterRenameHookForTest([](size_t renamed) {
       if (renamed == 1) raise(SIGKILL);
     });
-    WriteTogetherAtomic(NewSet(d), false, {d / "x.bin"});
+    try {  // never back into the test runner inside the child
+      WriteTogetherAtomic(NewSet(d), false, {d / "x.bin"});
+    } catch (...) {
+      _exit(2);
+    }
     _exit(0);
   }
   int status = 0;
-  waitpid(pid, &status, 0);
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
   return WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL;
 }
 
@@ -190,6 +196,45 @@ TEST(AtomicFile, InterruptedSetOlderThanANewerWriteIsDropped) {
   EXPECT_EQ(Slurp(d / "c.txt"), "later c");
   EXPECT_EQ(Slurp(d / "b.txt"), "old b.txt");
   EXPECT_EQ(Entries(d), 3u);
+  fs::remove_all(d);
+}
+
+// So is a file the dead set was to remove, written again since (COLMAP writing a binary model
+// into the folder after the kill): kept, and the set dropped.
+TEST(AtomicFile, ReplacedFileWrittenAgainIsKept) {
+  fs::path d = OldSetIn("rewritten");
+  ASSERT_TRUE(CommitKilledAfterFirstRename(d));
+  fs::path journal;
+  for (const auto& e : fs::directory_iterator(d))
+    if (e.path().filename().string().rfind(".mvtm-journal-", 0) == 0) journal = e.path();
+  ASSERT_FALSE(journal.empty());
+  std::ofstream(d / "x.bin") << "colmap's x";
+  fs::last_write_time(d / "x.bin", fs::last_write_time(journal) + std::chrono::seconds(2));
+  FinishInterruptedWrites(d);
+  EXPECT_EQ(Slurp(d / "x.bin"), "colmap's x");
+  EXPECT_EQ(Slurp(d / "c.txt"), "old c.txt");
+  EXPECT_EQ(Entries(d), 4u);
+  fs::remove_all(d);
+}
+
+// A journal of another host that is not an hour old is left to its writer (or to a finisher an
+// hour on), and the sweep of stale temporaries keeps the temporaries it names, however old:
+// they are that set's new files.
+TEST(AtomicFile, SweepKeepsTheTemporariesOfAJournal) {
+  fs::path d = TempDir("sweep-journal");
+  const std::string owner = "999999999-7@node7~4026531836";
+  std::ofstream(d / ".mvtm-journal-999999999-8@node7~4026531836")
+      << "mvtm-journal 1\nrename\n.a.tmp-" << owner << ".txt\na.txt\n";
+  std::ofstream(d / (".a.tmp-" + owner + ".txt")) << "new a";
+  std::ofstream(d / ".b.tmp-999999999-9@node8~1.txt") << "stale";  // no journal: goes
+  for (const char* n : {".b.tmp-999999999-9@node8~1.txt"})
+    fs::last_write_time(d / n, fs::file_time_type::clock::now() - std::chrono::minutes(61));
+  fs::last_write_time(d / (".a.tmp-" + owner + ".txt"),
+                      fs::file_time_type::clock::now() - std::chrono::minutes(61));
+  RemoveStaleTemporaries(d);
+  EXPECT_TRUE(fs::exists(d / (".a.tmp-" + owner + ".txt")));
+  EXPECT_FALSE(fs::exists(d / ".b.tmp-999999999-9@node8~1.txt"));
+  EXPECT_FALSE(fs::exists(d / "a.txt"));
   fs::remove_all(d);
 }
 
