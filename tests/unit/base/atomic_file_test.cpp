@@ -181,40 +181,26 @@ TEST(AtomicFile, KillBetweenRenamesIsFinishedByTheNextReader) {
   }
 }
 
-// A final file written again after the dead writer's journal (another program's new output) is
-// never overwritten by the dead set: it is dropped, temporaries and journal with it.
+// A file of the set written again after the dead writer's journal is never overwritten or
+// removed by the dead set: a final name (another program's new output) or a file it was to remove
+// (COLMAP writing a binary model into the folder after the kill). The set is dropped, its
+// temporaries and journal with it, and the files stay as they are.
 TEST(AtomicFile, InterruptedSetOlderThanANewerWriteIsDropped) {
-  fs::path d = OldSetIn("superseded");
-  ASSERT_TRUE(CommitKilledAfterFirstRename(d));
-  fs::path journal;
-  for (const auto& e : fs::directory_iterator(d))
-    if (e.path().filename().string().rfind(".mvtm-journal-", 0) == 0) journal = e.path();
-  ASSERT_FALSE(journal.empty());
-  std::ofstream(d / "c.txt") << "later c";
-  fs::last_write_time(d / "c.txt", fs::last_write_time(journal) + std::chrono::seconds(2));
-  FinishInterruptedWrites(d);
-  EXPECT_EQ(Slurp(d / "c.txt"), "later c");
-  EXPECT_EQ(Slurp(d / "b.txt"), "old b.txt");
-  EXPECT_EQ(Entries(d), 3u);
-  fs::remove_all(d);
-}
-
-// So is a file the dead set was to remove, written again since (COLMAP writing a binary model
-// into the folder after the kill): kept, and the set dropped.
-TEST(AtomicFile, ReplacedFileWrittenAgainIsKept) {
-  fs::path d = OldSetIn("rewritten");
-  ASSERT_TRUE(CommitKilledAfterFirstRename(d));
-  fs::path journal;
-  for (const auto& e : fs::directory_iterator(d))
-    if (e.path().filename().string().rfind(".mvtm-journal-", 0) == 0) journal = e.path();
-  ASSERT_FALSE(journal.empty());
-  std::ofstream(d / "x.bin") << "colmap's x";
-  fs::last_write_time(d / "x.bin", fs::last_write_time(journal) + std::chrono::seconds(2));
-  FinishInterruptedWrites(d);
-  EXPECT_EQ(Slurp(d / "x.bin"), "colmap's x");
-  EXPECT_EQ(Slurp(d / "c.txt"), "old c.txt");
-  EXPECT_EQ(Entries(d), 4u);
-  fs::remove_all(d);
+  for (const char* later : {"c.txt", "x.bin"}) {
+    fs::path d = OldSetIn("superseded");
+    ASSERT_TRUE(CommitKilledAfterFirstRename(d));
+    fs::path journal;
+    for (const auto& e : fs::directory_iterator(d))
+      if (e.path().filename().string().rfind(".mvtm-journal-", 0) == 0) journal = e.path();
+    ASSERT_FALSE(journal.empty());
+    std::ofstream(d / later) << "later";
+    fs::last_write_time(d / later, fs::last_write_time(journal) + std::chrono::seconds(2));
+    FinishInterruptedWrites(d);
+    EXPECT_EQ(Slurp(d / later), "later") << later;
+    EXPECT_EQ(Slurp(d / "b.txt"), "old b.txt") << later;
+    EXPECT_EQ(Entries(d), fs::path(later).extension() == ".bin" ? 4u : 3u) << later;
+    fs::remove_all(d);
+  }
 }
 
 // A journal of another host that is not an hour old is left to its writer (or to a finisher an
