@@ -179,24 +179,25 @@ Journal ReadJournal(const fs::path& file, const fs::path& path) {
   return j;
 }
 
-// The owner of a name "...PID-N@SPACE..." whose "PID" starts at `pid_at`: "PID@SPACE" (a name
-// without "@SPACE" is from this machine: older mvtm).
-std::string OwnerOf(const std::string& n, size_t pid_at, std::string* space_out = nullptr) {
+// The writer a name "...PID-N@SPACE..." belongs to, "PID" starting at `pid_at` (a name without
+// "@SPACE" is from this machine: older mvtm).
+struct Owner {
+  long pid;
+  std::string space;
+  std::string Key() const { return std::to_string(pid) + "@" + space; }
+};
+Owner OwnerOf(const std::string& n, size_t pid_at) {
   char* pid_end = nullptr;
   const long pid = std::strtol(n.c_str() + pid_at, &pid_end, 10);
   const size_t at = n.find('@', size_t(pid_end - n.c_str()));
-  const std::string space =
-      at == std::string::npos ? ProcessSpace() : n.substr(at + 1, n.find('.', at) - at - 1);
-  if (space_out) *space_out = space;
-  return std::to_string(pid) + "@" + space;
+  return {pid,
+          at == std::string::npos ? ProcessSpace() : n.substr(at + 1, n.find('.', at) - at - 1)};
 }
 
 // That owner is gone: this host's process PID is not alive, or (another host's or namespace's)
 // the entry is an hour old.
-bool OwnerGone(const fs::directory_entry& e, const std::string& n, size_t pid_at) {
-  std::string space;
-  const std::string owner = OwnerOf(n, pid_at, &space);
-  if (space == ProcessSpace()) return !ProcessAlive(std::strtol(owner.c_str(), nullptr, 10));
+bool OwnerGone(const fs::directory_entry& e, const Owner& owner) {
+  if (owner.space == ProcessSpace()) return !ProcessAlive(owner.pid);
   std::error_code ec;
   const auto written = e.last_write_time(ec);
   return !ec && fs::file_time_type::clock::now() - written > kForeignTemporaryAge;
@@ -276,7 +277,8 @@ void FinishInterruptedWrites(const fs::path& dir) {
   for (fs::directory_iterator it(d, ec), end; !ec && it != end; it.increment(ec)) {
     const std::string n = it->path().filename().string();
     if (n.rfind(kJournalPrefix, 0) != 0) continue;
-    if (OwnerGone(*it, n, std::string(kJournalPrefix).size())) journals.push_back(it->path());
+    if (OwnerGone(*it, OwnerOf(n, std::string(kJournalPrefix).size())))
+      journals.push_back(it->path());
   }
   std::sort(journals.begin(), journals.end());
   for (const auto& j : journals) FinishJournal(j);
@@ -307,7 +309,7 @@ void WriteTogetherAtomic(const std::vector<FileWriter>& files, bool binary,
   for (const auto& out : outs)
     j.renames.emplace_back(out->temp_path().filename().string(),
                            out->final_path().filename().string());
-  const fs::path journal = NewJournalPath(dir.empty() ? fs::path(".") : dir);
+  const fs::path journal = NewJournalPath(dir);  // "" / NAME: the current folder's
   WriteJournal(journal, j);
   size_t renamed = 0;
   try {
@@ -382,7 +384,8 @@ void RemoveStaleTemporaries(const fs::path& dir) {
     std::string n = it->path().filename().string();
     auto p = n.find(".tmp-");
     if (n.empty() || n[0] != '.' || p == std::string::npos) continue;
-    if (OwnerGone(*it, n, p + 5)) dead.emplace_back(it->path(), OwnerOf(n, p + 5));
+    const Owner owner = OwnerOf(n, p + 5);
+    if (OwnerGone(*it, owner)) dead.emplace_back(it->path(), owner.Key());
   }
   if (dead.empty()) return;
   // A journal of the same owner names them (one FinishInterruptedWrites left: another host's,
@@ -392,7 +395,7 @@ void RemoveStaleTemporaries(const fs::path& dir) {
   for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
     const std::string n = it->path().filename().string();
     if (n.rfind(kJournalPrefix, 0) == 0)
-      journal_owners.insert(OwnerOf(n, std::string(kJournalPrefix).size()));
+      journal_owners.insert(OwnerOf(n, std::string(kJournalPrefix).size()).Key());
   }
   for (const auto& [path, owner] : dead)
     if (!journal_owners.count(owner)) fs::remove_all(path, ec);

@@ -312,7 +312,6 @@ void Join(std::ostream& os, const T& x, bool& first) {
   os << x;
 }
 
-// Removes DIR's model files of the format not being written (see the header).
 // The other format's files in DIR: a commit removes them (ReadColmapModel prefers binary, so a
 // stale binary model beside a new text one would be the one read).
 std::vector<fs::path> OtherFormat(const fs::path& dir, bool writing_binary) {
