@@ -73,19 +73,33 @@ void RequireImageSize(const Image& img, const std::string& path, uint64_t w, uin
                     " but its camera is " + std::to_string(w) + "x" + std::to_string(h));
 }
 
-void WriteImage(const std::string& path, const Image& img, PngCompression png) {
-  if (img.empty()) throw Error(path, 0, "refusing to write an empty image");
+namespace {
+
+// The pipeline's formats (8/16-bit PNG, float EXR, at most 4 channels) encoded in memory by their
+// own library; false for anything else.
+bool EncodeOwnFormat(const std::string& path, const Image& img, PngCompression png,
+                     std::vector<unsigned char>* bytes) {
   const std::string ext = Extension(path);
-  // The pipeline's formats: encoded in memory by their own library, then written with every
-  // write() and the close() checked, so a full disk never leaves a truncated file in place.
   if (ext == ".png" && (img.bits == 8 || img.bits == 16) && img.channels <= 4) {
-    const auto bytes = EncodePng(path, img, png);
-    WriteBytesAtomic(path, bytes.data(), bytes.size());
-    return;
+    *bytes = EncodePng(path, img, png);
+    return true;
   }
   if (ext == ".exr" && img.bits == 32 && img.channels <= 4) {
-    const auto bytes = EncodeExr(path, img);
-    WriteBytesAtomic(path, bytes.data(), bytes.size());
+    *bytes = EncodeExr(path, img);
+    return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+void WriteImage(const std::string& path, const Image& img, PngCompression png) {
+  if (img.empty()) throw Error(path, 0, "refusing to write an empty image");
+  // The pipeline's formats: encoded in memory, then written with every write() and the close()
+  // checked, so a full disk never leaves a truncated file in place.
+  std::vector<unsigned char> own;
+  if (EncodeOwnFormat(path, img, png, &own)) {
+    WriteBytesAtomic(path, own.data(), own.size());
     return;
   }
   // Everything else through OpenImageIO: in memory when its writer can, else into a temporary
@@ -104,6 +118,23 @@ void WriteImage(const std::string& path, const Image& img, PngCompression png) {
     throw Error(path, 0, "write failed: the file does not read back (disk full?)");
   }
   out.Commit();
+}
+
+void WriteImagesTogether(const std::vector<ImageToWrite>& images) {
+  std::vector<std::vector<unsigned char>> bytes(images.size());
+  std::vector<FileWriter> files;
+  for (size_t i = 0; i < images.size(); ++i) {
+    const ImageToWrite& w = images[i];
+    if (w.image->empty()) throw Error(w.path, 0, "refusing to write an empty image");
+    if (!EncodeOwnFormat(w.path, *w.image, PngCompression::kDefault, &bytes[i]))
+      throw Error(w.path, 0,
+                  "only 8/16-bit PNG and float EXR images are written together (program error)");
+    const std::vector<unsigned char>& b = bytes[i];
+    files.push_back({w.path, [&b](std::ostream& os) {
+                       os.write(reinterpret_cast<const char*>(b.data()), std::streamsize(b.size()));
+                     }});
+  }
+  WriteTogetherAtomic(files, true);
 }
 
 Image ToGrey(const Image& img) {

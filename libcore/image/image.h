@@ -69,6 +69,17 @@ enum class PngCompression {
 void WriteImage(const std::string& path, const Image& img,
                 PngCompression png = PngCompression::kDefault);
 
+// Images that only make sense together (densify's depth map and its confidence), in one folder,
+// written as one step (WriteTogetherAtomic): a full disk leaves every final file as it was, and
+// a writer killed between the renames leaves a journal that the next FinishInterruptedWrites of
+// the folder completes, so a reader that calls it first never meets a new image beside an old
+// one. The pipeline's own formats only (8/16-bit PNG, float EXR): else an Error.
+struct ImageToWrite {
+  std::string path;
+  const Image* image;
+};
+void WriteImagesTogether(const std::vector<ImageToWrite>& images);
+
 // One channel: the mean of the colour channels (alpha excluded when there are 2 or 4 channels).
 Image ToGrey(const Image& img);
 

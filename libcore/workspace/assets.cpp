@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "base/atomic_file.h"
 #include "base/error.h"
 #include "image/mask.h"
 
@@ -57,6 +58,7 @@ Image ReadDepthAtCamera(const Workspace& ws, const std::string& name, const Came
 
 Image ReadSeenDepthAtCamera(const Workspace& ws, const std::string& name, const Camera& cam) {
   const fs::path p = ws.StereoDepthPath(name), cp = ws.StereoConfidencePath(name);
+  FinishInterruptedWrites(ws.StereoDir());  // densify killed between a pair's renames: both new
   if (!fs::exists(p)) return Image();
   const Image d = ReadFloatMap(p.string());
   Image c;

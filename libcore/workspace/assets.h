@@ -25,7 +25,8 @@ Image ReadSourceImage(const Workspace& ws, const std::string& name, const Camera
 Image ReadDepthAtCamera(const Workspace& ws, const std::string& name, const Camera& cam);
 // stereo/NAME.exr (densify's map of what the photo saw) at the camera's size, nearest
 // neighbour, with its confidence (stereo/NAME.conf.exr; 1 without one) as a second channel;
-// empty when the workspace has none for the image.
+// empty when the workspace has none for the image. A densify killed between the pair's renames
+// is finished first (FinishInterruptedWrites), so the two are always of one run.
 Image ReadSeenDepthAtCamera(const Workspace& ws, const std::string& name, const Camera& cam);
 // masks/NAME.png (0 or 255) at the camera's size; empty when the image has no mask.
 Image ReadMaskAtCamera(const Workspace& ws, const std::string& name, const Camera& cam);

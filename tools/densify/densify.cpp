@@ -183,9 +183,10 @@ double DensifyOne(const DensifyOptions& o, const Workspace& ws, const DenseScene
   const DepthMap dm = SweepDepth(ref, views, Families(o, s, i, pts), o.sweep);
   const fs::path depth = ws.StereoDepthPath(s.images[i]->name),
                  confidence = ws.StereoConfidencePath(s.images[i]->name);
-  WriteImage(depth.string(), dm.depth);
+  // One step: a kill between the two renames never leaves a new map beside an old confidence
+  // for a reader (each calls FinishInterruptedWrites on stereo/ first).
+  WriteImagesTogether({{depth.string(), &dm.depth}, {confidence.string(), &dm.confidence}});
   ledger.Done(depth, job.in);
-  WriteImage(confidence.string(), dm.confidence);
   ledger.Done(confidence, job.in);
   size_t valid = 0;
   for (float z : dm.depth.data) valid += std::isfinite(z);

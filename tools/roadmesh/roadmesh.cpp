@@ -7,6 +7,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "base/atomic_file.h"
 #include "base/error.h"
 #include "base/stats.h"
 #include "cli/progress.h"
@@ -147,6 +148,7 @@ void LeaveOutMasked(const Image& mask, Image& depth) {
 // densify's depth maps with the cameras scaled to their size, in name order.
 std::vector<DepthView> LoadStereoViews(const Workspace& ws, const Reconstruction& rec) {
   std::vector<DepthView> views;
+  FinishInterruptedWrites(ws.StereoDir());  // densify killed between a pair's renames: both new
   for (const ImageRecord* im : rec.ImagesByName()) {
     const fs::path d = ws.StereoDepthPath(im->name), c = ws.StereoConfidencePath(im->name);
     if (!fs::exists(d)) continue;

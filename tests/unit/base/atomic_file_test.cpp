@@ -2,17 +2,15 @@
 #include "base/atomic_file.h"
 
 #include <gtest/gtest.h>
-#include <signal.h>
 #include <sys/stat.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
-#include <cerrno>
 #include <chrono>
 #include <fstream>
 #include <sstream>
 
 #include "base/error.h"
+#include "support/killed_commit.h"
 
 namespace mvtm {
 namespace {
@@ -126,25 +124,11 @@ std::vector<FileWriter> NewSet(const fs::path& d) {
   return files;
 }
 
-// Commits NewSet(d) over the old set in a forked child that SIGKILLs itself right after its
-// first rename (the hook stands for a kill -9 arriving there); true when it died so.
+// Commits NewSet(d) over the old set in a forked child killed right after its first rename;
+// true when it died so.
 bool CommitKilledAfterFirstRename(const fs::path& d) {
-  const pid_t pid = fork();
-  if (pid == 0) {
-    SetAfterRenameHookForTest([](size_t renamed) {
-      if (renamed == 1) raise(SIGKILL);
-    });
-    try {  // never back into the test runner inside the child
-      WriteTogetherAtomic(NewSet(d), false, {d / "x.bin"});
-    } catch (...) {
-      _exit(2);
-    }
-    _exit(0);
-  }
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-  return WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL;
+  return test::CommitKilledAfterFirstRename(
+      [&d] { WriteTogetherAtomic(NewSet(d), false, {d / "x.bin"}); });
 }
 
 fs::path OldSetIn(const char* name) {

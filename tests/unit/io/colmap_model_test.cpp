@@ -3,11 +3,7 @@
 #include "io/colmap_model.h"
 
 #include <gtest/gtest.h>
-#include <signal.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
-#include <cerrno>
 #include <clocale>
 #include <locale>
 #include <random>
@@ -16,6 +12,7 @@
 #include "base/atomic_file.h"
 #include "base/error.h"
 #include "comma_locale.h"
+#include "support/killed_commit.h"
 #include "test_util.h"
 
 namespace mvtm {
@@ -146,22 +143,8 @@ TEST(ColmapModel, KillBetweenRenamesReadsTheNewModelWhole) {
       WriteColmapBinary(old_model, d.string());
     else
       WriteColmapText(old_model, d.string());
-    const pid_t pid = fork();
-    if (pid == 0) {
-      SetAfterRenameHookForTest([](size_t renamed) {
-        if (renamed == 1) raise(SIGKILL);
-      });
-      try {  // never back into the test runner inside the child
-        WriteColmapText(new_model, d.string());
-      } catch (...) {
-        _exit(2);
-      }
-      _exit(0);
-    }
-    int status = 0;
-    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-    }
-    ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL);
+    ASSERT_TRUE(
+        test::CommitKilledAfterFirstRename([&] { WriteColmapText(new_model, d.string()); }));
     // Killed between cameras.txt's rename and images.txt's: the old binary model is gone and the
     // new one incomplete, or the old text's images and points sit beside the new cameras.
     EXPECT_EQ(std::filesystem::exists(d / "images.txt"), !old_binary);

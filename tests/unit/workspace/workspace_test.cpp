@@ -2,10 +2,16 @@
 #include "workspace/workspace.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <fstream>
+#include <iterator>
 
+#include "base/atomic_file.h"
 #include "base/error.h"
+#include "image/image.h"
+#include "support/killed_commit.h"
+#include "workspace/assets.h"
 
 namespace mvtm {
 namespace {
@@ -46,6 +52,37 @@ TEST(Workspace, MissingItemsAndProvenance) {
   std::ofstream(d / "provenance/roadmesh.json") << R"({"options": {"metric": true}})";
   std::ofstream(d / "provenance/exposure.json") << "{not json";
   EXPECT_EQ(ws.MetricRecord("drive"), d / "provenance/roadmesh.json");
+  fs::remove_all(d);
+}
+
+// densify writes a depth map and its confidence as one step: killed between the two renames, it
+// leaves the new map beside the old confidence, and the next reader finishes the pair first.
+TEST(Workspace, KillBetweenAStereoPairsRenamesReadsTheNewPairWhole) {
+  const fs::path d = fs::temp_directory_path() / ("mvtm-ws-pair-" + std::to_string(getpid()));
+  fs::remove_all(d);
+  const Workspace ws(d);
+  const Camera cam{1, CameraModel::kPinhole, 8, 6, {10, 10, 4, 3}};
+  const std::string depth = ws.StereoDepthPath("A.png").string(),
+                    conf = ws.StereoConfidencePath("A.png").string();
+  const Image old_depth(8, 6, 1, 32, 5.f), old_conf(8, 6, 1, 32, 0.25f);
+  const Image new_depth(8, 6, 1, 32, 7.f), new_conf(8, 6, 1, 32, 0.75f);
+  CreateFolder(ws.StereoDir());
+  WriteImage(depth, old_depth);
+  WriteImage(conf, old_conf);
+  ASSERT_TRUE(test::CommitKilledAfterFirstRename([&] {
+    WriteImagesTogether({{depth, &new_depth}, {conf, &new_conf}});
+  }));
+  // The mix the kill left: the new depth beside the old confidence.
+  EXPECT_EQ(ReadFloatMap(depth).data.front(), 7.f);
+  EXPECT_EQ(ReadFloatMap(conf).data.front(), 0.25f);
+  const Image both = ReadSeenDepthAtCamera(ws, "A.png", cam);
+  ASSERT_EQ(both.channels, 2);
+  for (size_t i = 0; i < both.pixels(); ++i) {
+    ASSERT_EQ(both.data[2 * i], 7.f);
+    ASSERT_EQ(both.data[2 * i + 1], 0.75f);
+  }
+  // The pair and nothing else: no journal, no temporary.
+  EXPECT_EQ(std::distance(fs::directory_iterator(ws.StereoDir()), fs::directory_iterator()), 2);
   fs::remove_all(d);
 }
 
