@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -270,8 +271,26 @@ void SetAfterRenameHookForTest(std::function<void(size_t)> hook) {
   AfterRenameHook() = std::move(hook);
 }
 
-void FinishInterruptedWrites(const fs::path& dir) {
-  const fs::path d = dir.empty() ? fs::path(".") : dir;  // a model in the current folder
+FolderLock::FolderLock(const fs::path& dir, bool exclusive) {
+  fd_ = ::open(dir.empty() ? "." : dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd_ < 0) return;
+  int r;
+  while ((r = ::flock(fd_, exclusive ? LOCK_EX : LOCK_SH)) != 0 && errno == EINTR) {
+  }
+  if (r != 0) {  // no locks on this file system: the journals alone
+    ::close(fd_);
+    fd_ = -1;
+  }
+}
+
+FolderLock::~FolderLock() {
+  if (fd_ >= 0) ::close(fd_);  // releases the lock
+}
+
+namespace {
+
+// The journals of dead writers in `d`, in name order.
+std::vector<fs::path> DeadJournals(const fs::path& d) {
   std::error_code ec;
   std::vector<fs::path> journals;
   for (fs::directory_iterator it(d, ec), end; !ec && it != end; it.increment(ec)) {
@@ -281,7 +300,16 @@ void FinishInterruptedWrites(const fs::path& dir) {
       journals.push_back(it->path());
   }
   std::sort(journals.begin(), journals.end());
-  for (const auto& j : journals) FinishJournal(j);
+  return journals;
+}
+
+}  // namespace
+
+void FinishInterruptedWrites(const fs::path& dir) {
+  const fs::path d = dir.empty() ? fs::path(".") : dir;  // a model in the current folder
+  if (DeadJournals(d).empty()) return;                   // the common case takes no lock
+  const FolderLock lock(d, true);
+  for (const auto& j : DeadJournals(d)) FinishJournal(j);
 }
 
 void WriteTogetherAtomic(const std::vector<FileWriter>& files, bool binary,
@@ -296,7 +324,9 @@ void WriteTogetherAtomic(const std::vector<FileWriter>& files, bool binary,
     outs.push_back(std::make_unique<AtomicFile>(w.path));
     WriteTemporary(*outs.back(), mode, w.write);
   }
-  FinishInterruptedWrites(dir);  // an earlier, killed commit here goes first
+  // Readers (shared lock) wait for the renames; an earlier, killed commit here goes first.
+  const FolderLock lock(dir, true);
+  for (const auto& dead : DeadJournals(dir.empty() ? fs::path(".") : dir)) FinishJournal(dead);
   // The journal makes the renames one step: a kill between two of them leaves it, and the next
   // reader or writer of the folder (FinishInterruptedWrites) completes them.
   Journal j;

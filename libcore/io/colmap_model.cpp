@@ -242,7 +242,8 @@ std::map<uint64_t, Point3D> ReadColmapPoints3DText(std::istream& stream, const s
 }
 
 Reconstruction ReadColmapText(const std::string& dir) {
-  FinishInterruptedWrites(dir);  // a writer killed between its renames: its model, whole
+  FinishInterruptedWrites(dir);       // a writer killed between its renames: its model, whole
+  const FolderLock lock(dir, false);  // a live writer's renames are waited for
   Reconstruction r;
   const std::string cam_file = (fs::path(dir) / "cameras.txt").string();
   const std::string img_file = (fs::path(dir) / "images.txt").string();
@@ -549,6 +550,7 @@ std::map<uint64_t, Point3D> ReadPoints3DBinary(const std::string& path) {
 
 Reconstruction ReadColmapBinary(const std::string& dir) {
   FinishInterruptedWrites(dir);
+  const FolderLock lock(dir, false);  // a live writer's renames are waited for
   Reconstruction r;
   const std::string img_file = (fs::path(dir) / "images.bin").string();
   const std::string pts_file = (fs::path(dir) / "points3D.bin").string();

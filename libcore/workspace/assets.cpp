@@ -59,17 +59,18 @@ Image ReadDepthAtCamera(const Workspace& ws, const std::string& name, const Came
 Image ReadSeenDepthAtCamera(const Workspace& ws, const std::string& name, const Camera& cam) {
   const fs::path p = ws.StereoDepthPath(name), cp = ws.StereoConfidencePath(name);
   FinishInterruptedWrites(ws.StereoDir());  // densify killed between a pair's renames: both new
-  if (!fs::exists(p)) return Image();
-  const Image d = ReadFloatMap(p.string());
-  Image c;
-  if (fs::exists(cp)) {
-    c = ReadFloatMap(cp.string());
-    if (c.width != d.width || c.height != d.height)
-      throw Error(cp.string(), 0,
-                  "confidence map is " + std::to_string(c.width) + "x" + std::to_string(c.height) +
-                      ", its depth map " + std::to_string(d.width) + "x" +
-                      std::to_string(d.height) + " (rerun densify)");
+  Image d, c;
+  {
+    const FolderLock lock(ws.StereoDir(), false);  // a live densify's renames are waited for
+    if (!fs::exists(p)) return Image();
+    d = ReadFloatMap(p.string());
+    if (fs::exists(cp)) c = ReadFloatMap(cp.string());
   }
+  if (!c.empty() && (c.width != d.width || c.height != d.height))
+    throw Error(cp.string(), 0,
+                "confidence map is " + std::to_string(c.width) + "x" + std::to_string(c.height) +
+                    ", its depth map " + std::to_string(d.width) + "x" + std::to_string(d.height) +
+                    " (rerun densify)");
   Image both(d.width, d.height, 2, 32);
   for (size_t i = 0; i < d.pixels(); ++i) {
     both.data[2 * i] = d.data[i * d.channels];

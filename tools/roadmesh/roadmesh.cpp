@@ -153,8 +153,11 @@ std::vector<DepthView> LoadStereoViews(const Workspace& ws, const Reconstruction
     const fs::path d = ws.StereoDepthPath(im->name), c = ws.StereoConfidencePath(im->name);
     if (!fs::exists(d)) continue;
     DepthView v;
-    v.depth = ReadFloatMap(d.string());
-    if (fs::exists(c)) v.confidence = ReadFloatMap(c.string());
+    {
+      const FolderLock lock(ws.StereoDir(), false);  // a live densify's renames are waited for
+      v.depth = ReadFloatMap(d.string());
+      if (fs::exists(c)) v.confidence = ReadFloatMap(c.string());
+    }
     const Camera& cam = rec.cameras.at(im->camera_id);
     cam.RequireUndistorted();
     v.camera = cam.Scaled(uint64_t(v.depth.width), uint64_t(v.depth.height));

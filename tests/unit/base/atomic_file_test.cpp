@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <fstream>
+#include <future>
 #include <sstream>
 
 #include "base/error.h"
@@ -163,6 +164,42 @@ TEST(AtomicFile, KillBetweenRenamesIsFinishedByTheNextReader) {
     EXPECT_EQ(Entries(d), 3u);
     fs::remove_all(d);
   }
+}
+
+// A live writer in the middle of its renames holds the folder's exclusive lock: a reader under a
+// shared FolderLock waits and then reads the new set whole, never the mix the folder holds while
+// the writer is paused; a second commit into the folder waits too, so the two never interleave.
+TEST(AtomicFile, ReadersAndWritersWaitForALiveCommit) {
+  fs::path d = OldSetIn("live");
+  test::PausedCommit writer([&d] { WriteTogetherAtomic(NewSet(d), false, {d / "x.bin"}); });
+  EXPECT_EQ(Slurp(d / "a.txt"), "new a.txt");  // paused between its renames: the mix is there
+  EXPECT_EQ(Slurp(d / "b.txt"), "old b.txt");
+  auto reader = std::async(std::launch::async, [&d] {
+    const FolderLock lock(d, false);
+    return Slurp(d / "a.txt") + "|" + Slurp(d / "b.txt") + "|" + Slurp(d / "c.txt");
+  });
+  auto second = std::async(std::launch::async, [&d] {
+    std::vector<FileWriter> files;
+    for (const char* n : {"a.txt", "b.txt", "c.txt"})
+      files.push_back({d / n, [n](std::ostream& f) { f << "second " << n; }});
+    WriteTogetherAtomic(files, false);
+  });
+  EXPECT_EQ(reader.wait_for(std::chrono::milliseconds(300)), std::future_status::timeout);
+  EXPECT_EQ(second.wait_for(std::chrono::milliseconds(0)), std::future_status::timeout);
+  writer.Resume();
+  // Waited: one whole set, the paused writer's or (had the second commit gone first once the
+  // writer was done) the second's, never a mix.
+  const std::string seen = reader.get();
+  EXPECT_TRUE(seen == "new a.txt|new b.txt|new c.txt" ||
+              seen == "second a.txt|second b.txt|second c.txt")
+      << seen;
+  second.get();
+  ASSERT_TRUE(writer.Finished());
+  for (const char* n : {"a.txt", "b.txt", "c.txt"})  // the second, after the first whole
+    EXPECT_EQ(Slurp(d / n), std::string("second ") + n);
+  EXPECT_EQ(Entries(d), 3u);
+  const FolderLock none(d / "missing", false);  // a folder that does not exist: nothing held
+  fs::remove_all(d);
 }
 
 // A file of the set written again after the dead writer's journal is never overwritten or

@@ -4,7 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <clocale>
+#include <future>
 #include <locale>
 #include <random>
 #include <sstream>
@@ -153,6 +155,20 @@ TEST(ColmapModel, KillBetweenRenamesReadsTheNewModelWhole) {
                             std::filesystem::directory_iterator()),
               3);
   }
+}
+
+// A live writer between its renames: ReadColmapModel waits for it (the folder's lock) and reads
+// the new model whole, never its new cameras beside the old images.
+TEST(ColmapModel, ALiveWritersRenamesAreWaitedFor) {
+  auto d = test::FreshDir("colmap-live");
+  const Reconstruction old_model = RandomModel(4, 6, 5), new_model = RandomModel(3, 5, 6);
+  WriteColmapText(old_model, d.string());
+  test::PausedCommit writer([&] { WriteColmapText(new_model, d.string()); });
+  auto reader = std::async(std::launch::async, [&] { return ReadColmapModel(d.string()); });
+  EXPECT_EQ(reader.wait_for(std::chrono::milliseconds(300)), std::future_status::timeout);
+  writer.Resume();
+  ExpectSame(new_model, reader.get());
+  EXPECT_TRUE(writer.Finished());
 }
 
 TEST(ColmapModel, EmptyPointsLineAndEmptyModel) {

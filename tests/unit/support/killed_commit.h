@@ -1,4 +1,4 @@
-// A commit of WriteTogetherAtomic killed half-way, for the tests of what the next reader does.
+// A commit of WriteTogetherAtomic killed or paused half-way, for the tests of what a reader does.
 #pragma once
 
 #include <signal.h>
@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdlib>
 #include <functional>
 
 #include "base/atomic_file.h"
@@ -33,5 +34,64 @@ inline bool CommitKilledAfterFirstRename(const std::function<void()>& commit) {
   }
   return WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL;
 }
+
+// A commit (a call that ends in WriteTogetherAtomic) in a forked child, paused right after its
+// first rename until Resume(): a live writer in the middle of its renames. The constructor returns
+// once the child is paused there (or has died: Finished() then says false).
+class PausedCommit {
+ public:
+  explicit PausedCommit(const std::function<void()>& commit) {
+    if (pipe(paused_) != 0 || pipe(resume_) != 0) std::abort();
+    pid_ = fork();
+    if (pid_ == 0) {
+      const int paused = paused_[1], resume = resume_[0];
+      SetAfterRenameHookForTest([paused, resume](size_t renamed) {
+        char c = 0;
+        if (renamed == 1 && (write(paused, "p", 1) != 1 || read(resume, &c, 1) != 1)) _exit(3);
+      });
+      try {  // never back into the test runner inside the child
+        commit();
+      } catch (...) {
+        _exit(2);
+      }
+      _exit(0);
+    }
+    close(paused_[1]);
+    close(resume_[0]);
+    char c = 0;
+    while (read(paused_[0], &c, 1) < 0 && errno == EINTR) {
+    }
+  }
+  ~PausedCommit() {
+    Resume();
+    Finished();
+  }
+  PausedCommit(const PausedCommit&) = delete;
+  PausedCommit& operator=(const PausedCommit&) = delete;
+
+  void Resume() {
+    if (resume_[1] < 0) return;
+    if (write(resume_[1], "r", 1) != 1) {
+    }
+    close(resume_[1]);
+    resume_[1] = -1;
+  }
+  // Waits for the child; true when its commit completed (exit 0).
+  bool Finished() {
+    if (pid_ <= 0) return status_ok_;
+    int status = 0;
+    while (waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
+    }
+    pid_ = -1;
+    close(paused_[0]);
+    status_ok_ = WIFEXITED(status) && WEXITSTATUS(status) == 0;
+    return status_ok_;
+  }
+
+ private:
+  int paused_[2] = {-1, -1}, resume_[2] = {-1, -1};
+  pid_t pid_ = -1;
+  bool status_ok_ = false;
+};
 
 }  // namespace mvtm::test
