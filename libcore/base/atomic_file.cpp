@@ -25,8 +25,15 @@ namespace mvtm {
 namespace {
 std::atomic<unsigned> g_counter{0};
 
+// A zombie (killed, not yet reaped by its parent) is not alive: its locks are already released.
 bool ProcessAlive(long pid) {
-  return pid > 0 && (kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM);
+  if (pid <= 0 || (kill(static_cast<pid_t>(pid), 0) != 0 && errno != EPERM)) return false;
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string line;
+  if (!std::getline(stat, line)) return true;  // no /proc: the signal's answer
+  const size_t paren = line.rfind(')');        // "PID (COMM) STATE ...": COMM may hold anything
+  return paren == std::string::npos || paren + 2 >= line.size() ||
+         (line[paren + 2] != 'Z' && line[paren + 2] != 'X');
 }
 
 // Where a process id means something: the host name and the process-id namespace (containers on
@@ -310,6 +317,39 @@ void FinishInterruptedWrites(const fs::path& dir) {
   if (DeadJournals(d).empty()) return;                   // the common case takes no lock
   const FolderLock lock(d, true);
   for (const auto& j : DeadJournals(d)) FinishJournal(j);
+}
+
+namespace {
+
+// A journal in `d` of another live process of this host and namespace. Under a lock held on `d`,
+// its writer is not in its commit (that holds the exclusive lock): it is dying (its locks go
+// before it is a zombie), or its commit failed and it lives on.
+bool OthersJournalHere(const fs::path& d) {
+  std::error_code ec;
+  for (fs::directory_iterator it(d, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string n = it->path().filename().string();
+    if (n.rfind(kJournalPrefix, 0) != 0) continue;
+    const Owner o = OwnerOf(n, std::string(kJournalPrefix).size());
+    if (o.space == ProcessSpace() && o.pid != long(getpid()) && ProcessAlive(o.pid)) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+FolderLock LockForReading(const fs::path& dir) {
+  const fs::path d = dir.empty() ? fs::path(".") : dir;
+  for (int round = 0;; ++round) {
+    FinishInterruptedWrites(d);
+    FolderLock lock(d, false);
+    // The writer this waited for may have been killed between its renames: its journal is now a
+    // dead one's (or, for a moment, a dying one's), and its set half renamed. Finish it and lock
+    // again; a writer whose commit failed and that lives on is waited for half a second at most.
+    if (DeadJournals(d).empty() && (!lock.held() || round >= 100 || !OthersJournalHere(d)))
+      return lock;
+    if (!DeadJournals(d).empty()) continue;
+    usleep(5000);
+  }
 }
 
 void WriteTogetherAtomic(const std::vector<FileWriter>& files, bool binary,

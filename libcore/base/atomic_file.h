@@ -82,37 +82,47 @@ void WriteTogetherAtomic(const std::vector<FileWriter>& files, bool binary,
                          const std::vector<fs::path>& replaced = {});
 
 // A lock on the folder `dir` itself (flock(2) on the folder: no file is made), held for the
-// object's lifetime: shared by readers of files that go together (the COLMAP model readers of
-// libcore/io, densify's depth and confidence), exclusive while WriteTogetherAtomic commits there
-// (from its journal to its last rename) and while FinishInterruptedWrites rolls a journal
-// forward. So a reader waits for a live writer's renames instead of meeting a set half renamed,
-// and two commits into one folder never interleave their renames. Where the folder cannot be
-// opened (it does not exist yet) or its file system has no such locks (NFS gives none on a
-// folder), nothing is held and the journals alone keep their guarantees. Never take a second
-// lock on a folder a thread already holds one on: flock's locks of one process conflict too.
+// object's lifetime: exclusive while WriteTogetherAtomic commits there (from its journal to its
+// last rename) and while FinishInterruptedWrites rolls a journal forward; shared, through
+// LockForReading, by readers of files that go together (the COLMAP model readers of libcore/io,
+// densify's depth and confidence). Where the folder cannot be opened (it does not exist yet) or
+// its file system has no such locks (NFS gives none on a folder), nothing is held and the
+// journals alone keep their guarantees. flock's locks of one process conflict as another's do:
+// never take an exclusive lock (nor call FinishInterruptedWrites or WriteTogetherAtomic) on a
+// folder while holding a lock on it.
 class FolderLock {
  public:
   FolderLock(const fs::path& dir, bool exclusive);
   ~FolderLock();
+  FolderLock(FolderLock&& other) noexcept : fd_(other.fd_) { other.fd_ = -1; }
   FolderLock(const FolderLock&) = delete;
   FolderLock& operator=(const FolderLock&) = delete;
+  FolderLock& operator=(FolderLock&&) = delete;
+  bool held() const { return fd_ >= 0; }
 
  private:
   int fd_ = -1;
 };
 
+// The shared lock a reader of a set in `dir` holds while it reads: the folder's interrupted
+// commits finished first (FinishInterruptedWrites), then the lock taken, and taken again when a
+// writer it waited for died in the middle of its renames (its journal finished first). So the
+// reader sees every set whole: a live writer's renames are waited for, a dead one's completed.
+FolderLock LockForReading(const fs::path& dir);
+
 // Completes the commits of WriteTogetherAtomic that a dead process left in `dir` ("" is the
 // current folder): of this host and namespace when its process is gone; of another when the
-// journal is an hour old. A live writer's journal is left (a reader then waits for its commit under
-// a shared FolderLock), and so is a journal of another host younger than that. Each journal is
-// claimed first (renamed to one of this process), so concurrent finishers never follow one journal
-// twice. The whole new set is put in place; where a file of the set (a final name or one it was to
-// remove) has a modification time after the journal's, another program wrote it since and the stale
-// set is dropped instead (the files as they are: possibly a mix of that program's and the set's).
-// Called first by every COLMAP model reader of libcore/io, by WriteTogetherAtomic in its folder,
-// and by RemoveStaleTemporaries, which also keeps any temporary that a journal of the same owner
-// still names. Throws Error when a step cannot be made (a read-only folder) or a journal is damaged
-// (the error names it: remove it to go on).
+// journal is an hour old. A live writer's journal is left (LockForReading waits for its commit),
+// and so is a journal of another host younger than that. Each journal is claimed first (renamed
+// to one of this process), so concurrent finishers never follow one journal twice. The whole new
+// set is put in place; where a file of the set (a final name or one it was to remove) has a
+// modification time after the journal's, another program wrote it since and the stale set is
+// dropped instead (the files as they are: possibly a mix of that program's and the set's). Called
+// by LockForReading (every COLMAP model reader of libcore/io, densify's pair readers), by
+// WriteTogetherAtomic in its folder (the same roll-forward, under its own lock), and by
+// RemoveStaleTemporaries, which also keeps any temporary that a journal of the same owner still
+// names. Throws Error when a step cannot be made (a read-only folder) or a journal is damaged (the
+// error names it: remove it to go on).
 void FinishInterruptedWrites(const fs::path& dir);
 
 // For a test of a kill between two renames: called after each rename of WriteTogetherAtomic with

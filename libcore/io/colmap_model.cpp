@@ -24,18 +24,27 @@ std::vector<std::string> ColmapModelFileNames(bool binary) {
   return names;
 }
 
+namespace {
+
+bool AllExist(const std::string& dir, bool binary) {
+  bool all = true;
+  for (const auto& f : ColmapModelFileNames(binary)) all = all && fs::exists(fs::path(dir) / f);
+  return all;
+}
+
+// The readers' work under the lock their public callers hold (LockForReading: never taken twice).
+Reconstruction ReadTextLocked(const std::string& dir);
+Reconstruction ReadBinaryLocked(const std::string& dir);
+
+}  // namespace
+
 bool HasColmapModel(const std::string& dir) {
-  FinishInterruptedWrites(dir);
-  for (bool binary : {false, true}) {
-    bool all = true;
-    for (const auto& f : ColmapModelFileNames(binary)) all = all && fs::exists(fs::path(dir) / f);
-    if (all) return true;
-  }
-  return false;
+  const FolderLock lock = LockForReading(dir);
+  return AllExist(dir, false) || AllExist(dir, true);
 }
 
 std::vector<std::string> ColmapModelFiles(const std::string& dir) {
-  FinishInterruptedWrites(dir);
+  const FolderLock lock = LockForReading(dir);
   std::vector<std::string> files;
   for (bool binary : {false, true})
     for (const auto& f : ColmapModelFileNames(binary))
@@ -44,17 +53,18 @@ std::vector<std::string> ColmapModelFiles(const std::string& dir) {
 }
 
 bool IsColmapBinaryModel(const std::string& dir) {
-  FinishInterruptedWrites(dir);
-  bool bin = true;
-  for (const auto& f : ColmapModelFileNames(true)) bin = bin && fs::exists(fs::path(dir) / f);
-  return bin;
+  const FolderLock lock = LockForReading(dir);
+  return AllExist(dir, true);
 }
 
 Reconstruction ReadColmapModel(const std::string& dir) {
-  if (IsColmapBinaryModel(dir)) return ReadColmapBinary(dir);
+  // One lock for the choice of format and the read: a live commit from text to binary (the text
+  // files already removed) is waited for, not taken for a folder without a model.
+  const FolderLock lock = LockForReading(dir);
+  if (AllExist(dir, true)) return ReadBinaryLocked(dir);
   if (!fs::exists(fs::path(dir) / "images.txt"))
     throw Error(dir, 0, "no COLMAP model here (need cameras, images, points3D as .txt or .bin)");
-  return ReadColmapText(dir);
+  return ReadTextLocked(dir);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -242,8 +252,14 @@ std::map<uint64_t, Point3D> ReadColmapPoints3DText(std::istream& stream, const s
 }
 
 Reconstruction ReadColmapText(const std::string& dir) {
-  FinishInterruptedWrites(dir);       // a writer killed between its renames: its model, whole
-  const FolderLock lock(dir, false);  // a live writer's renames are waited for
+  // A writer killed between its renames: its model, whole; a live one's renames waited for.
+  const FolderLock lock = LockForReading(dir);
+  return ReadTextLocked(dir);
+}
+
+namespace {
+
+Reconstruction ReadTextLocked(const std::string& dir) {
   Reconstruction r;
   const std::string cam_file = (fs::path(dir) / "cameras.txt").string();
   const std::string img_file = (fs::path(dir) / "images.txt").string();
@@ -263,6 +279,8 @@ Reconstruction ReadColmapText(const std::string& dir) {
   CheckReferences(r, img_file, pts_file);
   return r;
 }
+
+}  // namespace
 
 namespace {
 // COLMAP normalises quaternions (v / v.norm()) every time it reads or writes them, and that
@@ -549,8 +567,13 @@ std::map<uint64_t, Point3D> ReadPoints3DBinary(const std::string& path) {
 }  // namespace
 
 Reconstruction ReadColmapBinary(const std::string& dir) {
-  FinishInterruptedWrites(dir);
-  const FolderLock lock(dir, false);  // a live writer's renames are waited for
+  const FolderLock lock = LockForReading(dir);
+  return ReadBinaryLocked(dir);
+}
+
+namespace {
+
+Reconstruction ReadBinaryLocked(const std::string& dir) {
   Reconstruction r;
   const std::string img_file = (fs::path(dir) / "images.bin").string();
   const std::string pts_file = (fs::path(dir) / "points3D.bin").string();
@@ -560,6 +583,8 @@ Reconstruction ReadColmapBinary(const std::string& dir) {
   CheckReferences(r, img_file, pts_file);
   return r;
 }
+
+}  // namespace
 
 // As WriteColmapText: the three files renamed into place together.
 void WriteColmapBinary(const Reconstruction& r, const std::string& dir) {

@@ -58,10 +58,10 @@ Image ReadDepthAtCamera(const Workspace& ws, const std::string& name, const Came
 
 Image ReadSeenDepthAtCamera(const Workspace& ws, const std::string& name, const Camera& cam) {
   const fs::path p = ws.StereoDepthPath(name), cp = ws.StereoConfidencePath(name);
-  FinishInterruptedWrites(ws.StereoDir());  // densify killed between a pair's renames: both new
   Image d, c;
   {
-    const FolderLock lock(ws.StereoDir(), false);  // a live densify's renames are waited for
+    // densify killed between a pair's renames: both new; a live one's renames waited for.
+    const FolderLock lock = LockForReading(ws.StereoDir());
     if (!fs::exists(p)) return Image();
     d = ReadFloatMap(p.string());
     if (fs::exists(cp)) c = ReadFloatMap(cp.string());

@@ -148,13 +148,13 @@ void LeaveOutMasked(const Image& mask, Image& depth) {
 // densify's depth maps with the cameras scaled to their size, in name order.
 std::vector<DepthView> LoadStereoViews(const Workspace& ws, const Reconstruction& rec) {
   std::vector<DepthView> views;
-  FinishInterruptedWrites(ws.StereoDir());  // densify killed between a pair's renames: both new
   for (const ImageRecord* im : rec.ImagesByName()) {
     const fs::path d = ws.StereoDepthPath(im->name), c = ws.StereoConfidencePath(im->name);
     if (!fs::exists(d)) continue;
     DepthView v;
     {
-      const FolderLock lock(ws.StereoDir(), false);  // a live densify's renames are waited for
+      // densify killed between a pair's renames: both new; a live one's renames waited for.
+      const FolderLock lock = LockForReading(ws.StereoDir());
       v.depth = ReadFloatMap(d.string());
       if (fs::exists(c)) v.confidence = ReadFloatMap(c.string());
     }

@@ -276,6 +276,7 @@ void LinkImageFiles(const Workspace& src, const Workspace& dst, const std::strin
   LinkFile(src.LabelPath(name), dst.LabelPath(name), rep);
   LinkFile(src.DynamicPath(name), dst.DynamicPath(name), rep);
   LinkFile(src.DepthPath(name), dst.DepthPath(name), rep);
+  const FolderLock lock = LockForReading(src.StereoDir());  // densify's pair, one run's whole
   LinkFile(src.StereoDepthPath(name), dst.StereoDepthPath(name), rep);
   LinkFile(src.StereoConfidencePath(name), dst.StereoConfidencePath(name), rep);
 }
@@ -439,7 +440,6 @@ RoadSplitReport RunRoadSplit(const RoadSplitOptions& o) {
   ws.Require("roadsplit", {WsItem::kSparse});
   const Reconstruction rec = ReadColmapModel(ws.SparseDir().string());
   const std::vector<const ImageRecord*> images = rec.ImagesByName();
-  FinishInterruptedWrites(ws.StereoDir());  // a densify pair half renamed is linked whole
   RoadSplitOptions resolved = o;
   const OptionTable table = DeclareOptions(resolved);
   Ledger ledger(road, "roadsplit", table, RoadInputs(ws, images), ws.root());

@@ -166,17 +166,28 @@ TEST(AtomicFile, KillBetweenRenamesIsFinishedByTheNextReader) {
   }
 }
 
-// A live writer in the middle of its renames holds the folder's exclusive lock: a reader under a
-// shared FolderLock waits and then reads the new set whole, never the mix the folder holds while
-// the writer is paused; a second commit into the folder waits too, so the two never interleave.
+// Resumes a paused writer when the test leaves its scope early (declared after the futures that
+// wait for it, so it runs before their destructors would wait forever).
+struct ResumeOnExit {
+  test::PausedCommit& writer;
+  ~ResumeOnExit() { writer.Resume(); }
+};
+
+std::string SetOf(const fs::path& d) {
+  return Slurp(d / "a.txt") + "|" + Slurp(d / "b.txt") + "|" + Slurp(d / "c.txt");
+}
+
+// A live writer in the middle of its renames holds the folder's exclusive lock: a reader
+// (LockForReading) waits and then reads one set whole, never the mix the folder holds while the
+// writer is paused; a second commit into the folder waits too, so the two never interleave.
 TEST(AtomicFile, ReadersAndWritersWaitForALiveCommit) {
   fs::path d = OldSetIn("live");
   test::PausedCommit writer([&d] { WriteTogetherAtomic(NewSet(d), false, {d / "x.bin"}); });
-  EXPECT_EQ(Slurp(d / "a.txt"), "new a.txt");  // paused between its renames: the mix is there
-  EXPECT_EQ(Slurp(d / "b.txt"), "old b.txt");
+  ASSERT_TRUE(writer.Paused());
+  EXPECT_EQ(SetOf(d), "new a.txt|old b.txt|old c.txt");  // the mix is there meanwhile
   auto reader = std::async(std::launch::async, [&d] {
-    const FolderLock lock(d, false);
-    return Slurp(d / "a.txt") + "|" + Slurp(d / "b.txt") + "|" + Slurp(d / "c.txt");
+    const FolderLock lock = LockForReading(d);
+    return SetOf(d);
   });
   auto second = std::async(std::launch::async, [&d] {
     std::vector<FileWriter> files;
@@ -184,21 +195,40 @@ TEST(AtomicFile, ReadersAndWritersWaitForALiveCommit) {
       files.push_back({d / n, [n](std::ostream& f) { f << "second " << n; }});
     WriteTogetherAtomic(files, false);
   });
+  const ResumeOnExit guard{writer};
   EXPECT_EQ(reader.wait_for(std::chrono::milliseconds(300)), std::future_status::timeout);
   EXPECT_EQ(second.wait_for(std::chrono::milliseconds(0)), std::future_status::timeout);
   writer.Resume();
-  // Waited: one whole set, the paused writer's or (had the second commit gone first once the
-  // writer was done) the second's, never a mix.
+  // One whole set: the paused writer's, or the second's had it gone first once the writer was
+  // done; never a mix.
   const std::string seen = reader.get();
   EXPECT_TRUE(seen == "new a.txt|new b.txt|new c.txt" ||
               seen == "second a.txt|second b.txt|second c.txt")
       << seen;
   second.get();
   ASSERT_TRUE(writer.Finished());
-  for (const char* n : {"a.txt", "b.txt", "c.txt"})  // the second, after the first whole
-    EXPECT_EQ(Slurp(d / n), std::string("second ") + n);
+  EXPECT_EQ(SetOf(d), "second a.txt|second b.txt|second c.txt");  // after the first, whole
   EXPECT_EQ(Entries(d), 3u);
   const FolderLock none(d / "missing", false);  // a folder that does not exist: nothing held
+  fs::remove_all(d);
+}
+
+// The writer a reader waits for is killed between its renames: the reader's lock comes free on a
+// half-renamed set, and LockForReading finishes the dead writer's journal before it reads.
+TEST(AtomicFile, AReaderWaitingForAWriterThatIsKilledReadsItsSetWhole) {
+  fs::path d = OldSetIn("killed-live");
+  test::PausedCommit writer([&d] { WriteTogetherAtomic(NewSet(d), false, {d / "x.bin"}); });
+  ASSERT_TRUE(writer.Paused());
+  auto reader = std::async(std::launch::async, [&d] {
+    const FolderLock lock = LockForReading(d);
+    return SetOf(d);
+  });
+  const ResumeOnExit guard{writer};
+  EXPECT_EQ(reader.wait_for(std::chrono::milliseconds(300)), std::future_status::timeout);
+  writer.Kill();
+  EXPECT_FALSE(writer.Finished());
+  EXPECT_EQ(reader.get(), "new a.txt|new b.txt|new c.txt");
+  EXPECT_EQ(Entries(d), 3u);
   fs::remove_all(d);
 }
 

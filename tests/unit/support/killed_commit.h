@@ -36,14 +36,17 @@ inline bool CommitKilledAfterFirstRename(const std::function<void()>& commit) {
 }
 
 // A commit (a call that ends in WriteTogetherAtomic) in a forked child, paused right after its
-// first rename until Resume(): a live writer in the middle of its renames. The constructor returns
-// once the child is paused there (or has died: Finished() then says false).
+// first rename until Resume() or Kill(): a live writer in the middle of its renames. The
+// constructor returns once the child is paused there, or has died before (Paused() false).
 class PausedCommit {
  public:
   explicit PausedCommit(const std::function<void()>& commit) {
     if (pipe(paused_) != 0 || pipe(resume_) != 0) std::abort();
     pid_ = fork();
+    if (pid_ < 0) std::abort();
     if (pid_ == 0) {
+      close(paused_[0]);  // a dead test runner ends the child's wait (end of file)
+      close(resume_[1]);
       const int paused = paused_[1], resume = resume_[0];
       SetAfterRenameHookForTest([paused, resume](size_t renamed) {
         char c = 0;
@@ -59,8 +62,11 @@ class PausedCommit {
     close(paused_[1]);
     close(resume_[0]);
     char c = 0;
-    while (read(paused_[0], &c, 1) < 0 && errno == EINTR) {
+    ssize_t n;
+    while ((n = read(paused_[0], &c, 1)) < 0 && errno == EINTR) {
     }
+    paused_now_ = n == 1;
+    close(paused_[0]);
   }
   ~PausedCommit() {
     Resume();
@@ -69,29 +75,39 @@ class PausedCommit {
   PausedCommit(const PausedCommit&) = delete;
   PausedCommit& operator=(const PausedCommit&) = delete;
 
+  bool Paused() const { return paused_now_; }
+  // Lets the commit finish (nothing when the child is no longer waiting).
   void Resume() {
     if (resume_[1] < 0) return;
-    if (write(resume_[1], "r", 1) != 1) {
+    if (paused_now_) {
+      void (*old)(int) = signal(SIGPIPE, SIG_IGN);  // a child gone since: no signal to the runner
+      if (write(resume_[1], "r", 1) != 1) {
+      }
+      signal(SIGPIPE, old);
     }
     close(resume_[1]);
     resume_[1] = -1;
   }
+  // A kill -9 of the paused writer, in the middle of its renames.
+  void Kill() {
+    if (pid_ > 0) kill(pid_, SIGKILL);
+  }
   // Waits for the child; true when its commit completed (exit 0).
   bool Finished() {
-    if (pid_ <= 0) return status_ok_;
-    int status = 0;
-    while (waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
+    if (pid_ > 0) {
+      int status = 0;
+      while (waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
+      }
+      pid_ = -1;
+      completed_ = WIFEXITED(status) && WEXITSTATUS(status) == 0;
     }
-    pid_ = -1;
-    close(paused_[0]);
-    status_ok_ = WIFEXITED(status) && WEXITSTATUS(status) == 0;
-    return status_ok_;
+    return completed_;
   }
 
  private:
   int paused_[2] = {-1, -1}, resume_[2] = {-1, -1};
   pid_t pid_ = -1;
-  bool status_ok_ = false;
+  bool paused_now_ = false, completed_ = false;
 };
 
 }  // namespace mvtm::test
