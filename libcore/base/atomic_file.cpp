@@ -281,8 +281,12 @@ void SetAfterRenameHookForTest(std::function<void(size_t)> hook) {
 FolderLock::FolderLock(const fs::path& dir, bool exclusive) {
   fd_ = ::open(dir.empty() ? "." : dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (fd_ < 0) return;
-  int r;
-  while ((r = ::flock(fd_, exclusive ? LOCK_EX : LOCK_SH)) != 0 && errno == EINTR) {
+  const int op = exclusive ? LOCK_EX : LOCK_SH;
+  int r = ::flock(fd_, op | LOCK_NB);
+  if (r != 0 && errno == EWOULDBLOCK) {
+    waited_ = true;
+    while ((r = ::flock(fd_, op)) != 0 && errno == EINTR) {
+    }
   }
   if (r != 0) {  // no locks on this file system: the journals alone
     ::close(fd_);
@@ -339,15 +343,17 @@ bool OthersJournalHere(const fs::path& d) {
 
 FolderLock LockForReading(const fs::path& dir) {
   const fs::path d = dir.empty() ? fs::path(".") : dir;
+  bool waited = false;
   for (int round = 0;; ++round) {
     FinishInterruptedWrites(d);
     FolderLock lock(d, false);
+    waited = waited || lock.waited();
+    if (!waited) return lock;  // no writer was in its commit: the common case, one scan
     // The writer this waited for may have been killed between its renames: its journal is now a
     // dead one's (or, for a moment, a dying one's), and its set half renamed. Finish it and lock
     // again; a writer whose commit failed and that lives on is waited for half a second at most.
-    if (DeadJournals(d).empty() && (!lock.held() || round >= 100 || !OthersJournalHere(d)))
-      return lock;
     if (!DeadJournals(d).empty()) continue;
+    if (round >= 100 || !OthersJournalHere(d)) return lock;
     usleep(5000);
   }
 }

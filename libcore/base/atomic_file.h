@@ -94,14 +94,18 @@ class FolderLock {
  public:
   FolderLock(const fs::path& dir, bool exclusive);
   ~FolderLock();
-  FolderLock(FolderLock&& other) noexcept : fd_(other.fd_) { other.fd_ = -1; }
+  FolderLock(FolderLock&& other) noexcept : fd_(other.fd_), waited_(other.waited_) {
+    other.fd_ = -1;
+  }
   FolderLock(const FolderLock&) = delete;
   FolderLock& operator=(const FolderLock&) = delete;
   FolderLock& operator=(FolderLock&&) = delete;
-  bool held() const { return fd_ >= 0; }
+  // It had to wait for another holder (a writer in its commit, for a shared lock).
+  bool waited() const { return waited_; }
 
  private:
   int fd_ = -1;
+  bool waited_ = false;
 };
 
 // The shared lock a reader of a set in `dir` holds while it reads: the folder's interrupted

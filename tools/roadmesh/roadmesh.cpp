@@ -148,6 +148,7 @@ void LeaveOutMasked(const Image& mask, Image& depth) {
 // densify's depth maps with the cameras scaled to their size, in name order.
 std::vector<DepthView> LoadStereoViews(const Workspace& ws, const Reconstruction& rec) {
   std::vector<DepthView> views;
+  FinishInterruptedWrites(ws.StereoDir());  // a pair a killed densify had removed: back first
   for (const ImageRecord* im : rec.ImagesByName()) {
     const fs::path d = ws.StereoDepthPath(im->name), c = ws.StereoConfidencePath(im->name);
     if (!fs::exists(d)) continue;

@@ -440,6 +440,7 @@ RoadSplitReport RunRoadSplit(const RoadSplitOptions& o) {
   ws.Require("roadsplit", {WsItem::kSparse});
   const Reconstruction rec = ReadColmapModel(ws.SparseDir().string());
   const std::vector<const ImageRecord*> images = rec.ImagesByName();
+  FinishInterruptedWrites(ws.StereoDir());  // the inputs judged as the links will be
   RoadSplitOptions resolved = o;
   const OptionTable table = DeclareOptions(resolved);
   Ledger ledger(road, "roadsplit", table, RoadInputs(ws, images), ws.root());
