@@ -25,6 +25,9 @@ namespace mvtm {
 namespace {
 std::atomic<unsigned> g_counter{0};
 
+// The folder a path names, "" being the current one.
+fs::path FolderOrCurrent(const fs::path& dir) { return dir.empty() ? fs::path(".") : dir; }
+
 // A zombie (killed, not yet reaped by its parent) is not alive: its locks are already released.
 bool ProcessAlive(long pid) {
   if (pid <= 0 || (kill(static_cast<pid_t>(pid), 0) != 0 && errno != EPERM)) return false;
@@ -279,7 +282,7 @@ void SetAfterRenameHookForTest(std::function<void(size_t)> hook) {
 }
 
 FolderLock::FolderLock(const fs::path& dir, bool exclusive) {
-  fd_ = ::open(dir.empty() ? "." : dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  fd_ = ::open(FolderOrCurrent(dir).c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (fd_ < 0) return;
   const int op = exclusive ? LOCK_EX : LOCK_SH;
   int r = ::flock(fd_, op | LOCK_NB);
@@ -300,25 +303,32 @@ FolderLock::~FolderLock() {
 
 namespace {
 
-// The journals of dead writers in `d`, in name order.
-std::vector<fs::path> DeadJournals(const fs::path& d) {
+// The commit journals in `d` with their writers.
+std::vector<std::pair<fs::directory_entry, Owner>> Journals(const fs::path& d) {
   std::error_code ec;
-  std::vector<fs::path> journals;
+  std::vector<std::pair<fs::directory_entry, Owner>> journals;
   for (fs::directory_iterator it(d, ec), end; !ec && it != end; it.increment(ec)) {
     const std::string n = it->path().filename().string();
-    if (n.rfind(kJournalPrefix, 0) != 0) continue;
-    if (OwnerGone(*it, OwnerOf(n, std::string(kJournalPrefix).size())))
-      journals.push_back(it->path());
+    if (n.rfind(kJournalPrefix, 0) == 0)
+      journals.emplace_back(*it, OwnerOf(n, std::string(kJournalPrefix).size()));
   }
-  std::sort(journals.begin(), journals.end());
   return journals;
+}
+
+// The journals of dead writers in `d`, in name order.
+std::vector<fs::path> DeadJournals(const fs::path& d) {
+  std::vector<fs::path> dead;
+  for (const auto& [e, owner] : Journals(d))
+    if (OwnerGone(e, owner)) dead.push_back(e.path());
+  std::sort(dead.begin(), dead.end());
+  return dead;
 }
 
 }  // namespace
 
 void FinishInterruptedWrites(const fs::path& dir) {
-  const fs::path d = dir.empty() ? fs::path(".") : dir;  // a model in the current folder
-  if (DeadJournals(d).empty()) return;                   // the common case takes no lock
+  const fs::path d = FolderOrCurrent(dir);  // a model in the current folder
+  if (DeadJournals(d).empty()) return;      // the common case takes no lock
   const FolderLock lock(d, true);
   for (const auto& j : DeadJournals(d)) FinishJournal(j);
 }
@@ -329,20 +339,15 @@ namespace {
 // its writer is not in its commit (that holds the exclusive lock): it is dying (its locks go
 // before it is a zombie), or its commit failed and it lives on.
 bool OthersJournalHere(const fs::path& d) {
-  std::error_code ec;
-  for (fs::directory_iterator it(d, ec), end; !ec && it != end; it.increment(ec)) {
-    const std::string n = it->path().filename().string();
-    if (n.rfind(kJournalPrefix, 0) != 0) continue;
-    const Owner o = OwnerOf(n, std::string(kJournalPrefix).size());
+  for (const auto& [e, o] : Journals(d))
     if (o.space == ProcessSpace() && o.pid != long(getpid()) && ProcessAlive(o.pid)) return true;
-  }
   return false;
 }
 
 }  // namespace
 
 FolderLock LockForReading(const fs::path& dir) {
-  const fs::path d = dir.empty() ? fs::path(".") : dir;
+  const fs::path d = FolderOrCurrent(dir);
   bool waited = false;
   for (int round = 0;; ++round) {
     FinishInterruptedWrites(d);
@@ -372,7 +377,7 @@ void WriteTogetherAtomic(const std::vector<FileWriter>& files, bool binary,
   }
   // Readers (shared lock) wait for the renames; an earlier, killed commit here goes first.
   const FolderLock lock(dir, true);
-  for (const auto& dead : DeadJournals(dir.empty() ? fs::path(".") : dir)) FinishJournal(dead);
+  for (const auto& dead : DeadJournals(FolderOrCurrent(dir))) FinishJournal(dead);
   // The journal makes the renames one step: a kill between two of them leaves it, and the next
   // reader or writer of the folder (FinishInterruptedWrites) completes them.
   Journal j;
@@ -468,11 +473,7 @@ void RemoveStaleTemporaries(const fs::path& dir) {
   // not an hour old, or one whose writer died after it looked): they stay for it. Gathered after
   // their owners were found gone, so no journal of theirs can appear later.
   std::set<std::string> journal_owners;
-  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
-    const std::string n = it->path().filename().string();
-    if (n.rfind(kJournalPrefix, 0) == 0)
-      journal_owners.insert(OwnerOf(n, std::string(kJournalPrefix).size()).Key());
-  }
+  for (const auto& [e, owner] : Journals(dir)) journal_owners.insert(owner.Key());
   for (const auto& [path, owner] : dead)
     if (!journal_owners.count(owner)) fs::remove_all(path, ec);
 }

@@ -48,8 +48,8 @@ void ForEachColmapImageText(std::istream& in, const std::string& name,
 // (ReadColmapModel prefers binary). A kill while the files are written leaves the model that was
 // there; a kill between the renames leaves a journal, and the next reader or writer of DIR puts
 // the whole new model in place (the readers below, HasColmapModel, IsColmapBinaryModel and
-// ColmapModelFiles too, call FinishInterruptedWrites first, and throw its Errors). The readers
-// hold DIR's shared FolderLock while they read, so a live writer's renames are waited for.
+// ColmapModelFiles too, look under LockForReading: interrupted commits finished first, its Errors
+// thrown, a live writer's renames waited for).
 void WriteColmapText(const Reconstruction& r, const std::string& dir);
 void WriteColmapBinary(const Reconstruction& r, const std::string& dir);
 // The text files' parts, for a writer that makes a model too large to hold piece by piece: the

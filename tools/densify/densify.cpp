@@ -184,7 +184,7 @@ double DensifyOne(const DensifyOptions& o, const Workspace& ws, const DenseScene
   const fs::path depth = ws.StereoDepthPath(s.images[i]->name),
                  confidence = ws.StereoConfidencePath(s.images[i]->name);
   // One step: a kill between the two renames never leaves a new map beside an old confidence
-  // for a reader (each calls FinishInterruptedWrites on stereo/ first).
+  // for a reader (each reads the pair under LockForReading of stereo/).
   WriteImagesTogether({{depth.string(), &dm.depth}, {confidence.string(), &dm.confidence}});
   ledger.Done(depth, job.in);
   ledger.Done(confidence, job.in);
