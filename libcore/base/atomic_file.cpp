@@ -64,8 +64,31 @@ const std::string& ProcessSpace() {
 
 void CreateFolder(const fs::path& dir) {
   std::error_code ec;
+  if (dir.empty() || fs::is_directory(dir, ec)) return;
+  fs::path first = dir;  // the outermost folder this call creates
+  while (first.has_parent_path() && first.parent_path() != first &&
+         !fs::exists(first.parent_path(), ec))
+    first = first.parent_path();
   fs::create_directories(dir, ec);
   if (ec) throw Error(dir.string(), 0, "cannot create folder: " + ec.message());
+  // Each new folder's entry on the disk (in its parent), so the files synced in it stay found.
+  for (fs::path d = dir;; d = d.parent_path()) {
+    SyncFolder(d.parent_path());
+    if (d == first || !d.has_parent_path()) break;
+  }
+}
+
+void SyncTree(const fs::path& root) {
+  std::error_code ec;
+  for (fs::recursive_directory_iterator it(root, ec), end; !ec && it != end; it.increment(ec)) {
+    if (it->is_directory(ec))
+      SyncFolder(it->path());
+    else if (it->is_regular_file(ec))
+      SyncFile(it->path(), it->path());
+  }
+  if (ec) throw Error(root.string(), 0, "cannot list to sync: " + ec.message());
+  SyncFolder(root);
+  SyncFolder(root.parent_path());
 }
 
 bool LinkOrCopy(const fs::path& from, const fs::path& to, std::error_code& ec) {
@@ -96,10 +119,48 @@ AtomicFile::~AtomicFile() {
 }
 
 void AtomicFile::Commit() {
+  Sync();
+  Rename();
+  SyncFolder(final_.parent_path());
+}
+
+void AtomicFile::Sync() const { SyncFile(temp_, final_); }
+
+void AtomicFile::Rename() {
   std::error_code ec;
   fs::rename(temp_, final_, ec);
   if (ec) throw Error(final_.string(), 0, "cannot write: " + ec.message());
   committed_ = true;
+}
+
+namespace {
+// fsync(2) or fdatasync(2) of `fd`, interrupted calls repeated: 0, or the errno of the failure.
+// EINVAL (a file that cannot be synced: a pipe, a file system without the call) counts as done.
+int SyncDescriptor(int fd, bool data_only) {
+  int r;
+  while ((r = data_only ? ::fdatasync(fd) : ::fsync(fd)) != 0 && errno == EINTR) {
+  }
+  return r == 0 || errno == EINVAL ? 0 : errno;
+}
+}  // namespace
+
+void SyncFile(const fs::path& path, const fs::path& named) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0)
+    throw Error(named.string(), 0, std::string("cannot open to sync: ") + strerror(errno));
+  const int err = SyncDescriptor(fd, true);
+  ::close(fd);
+  if (err != 0) throw WriteFailed(named, err);
+}
+
+void SyncFolder(const fs::path& dir) {
+  const fs::path d = FolderOrCurrent(dir);
+  const int fd = ::open(d.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return;  // not readable (a folder of write and search rights only): not waited for
+  const int err = SyncDescriptor(fd, false);
+  ::close(fd);
+  if (err != 0)
+    throw Error(d.string(), 0, std::string("cannot write the folder's entries: ") + strerror(err));
 }
 
 Error WriteFailed(const fs::path& path, int err) {
@@ -269,6 +330,7 @@ void FinishJournal(const fs::path& path) {
     }
   }
   for (const auto& [from, to] : j.renames) fs::remove(dir / from, ec);  // what is left is stale
+  SyncFolder(dir);  // the set on the disk before the journal that completes it goes
   std::error_code e;
   fs::remove(claimed, e);
   if (e)
@@ -375,6 +437,7 @@ void WriteTogetherAtomic(const std::vector<FileWriter>& files, bool binary,
     outs.push_back(std::make_unique<AtomicFile>(w.path));
     WriteTemporary(*outs.back(), mode, w.write);
   }
+  for (const auto& out : outs) out->Sync();  // on the disk before the journal names them
   // Readers (shared lock) wait for the renames; an earlier, killed commit here goes first.
   const FolderLock lock(dir, true);
   for (const auto& dead : DeadJournals(FolderOrCurrent(dir))) FinishJournal(dead);
@@ -391,7 +454,7 @@ void WriteTogetherAtomic(const std::vector<FileWriter>& files, bool binary,
     j.renames.emplace_back(out->temp_path().filename().string(),
                            out->final_path().filename().string());
   const fs::path journal = NewJournalPath(dir);  // "" / NAME: the current folder's
-  WriteJournal(journal, j);
+  WriteJournal(journal, j);  // an atomic write: its data and its entry on the disk
   size_t renamed = 0;
   try {
     for (const auto& n : j.removals) {
@@ -401,9 +464,10 @@ void WriteTogetherAtomic(const std::vector<FileWriter>& files, bool binary,
         throw Error((dir / n).string(), 0, "cannot remove the file it replaces: " + ec.message());
     }
     for (auto& out : outs) {
-      out->Commit();
+      out->Rename();
       if (AfterRenameHook()) AfterRenameHook()(++renamed);
     }
+    SyncFolder(dir);  // the set on the disk before its journal goes
   } catch (...) {
     // The journal names the temporaries not yet renamed: they stay, so that the set is finished
     // once this process is gone (or the error is the next reader's to see).

@@ -3,10 +3,12 @@
 // Every output of every tool is written to a temporary name in the destination folder
 // (".STEM.tmp-PID-N@SPACE.EXT": hidden, unique per process and file, SPACE naming the host and
 // process-id namespace the PID belongs to, same extension so format-by-extension writers still
-// work) and
-// renamed over the final name only once it is complete, so a crash or `kill -9` never leaves a
-// half-written output. A re-run skips outputs that exist and are newer than all their inputs
-// (unless the tool is given --force).
+// work) and renamed over the final name only once it is complete, so a crash or `kill -9` never
+// leaves a half-written output. The temporary's data reach the disk (fdatasync) before the
+// rename, and the folder's entry (fsync of the folder) after it, so a power loss or a kernel
+// crash leaves the old file or the new one, whole, and a file a tool reported written stays
+// written. A re-run skips outputs that exist and are newer than all their inputs (unless the
+// tool is given --force).
 //
 // Thread safety: distinct AtomicFile objects may be used from different threads.
 #pragma once
@@ -35,8 +37,15 @@ class AtomicFile {
 
   const fs::path& temp_path() const { return temp_; }
   const fs::path& final_path() const { return final_; }
-  // Renames the temporary file over the final path (atomic on POSIX within one filesystem).
+  // Renames the temporary file over the final path (atomic on POSIX within one filesystem), its
+  // data on the disk first and the folder's new entry after (SyncFile, then SyncFolder): Sync(),
+  // Rename(), SyncFolder(final's folder). Throws Error naming the final path when a step fails.
   void Commit();
+  // The temporary's data on the disk (SyncFile); WriteTogetherAtomic syncs every file of a set,
+  // then renames them all (Rename) and syncs their folder once.
+  void Sync() const;
+  // Renames the temporary over the final path, nothing synced.
+  void Rename();
   // Keeps the temporary file (a commit journal names it: FinishInterruptedWrites renames it).
   void Release() { committed_ = true; }
 
@@ -73,7 +82,10 @@ int StreamFailure(const std::ios& f, Op&& op) {
 // (a full disk) leaves every final file as it was, never a new file beside an old one. The
 // removals and renames are one step: a journal (".mvtm-journal-PID-N@SPACE" in the folder) lists
 // them before the first is made and goes after the last, so a writer killed between two of them
-// leaves the journal, and FinishInterruptedWrites completes its set.
+// leaves the journal, and FinishInterruptedWrites completes its set. On the disk, the order is the
+// same: every temporary's data, then the journal (its data and entry), then the removals and
+// renames (the folder synced), and only then is the journal removed, so after a power loss the
+// folder holds the old set, the new one, or the journal that completes it.
 struct FileWriter {
   fs::path path;
   std::function<void(std::ostream&)> write;
@@ -137,7 +149,22 @@ void SetAfterRenameHookForTest(std::function<void(size_t)> hook);
 // close() are checked, so a full disk is an Error and nothing is renamed into place.
 void WriteBytesAtomic(const fs::path& path, const void* data, size_t size);
 
-// Creates `dir` and its parents; throws Error(dir, "cannot create folder: reason").
+// Waits until the data of the file `path` are on the disk (fdatasync(2)). Throws
+// WriteFailed(named, errno) when they cannot be written there (EIO, ENOSPC on a thin or network
+// file system), or Error when the file cannot be opened. A file system that keeps no such promise
+// (EINVAL: a pipe, some special file systems) is not waited for.
+void SyncFile(const fs::path& path, const fs::path& named);
+// Waits until the folder `dir`'s entries (the renames and removals made in it) are on the disk
+// (fsync(2) of the folder; "" is the current one). Throws Error naming the folder when they
+// cannot be written; a folder that cannot be opened for reading, or a file system that cannot sync
+// folders (EINVAL), is not waited for.
+void SyncFolder(const fs::path& dir);
+// Every file (SyncFile) and folder (SyncFolder) under `root`, `root` itself and its entry in its
+// parent on the disk: a folder built whole under a temporary name (roadsplit's road) before and
+// after it is renamed into place.
+void SyncTree(const fs::path& root);
+// Creates `dir` and its parents, each new folder's entry synced (SyncFolder of its parent); throws
+// Error(dir, "cannot create folder: reason").
 void CreateFolder(const fs::path& dir);
 
 // Hard-links the file `from` to the new name `to`, or copies it where a link fails (another file

@@ -35,6 +35,7 @@ bool AllExist(const std::string& dir, bool binary) {
 // The readers' work under the lock their public callers hold (LockForReading: never taken twice).
 Reconstruction ReadTextLocked(const std::string& dir);
 Reconstruction ReadBinaryLocked(const std::string& dir);
+std::map<uint32_t, ImageRecord> ReadImagesBinary(const std::string& path);
 
 }  // namespace
 
@@ -65,6 +66,23 @@ Reconstruction ReadColmapModel(const std::string& dir) {
   if (!fs::exists(fs::path(dir) / "images.txt"))
     throw Error(dir, 0, "no COLMAP model here (need cameras, images, points3D as .txt or .bin)");
   return ReadTextLocked(dir);
+}
+
+std::vector<std::string> ReadColmapImageNames(const std::string& dir) {
+  const FolderLock lock = LockForReading(dir);  // the format's choice and the read: one lock
+  std::vector<std::string> names;
+  if (AllExist(dir, true)) {
+    for (const auto& [id, im] : ReadImagesBinary((fs::path(dir) / "images.bin").string()))
+      names.push_back(im.name);
+    return names;
+  }
+  const fs::path text = fs::path(dir) / "images.txt";
+  std::ifstream in(text, std::ios::binary);
+  if (!in)
+    throw Error(dir, 0, "no COLMAP model here (need cameras, images, points3D as .txt or .bin)");
+  ForEachColmapImageText(in, text.string(),
+                         [&](ImageRecord&& r, long) { names.push_back(std::move(r.name)); });
+  return names;
 }
 
 // ---------------------------------------------------------------------------------------------

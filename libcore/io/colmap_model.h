@@ -62,6 +62,9 @@ void WriteColmapImagesHeader(std::ostream& f, size_t images, size_t observations
 void WriteColmapImageText(std::ostream& f, uint32_t id, const ImageRecord& im);
 void WriteColmapPointsHeader(std::ostream& f, size_t points, size_t track_sum);
 void WriteColmapPointText(std::ostream& f, uint64_t id, const Point3D& p);
+// The image names of the model ReadColmapModel would read, from its images file alone (not
+// checked against the other two), in file order (binary: by id), under one LockForReading.
+std::vector<std::string> ReadColmapImageNames(const std::string& dir);
 // True when DIR's model is read as binary: all three .bin files exist (ReadColmapModel's rule).
 bool IsColmapBinaryModel(const std::string& dir);
 // True when DIR holds a model (text or binary).

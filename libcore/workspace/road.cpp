@@ -18,17 +18,8 @@ namespace {
 
 // The image names of a workspace's model.
 std::set<std::string> ModelImageNames(const fs::path& sparse) {
-  std::set<std::string> names;
-  // The model ReadColmapModel reads (text: images.txt alone is read).
-  const fs::path text = sparse / "images.txt";
-  if (!IsColmapBinaryModel(sparse.string()) && fs::exists(text)) {
-    std::ifstream in(text, std::ios::binary);
-    if (!in) throw Error(text.string(), 0, "cannot open");
-    ForEachColmapImageText(in, text.string(), [&](ImageRecord&& r, long) { names.insert(r.name); });
-  } else {
-    for (const auto& [id, im] : ReadColmapModel(sparse.string()).images) names.insert(im.name);
-  }
-  return names;
+  const std::vector<std::string> names = ReadColmapImageNames(sparse.string());
+  return {names.begin(), names.end()};
 }
 
 void ReadRecord(RoadFragment& f) {

@@ -474,8 +474,10 @@ RoadSplitReport RunRoadSplit(const RoadSplitOptions& o) {
   try {
     fs::create_directories(tmp);
     WriteFragments(o, ws, rec, images, tmp, p, rep);
+    SyncTree(tmp);  // linked and copied files too: all on the disk before the rename
     if (fs::exists(road)) fs::remove_all(road);
     fs::rename(tmp, road);
+    SyncFolder(parent);
     ledger.Done(graph);
     ledger.Write({{"fragments", rep.fragments}, {"junctions", rep.junctions}});
   } catch (...) {

@@ -361,10 +361,12 @@ class Recorder {
     writer_.Finish();
     for (Log* l : logs()) Write(*l, [](std::ofstream& f) { f.close(); });
     for (Log* l : logs()) {
+      SyncFile(Partial(l->name), dir_ / l->name);  // on the disk before the final name shows it
       std::error_code ec;
       fs::rename(Partial(l->name), dir_ / l->name, ec);
       if (ec) throw Error((dir_ / l->name).string(), 0, "cannot write: " + ec.message());
     }
+    SyncFolder(dir_);
     WriteTextAtomic(dir_ / "summary.json", [&](std::ostream& f) { f << summary.dump(2) << '\n'; });
   }
 

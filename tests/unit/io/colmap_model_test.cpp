@@ -171,6 +171,32 @@ TEST(ColmapModel, ALiveWritersRenamesAreWaitedFor) {
   EXPECT_TRUE(writer.Finished());
 }
 
+// The names of a model's images, read from its images file alone: the same in either format as
+// the model's, and a live commit from text to binary (the text files removed first) is waited
+// for, not taken for a folder without a model.
+TEST(ColmapModel, ImageNamesWaitForALiveCommitOfTheOtherFormat) {
+  auto d = test::FreshDir("colmap-names");
+  const Reconstruction old_model = RandomModel(4, 6, 5), new_model = RandomModel(3, 5, 7);
+  const auto names = [](const Reconstruction& r) {
+    std::vector<std::string> n;
+    for (const auto& [id, im] : r.images) n.push_back(im.name);
+    return n;
+  };
+  WriteColmapBinary(new_model, d.string());
+  EXPECT_EQ(ReadColmapImageNames(d.string()), names(new_model));
+  WriteColmapText(old_model, d.string());
+  EXPECT_EQ(ReadColmapImageNames(d.string()), names(old_model));
+  test::PausedCommit writer([&] { WriteColmapBinary(new_model, d.string()); });
+  auto reader = std::async(std::launch::async, [&] { return ReadColmapImageNames(d.string()); });
+  EXPECT_EQ(reader.wait_for(std::chrono::milliseconds(300)), std::future_status::timeout);
+  writer.Resume();
+  EXPECT_EQ(reader.get(), names(new_model));
+  EXPECT_TRUE(writer.Finished());
+  std::filesystem::remove(d / "images.bin");
+  std::filesystem::remove(d / "cameras.bin");
+  EXPECT_THROW(ReadColmapImageNames(d.string()), Error);
+}
+
 TEST(ColmapModel, EmptyPointsLineAndEmptyModel) {
   auto d = test::FreshDir("colmap-empty");
   Reconstruction r = RandomModel(3, 0, 3);
