@@ -17,6 +17,7 @@
 #include <locale>
 #include <memory>
 #include <set>
+#include <utility>
 
 #include "base/error.h"
 
@@ -39,17 +40,28 @@ bool ProcessAlive(long pid) {
          (line[paren + 2] != 'Z' && line[paren + 2] != 'X');
 }
 
-// Where a process id means something: the host name and the process-id namespace (containers on
-// one host share its name, not their pid namespace), as letters, digits and '-' only.
+// Where a process id means something: the host name, the process-id namespace (containers on
+// one host share its name, not their pid namespace) and the boot (pids start again after a
+// reboot: a journal a power loss left must not be taken for the live process now holding its
+// pid), as letters, digits and '-' only, joined by '~': HOST~NS~BOOT.
 std::string MakeProcessSpace() {
   char host[256] = {};
   if (gethostname(host, sizeof host - 1) != 0) host[0] = 0;
   std::string out;
   for (const char* c = host; *c && out.size() < 64; ++c)
     out += std::isalnum(static_cast<unsigned char>(*c)) || *c == '-' ? *c : '-';
+  if (out.empty()) out = "local";
   struct stat st {};
-  if (stat("/proc/self/ns/pid", &st) == 0) out += "~" + std::to_string(st.st_ino);
-  return out.empty() ? "local" : out;
+  out += "~" + std::to_string(stat("/proc/self/ns/pid", &st) == 0 ? st.st_ino : 0);
+  std::ifstream boot_id("/proc/sys/kernel/random/boot_id");
+  std::string boot;
+  if (std::getline(boot_id, boot)) {
+    boot.erase(std::remove_if(boot.begin(), boot.end(),
+                              [](char c) { return !std::isxdigit(static_cast<unsigned char>(c)); }),
+               boot.end());
+    if (!boot.empty()) out += "~" + boot.substr(0, 12);
+  }
+  return out;
 }
 
 // A temporary of another host or namespace is judged by its age only: nothing mvtm writes takes
@@ -78,12 +90,42 @@ void CreateFolder(const fs::path& dir) {
   }
 }
 
+void ReplaceFolder(const fs::path& built, const fs::path& dest) {
+  SyncTree(built);
+  const fs::path parent = FolderOrCurrent(dest.parent_path());
+  std::error_code ec;
+  if (fs::exists(fs::symlink_status(dest, ec))) {
+    // One step: the old folder takes the built one's name, so there is always a whole DEST.
+    if (::renameat2(AT_FDCWD, built.c_str(), AT_FDCWD, dest.c_str(), RENAME_EXCHANGE) == 0) {
+      SyncFolder(parent);
+      fs::remove_all(built, ec);
+      return;
+    }
+    if (errno != EINVAL && errno != ENOSYS && errno != ENOTSUP)
+      throw Error(dest.string(), 0, std::string("cannot replace: ") + strerror(errno));
+    // No exchange on this file system: the old folder aside first (a stale temporary if killed).
+    const fs::path aside = TemporaryPathFor(dest);
+    fs::rename(dest, aside, ec);
+    if (ec) throw Error(dest.string(), 0, "cannot replace: " + ec.message());
+    fs::rename(built, dest, ec);
+    if (ec) throw Error(dest.string(), 0, "cannot write: " + ec.message());
+    SyncFolder(parent);
+    fs::remove_all(aside, ec);
+    return;
+  }
+  fs::rename(built, dest, ec);
+  if (ec) throw Error(dest.string(), 0, "cannot write: " + ec.message());
+  SyncFolder(parent);
+}
+
 void SyncTree(const fs::path& root) {
   std::error_code ec;
   for (fs::recursive_directory_iterator it(root, ec), end; !ec && it != end; it.increment(ec)) {
-    if (it->is_directory(ec))
+    const fs::file_status st = it->symlink_status(ec);  // a link's target is not the tree's
+    if (ec) break;
+    if (fs::is_directory(st))
       SyncFolder(it->path());
-    else if (it->is_regular_file(ec))
+    else if (fs::is_regular_file(st))
       SyncFile(it->path(), it->path());
   }
   if (ec) throw Error(root.string(), 0, "cannot list to sync: " + ec.message());
@@ -135,17 +177,20 @@ void AtomicFile::Rename() {
 
 namespace {
 // fsync(2) or fdatasync(2) of `fd`, interrupted calls repeated: 0, or the errno of the failure.
-// EINVAL (a file that cannot be synced: a pipe, a file system without the call) counts as done.
+// EINVAL, EROFS, ENOTSUP (a file that cannot be synced: a pipe, a file system without the call,
+// a FUSE or network one that does not sync folders) count as done.
 int SyncDescriptor(int fd, bool data_only) {
   int r;
   while ((r = data_only ? ::fdatasync(fd) : ::fsync(fd)) != 0 && errno == EINTR) {
   }
-  return r == 0 || errno == EINVAL ? 0 : errno;
+  const bool cannot = errno == EINVAL || errno == EROFS || errno == ENOTSUP || errno == EOPNOTSUPP;
+  return r == 0 || cannot ? 0 : errno;
 }
 }  // namespace
 
 void SyncFile(const fs::path& path, const fs::path& named) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0 && errno == EACCES) fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);  // umask 0277
   if (fd < 0)
     throw Error(named.string(), 0, std::string("cannot open to sync: ") + strerror(errno));
   const int err = SyncDescriptor(fd, true);
@@ -156,7 +201,8 @@ void SyncFile(const fs::path& path, const fs::path& named) {
 void SyncFolder(const fs::path& dir) {
   const fs::path d = FolderOrCurrent(dir);
   const int fd = ::open(d.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (fd < 0) return;  // not readable (a folder of write and search rights only): not waited for
+  if (fd < 0 && (errno == EACCES || errno == EPERM)) return;  // write and search rights only
+  if (fd < 0) throw Error(d.string(), 0, std::string("cannot open to sync: ") + strerror(errno));
   const int err = SyncDescriptor(fd, false);
   ::close(fd);
   if (err != 0)
@@ -266,10 +312,32 @@ Owner OwnerOf(const std::string& n, size_t pid_at) {
           at == std::string::npos ? ProcessSpace() : n.substr(at + 1, n.find('.', at) - at - 1)};
 }
 
-// That owner is gone: this host's process PID is not alive, or (another host's or namespace's)
-// the entry is an hour old.
+// Where an owner's SPACE is: this boot of this host and namespace (its pid means a process here;
+// a SPACE of older mvtm, HOST or HOST~NS without the boot, is taken as this boot's), an earlier
+// boot of them (its writer is gone whatever now holds its pid), or elsewhere.
+enum class Where { kHere, kEarlierBoot, kElsewhere };
+Where WhereOf(const std::string& space) {
+  const std::string& here = ProcessSpace();
+  if (space == here) return Where::kHere;
+  const auto host_ns = [](const std::string& sp) {
+    const size_t a = sp.find('~');
+    const size_t b = a == std::string::npos ? a : sp.find('~', a + 1);
+    return std::make_pair(sp.substr(0, b), b != std::string::npos);
+  };
+  const std::string mine = host_ns(here).first;
+  const auto [theirs, has_boot] = host_ns(space);
+  if (theirs == mine) return has_boot ? Where::kEarlierBoot : Where::kHere;
+  if (!has_boot && space.find('~') == std::string::npos && mine.rfind(space + "~", 0) == 0)
+    return Where::kHere;  // HOST alone: older mvtm without the namespace
+  return Where::kElsewhere;
+}
+
+// That owner is gone: this boot's process PID (of this host and namespace) is not alive, the
+// entry was written in an earlier boot, or (another host's or namespace's) it is an hour old.
 bool OwnerGone(const fs::directory_entry& e, const Owner& owner) {
-  if (owner.space == ProcessSpace()) return !ProcessAlive(owner.pid);
+  const Where where = WhereOf(owner.space);
+  if (where == Where::kHere) return !ProcessAlive(owner.pid);
+  if (where == Where::kEarlierBoot) return true;
   std::error_code ec;
   const auto written = e.last_write_time(ec);
   return !ec && fs::file_time_type::clock::now() - written > kForeignTemporaryAge;
@@ -402,7 +470,8 @@ namespace {
 // before it is a zombie), or its commit failed and it lives on.
 bool OthersJournalHere(const fs::path& d) {
   for (const auto& [e, o] : Journals(d))
-    if (o.space == ProcessSpace() && o.pid != long(getpid()) && ProcessAlive(o.pid)) return true;
+    if (WhereOf(o.space) == Where::kHere && o.pid != long(getpid()) && ProcessAlive(o.pid))
+      return true;
   return false;
 }
 

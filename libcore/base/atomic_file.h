@@ -163,6 +163,12 @@ void SyncFolder(const fs::path& dir);
 // parent on the disk: a folder built whole under a temporary name (roadsplit's road) before and
 // after it is renamed into place.
 void SyncTree(const fs::path& root);
+// Puts the folder `built` (made whole under a temporary name beside `dest`) in place of `dest`:
+// its tree synced (SyncTree), then exchanged with an existing `dest` in one step
+// (renameat2 RENAME_EXCHANGE; where the file system has none, the old one renamed aside first),
+// the folder synced, the old tree removed. A kill or power loss leaves the old `dest` or the new
+// one, whole, and at worst the other under a temporary name (RemoveStaleTemporaries').
+void ReplaceFolder(const fs::path& built, const fs::path& dest);
 // Creates `dir` and its parents, each new folder's entry synced (SyncFolder of its parent); throws
 // Error(dir, "cannot create folder: reason").
 void CreateFolder(const fs::path& dir);

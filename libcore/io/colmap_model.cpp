@@ -77,9 +77,10 @@ std::vector<std::string> ReadColmapImageNames(const std::string& dir) {
     return names;
   }
   const fs::path text = fs::path(dir) / "images.txt";
-  std::ifstream in(text, std::ios::binary);
-  if (!in)
+  if (!fs::exists(text))
     throw Error(dir, 0, "no COLMAP model here (need cameras, images, points3D as .txt or .bin)");
+  std::ifstream in(text, std::ios::binary);
+  if (!in) throw Error(text.string(), 0, std::string("cannot open: ") + strerror(errno));
   ForEachColmapImageText(in, text.string(),
                          [&](ImageRecord&& r, long) { names.push_back(std::move(r.name)); });
   return names;

@@ -472,12 +472,9 @@ RoadSplitReport RunRoadSplit(const RoadSplitOptions& o) {
   RemoveStaleTemporaries(parent);
   const fs::path tmp = TemporaryPathFor(parent / road.filename());
   try {
-    fs::create_directories(tmp);
+    CreateFolder(tmp);
     WriteFragments(o, ws, rec, images, tmp, p, rep);
-    SyncTree(tmp);  // linked and copied files too: all on the disk before the rename
-    if (fs::exists(road)) fs::remove_all(road);
-    fs::rename(tmp, road);
-    SyncFolder(parent);
+    ReplaceFolder(tmp, road);  // linked and copied files synced too, then one exchange
     ledger.Done(graph);
     ledger.Write({{"fragments", rep.fragments}, {"junctions", rep.junctions}});
   } catch (...) {

@@ -5,7 +5,7 @@ that every output reached the disk in an order a power loss cannot break:
 
   - a temporary renamed over a final name had its data synced (fdatasync or fsync of the file,
     after it was last opened for writing) before the rename; a folder renamed into place was
-    synced itself before the rename;
+    synced itself before the rename, and every file written in it before that rename;
   - the folder of every rename, and the parent of every folder made, is synced (fsync of the
     folder) after it, before the process ends;
   - a commit journal (.mvtm-journal-*) is on the disk (its folder synced after it was renamed
@@ -111,10 +111,20 @@ def check(ev):
         elif e[0] == 'mkdir':
             if not folder_synced_between(os.path.dirname(e[1]), i, end):
                 bad.append('unsynced folder after mkdir: %s' % e[1])
+        elif e[0] == 'write_open':
+            # A file written in a folder that is renamed into place later (roadsplit's road),
+            # not renamed itself: synced before that folder's rename.
+            f = e[1]
+            k = next((k for k in range(i + 1, end) if ev[k][0] == 'rename'
+                      and (ev[k][1] == f or f.startswith(ev[k][1] + '/'))), None)
+            if k is not None and ev[k][1] != f and not file_synced_between(f, i, k):
+                bad.append('unsynced data before its folder\'s rename: %s' % f)
     # Journals: from the rename that puts one in place to its removal.
     for i, e in enumerate(ev):
         if e[0] != 'rename' or not os.path.basename(e[2]).startswith('.mvtm-journal-'):
             continue
+        if os.path.basename(e[1]).startswith('.mvtm-journal-'):
+            continue  # a finisher claiming a dead writer's journal: on the disk already
         journal, d = e[2], os.path.dirname(e[2])
         gone = next((k for k in range(i + 1, end) if ev[k][0] == 'unlink'
                      and ev[k][1] == journal), end)

@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <fstream>
 #include <future>
@@ -326,6 +327,31 @@ TEST(AtomicFile, LiveOrDamagedJournalsAreNotRolledForward) {
     EXPECT_THROW(FinishInterruptedWrites(d), Error) << bad;
   }
   EXPECT_FALSE(fs::exists(d / "a.txt"));
+  fs::remove_all(d);
+}
+
+// After a reboot (a power loss) pids start again, so a journal's pid may now be a live process
+// that never wrote it: a journal and a temporary of an earlier boot of this host and namespace
+// are a dead writer's, whatever holds the pid. Named here with this very process's pid, alive.
+TEST(AtomicFile, AnEarlierBootsJournalIsFinishedWhateverHoldsItsPidNow) {
+  fs::path d = TempDir("reboot");
+  const std::string space = ProcessSpace();
+  ASSERT_EQ(std::count(space.begin(), space.end(), '~'), 2) << space;  // HOST~NS~BOOT
+  const std::string earlier = space.substr(0, space.rfind('~')) + "~0123456789ab";
+  const std::string pid = std::to_string(getpid());
+  std::ofstream(d / "a.txt") << "old";
+  std::ofstream(d / (".a.tmp-" + pid + "-1@" + earlier + ".txt")) << "new";
+  std::ofstream(d / (".mvtm-journal-" + pid + "-0@" + earlier))
+      << "mvtm-journal 1\nrename\n.a.tmp-" << pid << "-1@" << earlier << ".txt\na.txt\n";
+  std::ofstream(d / (".b.tmp-" + pid + "-2@" + earlier + ".txt")) << "stale";
+  fs::last_write_time(d / "a.txt", fs::file_time_type::clock::now() - std::chrono::minutes(5));
+  RemoveStaleTemporaries(d);
+  EXPECT_EQ(Slurp(d / "a.txt"), "new");
+  EXPECT_EQ(Entries(d), 1u);
+  // The same names of this boot are this live process's: left alone.
+  std::ofstream(d / (".c.tmp-" + pid + "-3@" + space + ".txt")) << "mine";
+  RemoveStaleTemporaries(d);
+  EXPECT_EQ(Entries(d), 2u);
   fs::remove_all(d);
 }
 
