@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <fstream>
 #include <locale>
 #include <memory>
@@ -101,14 +102,19 @@ void ReplaceFolder(const fs::path& built, const fs::path& dest) {
       fs::remove_all(built, ec);
       return;
     }
-    if (errno != EINVAL && errno != ENOSYS && errno != ENOTSUP)
+    if (errno != EINVAL && errno != ENOSYS && errno != ENOTSUP && errno != EXDEV)
       throw Error(dest.string(), 0, std::string("cannot replace: ") + strerror(errno));
-    // No exchange on this file system: the old folder aside first (a stale temporary if killed).
+    // No exchange on this file system: the old folder aside first. A kill between the two
+    // renames leaves both under temporary names, which the next run sweeps: a rerun makes DEST.
     const fs::path aside = TemporaryPathFor(dest);
     fs::rename(dest, aside, ec);
     if (ec) throw Error(dest.string(), 0, "cannot replace: " + ec.message());
     fs::rename(built, dest, ec);
-    if (ec) throw Error(dest.string(), 0, "cannot write: " + ec.message());
+    if (ec) {
+      std::error_code back;
+      fs::rename(aside, dest, back);  // the old one stays DEST
+      throw Error(dest.string(), 0, "cannot write: " + ec.message());
+    }
     SyncFolder(parent);
     fs::remove_all(aside, ec);
     return;
@@ -312,32 +318,45 @@ Owner OwnerOf(const std::string& n, size_t pid_at) {
           at == std::string::npos ? ProcessSpace() : n.substr(at + 1, n.find('.', at) - at - 1)};
 }
 
-// Where an owner's SPACE is: this boot of this host and namespace (its pid means a process here;
-// a SPACE of older mvtm, HOST or HOST~NS without the boot, is taken as this boot's), an earlier
-// boot of them (its writer is gone whatever now holds its pid), or elsewhere.
-enum class Where { kHere, kEarlierBoot, kElsewhere };
+// Where an owner's SPACE is. kHere: this host and namespace in this boot, or where a boot is not
+// known (a SPACE of older mvtm, HOST~NS, or this process's where /proc/sys cannot be read): its
+// pid is checked. kOtherBoot: this host name and namespace, another boot id: an earlier boot of
+// this machine, or another machine of the same name sharing the folder (told apart by the entry's
+// time). kElsewhere: another host or namespace.
+enum class Where { kHere, kOtherBoot, kElsewhere };
 Where WhereOf(const std::string& space) {
   const std::string& here = ProcessSpace();
   if (space == here) return Where::kHere;
-  const auto host_ns = [](const std::string& sp) {
+  const auto split = [](const std::string& sp) {  // HOST~NS, BOOT
     const size_t a = sp.find('~');
     const size_t b = a == std::string::npos ? a : sp.find('~', a + 1);
-    return std::make_pair(sp.substr(0, b), b != std::string::npos);
+    return std::make_pair(sp.substr(0, b), b == std::string::npos ? "" : sp.substr(b + 1));
   };
-  const std::string mine = host_ns(here).first;
-  const auto [theirs, has_boot] = host_ns(space);
-  if (theirs == mine) return has_boot ? Where::kEarlierBoot : Where::kHere;
-  if (!has_boot && space.find('~') == std::string::npos && mine.rfind(space + "~", 0) == 0)
-    return Where::kHere;  // HOST alone: older mvtm without the namespace
-  return Where::kElsewhere;
+  const auto mine = split(here), theirs = split(space);
+  if (theirs.first != mine.first) return Where::kElsewhere;
+  return theirs.second.empty() || mine.second.empty() ? Where::kHere : Where::kOtherBoot;
+}
+
+// The entry was last written before this boot began (now less the time since boot, a second of
+// slack): its writer cannot be running. A clock set wrong at the earlier boot errs towards
+// "not before", the age rule's side.
+bool WrittenBeforeThisBoot(const fs::path& p) {
+  struct stat st {};
+  timespec now{}, up{};
+  if (::lstat(p.c_str(), &st) != 0 || clock_gettime(CLOCK_REALTIME, &now) != 0 ||
+      clock_gettime(CLOCK_BOOTTIME, &up) != 0)
+    return false;
+  const double boot = double(now.tv_sec - up.tv_sec) + 1e-9 * double(now.tv_nsec - up.tv_nsec);
+  return double(st.st_mtim.tv_sec) + 1e-9 * double(st.st_mtim.tv_nsec) < boot - 1.0;
 }
 
 // That owner is gone: this boot's process PID (of this host and namespace) is not alive, the
-// entry was written in an earlier boot, or (another host's or namespace's) it is an hour old.
+// entry of this host name and namespace was written before this boot, or (another host's,
+// namespace's or boot's) it is an hour old.
 bool OwnerGone(const fs::directory_entry& e, const Owner& owner) {
   const Where where = WhereOf(owner.space);
   if (where == Where::kHere) return !ProcessAlive(owner.pid);
-  if (where == Where::kEarlierBoot) return true;
+  if (where == Where::kOtherBoot && WrittenBeforeThisBoot(e.path())) return true;
   std::error_code ec;
   const auto written = e.last_write_time(ec);
   return !ec && fs::file_time_type::clock::now() - written > kForeignTemporaryAge;

@@ -165,9 +165,11 @@ void SyncFolder(const fs::path& dir);
 void SyncTree(const fs::path& root);
 // Puts the folder `built` (made whole under a temporary name beside `dest`) in place of `dest`:
 // its tree synced (SyncTree), then exchanged with an existing `dest` in one step
-// (renameat2 RENAME_EXCHANGE; where the file system has none, the old one renamed aside first),
-// the folder synced, the old tree removed. A kill or power loss leaves the old `dest` or the new
-// one, whole, and at worst the other under a temporary name (RemoveStaleTemporaries').
+// (renameat2 RENAME_EXCHANGE), the folder synced, the old tree removed: a kill or power loss
+// leaves the old `dest` or the new one, whole, the other at most under a temporary name that the
+// next sweep removes (RemoveStaleTemporaries). Where the file system has no exchange (NFS), the
+// old one is renamed aside first, and a kill between the two renames leaves no `dest` (both under
+// temporary names): a rerun makes it again.
 void ReplaceFolder(const fs::path& built, const fs::path& dest);
 // Creates `dir` and its parents, each new folder's entry synced (SyncFolder of its parent); throws
 // Error(dir, "cannot create folder: reason").
