@@ -82,6 +82,17 @@ mkdir -p "$out"; out=$(cd "$out" && pwd); ws=$out/ws
 holdout=${HOLDOUT:-5}; lateral=${LATERAL:-1.5}
 log() { echo "== $*" >&2; }
 colmap_log() { "$@" > "$out/colmap.log" 2>&1 || { tail -20 "$out/colmap.log" >&2; exit 1; }; }
+# Copies SRC (a file or a folder) to DEST whole: into a temporary beside DEST (a killed run's
+# goes first), synced (the file system's, sync -f), then renamed into place and the folder
+# synced, so a kill or a power loss never leaves a partial DEST that a rerun would take for done.
+copy_whole() {  # SRC DEST
+  local tmp
+  tmp="$(dirname "$2")/.$(basename "$2").tmp-$$"  # named as mvtm names its temporaries
+  rm -rf "$(dirname "$2")/.$(basename "$2").tmp-"*
+  { cp -r "$1" "$tmp" && sync -f "$tmp" && { [ ! -d "$2" ] || rm -rf "$2"; } &&
+    mv -T -f "$tmp" "$2" && sync "$(dirname "$2")"; } ||
+    { echo "$0: error: cannot copy $1 to $2" >&2; exit 1; }
+}
 if [ -n "${CALIB:-}" ]; then
   log "0. calibrate: the camera from the chessboard views in $CALIB"
   spec=$("$bin/calibrate" --pattern "${CALIB_PATTERN:-9x6}" --model "${CALIB_MODEL:-OPENCV}" "$CALIB" "$out/calib")
@@ -341,7 +352,7 @@ fi
 # and settings cheap) and the workspace gets its output, or the record again with BORESIGHT=0.
 # With HOLDOUT_STRICT the held-out photos take no part in the fit.
 if [ "$poses" != - ]; then
-  [ -d "$out/sparse_record" ] || cp -r "$ws/sparse" "$out/sparse_record"
+  [ -d "$out/sparse_record" ] || copy_whole "$ws/sparse" "$out/sparse_record"
   model=$out/sparse_record
   if [ "${BORESIGHT:-1}" = 1 ]; then
     log "2b. boresight: the camera's mount rotation against the poses of record"
@@ -359,11 +370,11 @@ if [ "$poses" != - ]; then
   for f in cameras.bin images.bin points3D.bin; do
     # New poses: the first mesh (and the one dynmask kept of it) was built with the old ones.
     cmp -s "$model/$f" "$ws/sparse/$f" ||
-      { cp "$model/$f" "$ws/sparse/$f"; rm -f "$ws/mesh.ply" "$ws/dynmask-mesh.ply"; }
+      { rm -f "$ws/mesh.ply" "$ws/dynmask-mesh.ply"; copy_whole "$model/$f" "$ws/sparse/$f"; }
   done
 fi
 if [ -f "$out/ba/georef.json" ]; then
-  cmp -s "$out/ba/georef.json" "$ws/georef.json" || cp "$out/ba/georef.json" "$ws/georef.json"
+  cmp -s "$out/ba/georef.json" "$ws/georef.json" || copy_whole "$out/ba/georef.json" "$ws/georef.json"
 fi
 # A video's burned-in overlay: undistorted like the photos, one mask per image, so that fusion,
 # vertex colours and projection leave those pixels out (ptmrender fills them from other photos);
@@ -378,7 +389,7 @@ if [ -n "$overlay" ]; then
       --output_path "$out/overlay/out" --output_type COLMAP
     mv "$out/overlay/out/images" "$overlay_masks"
   fi
-  [ -d "$ws/masks" ] || cp -r "$overlay_masks" "$ws/masks"
+  [ -d "$ws/masks" ] || copy_whole "$overlay_masks" "$ws/masks"
 fi
 colmap model_analyzer --path "$ws/sparse" 2>&1 | grep -E "Registered images|Points:|Mean reprojection" >&2 || true
 
@@ -418,7 +429,7 @@ if [ ! -f "$ws/mesh.ply" ] && [ ! -f "$ws/meshed-poisson.ply" ]; then
   rm -f "$ws/dynmask-mesh.ply"
   if [ ! -d "$ws/labels" ] && [ -f "$ws/tracks.tsv" ]; then
     rm -rf "$ws/masks" "$ws/tracks.tsv"
-    [ -z "$overlay_masks" ] || cp -r "$overlay_masks" "$ws/masks"
+    [ -z "$overlay_masks" ] || copy_whole "$overlay_masks" "$ws/masks"
   fi
   if colmap -h 2>&1 | grep -q "with CUDA"; then
     colmap_log colmap patch_match_stereo --workspace_path "$ws"
