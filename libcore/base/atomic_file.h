@@ -1,10 +1,10 @@
 // mvtm — atomic output files and up-to-date checks.
 //
 // Every output of every tool is written to a temporary name in the destination folder
-// (".STEM.tmp-PID-N@SPACE.EXT": hidden, unique per process and file, SPACE naming the host and
-// process-id namespace the PID belongs to, same extension so format-by-extension writers still
-// work) and renamed over the final name only once it is complete, so a crash or `kill -9` never
-// leaves a half-written output. The temporary's data reach the disk (fdatasync) before the
+// (".STEM.tmp-PID-N@SPACE.EXT": hidden, unique per process and file, SPACE naming the host,
+// process-id namespace and boot the PID belongs to, same extension so format-by-extension writers
+// still work) and renamed over the final name only once it is complete, so a crash or `kill -9`
+// never leaves a half-written output. The temporary's data reach the disk (fdatasync) before the
 // rename, and the folder's entry (fsync of the folder) after it, so a power loss or a kernel
 // crash leaves the old file or the new one, whole, and a file a tool reported written stays
 // written. A re-run skips outputs that exist and are newer than all their inputs (unless the
@@ -127,8 +127,9 @@ class FolderLock {
 FolderLock LockForReading(const fs::path& dir);
 
 // Completes the commits of WriteTogetherAtomic that a dead process left in `dir` ("" is the
-// current folder): of this host and namespace when its process is gone; of another when the
-// journal is an hour old. A live writer's journal is left (LockForReading waits for its commit),
+// current folder): of this host and namespace when its process is gone or it was written in an
+// earlier boot (another boot id, before this boot began); of another when the journal is an hour
+// old. A live writer's journal is left (LockForReading waits for its commit),
 // and so is a journal of another host younger than that. Each journal is claimed first (renamed
 // to one of this process), so concurrent finishers never follow one journal twice. The whole new
 // set is put in place; where a file of the set (a final name or one it was to remove) has a
@@ -190,14 +191,15 @@ bool IsUpToDate(const fs::path& output, const std::vector<fs::path>& inputs);
 fs::path TemporaryPathFor(const fs::path& final_path);
 
 // Removes stale temporaries ".STEM.tmp-PID-N@SPACE.EXT" (files, or folders with what they hold)
-// left in `dir` by processes that died: of this host and namespace when process PID is gone; of
-// another (a cluster node or a container sharing the folder, where PID says nothing) when
-// untouched for an hour. A name without "@SPACE" counts as this host's.
-// Finishes the folder's interrupted commits first (FinishInterruptedWrites; its Errors pass
-// through) and keeps the temporaries a journal of their owner names.
+// left in `dir` by processes that died: of this host and namespace when process PID is gone or
+// it was written in an earlier boot; of another (a cluster node or a container sharing the
+// folder, where PID says nothing) when untouched for an hour. A name without "@SPACE" counts as
+// this host's. Finishes the folder's interrupted commits first (FinishInterruptedWrites; its Errors
+// pass through) and keeps the temporaries a journal of their owner names.
 void RemoveStaleTemporaries(const fs::path& dir);
 
-// This process's SPACE: host name and pid-namespace inode, letters, digits, '-' and '~'.
+// This process's SPACE, HOST~NS~BOOT: host name, pid-namespace inode and the boot id's first 12
+// hex digits (no boot where it cannot be read), letters, digits, '-' and '~'.
 const std::string& ProcessSpace();
 
 }  // namespace mvtm
