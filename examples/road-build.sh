@@ -82,16 +82,27 @@ mkdir -p "$out"; out=$(cd "$out" && pwd); ws=$out/ws
 holdout=${HOLDOUT:-5}; lateral=${LATERAL:-1.5}
 log() { echo "== $*" >&2; }
 colmap_log() { "$@" > "$out/colmap.log" 2>&1 || { tail -20 "$out/colmap.log" >&2; exit 1; }; }
-# Copies SRC (a file or a folder) to DEST whole: into a temporary beside DEST (a killed run's
-# goes first), synced (the file system's, sync -f), then renamed into place and the folder
-# synced, so a kill or a power loss never leaves a partial DEST that a rerun would take for done.
+# Puts TMP (a file or a folder another program wrote whole) in DEST's place: synced (the file
+# system's, sync -f: COLMAP syncs nothing), renamed into place over any old DEST, and the folder
+# synced. Steps are skipped when their output exists, so each output of a program that writes in
+# place (COLMAP) is made under a temporary name and committed only once it is complete: a kill or
+# a power loss never leaves a partial DEST that a rerun would take for done.
+commit_whole() {  # TMP DEST
+  { sync -f "$1" && { [ ! -d "$2" ] || rm -rf "$2"; } &&
+    mv -T -f "$1" "$2" && sync "$(dirname "$2")"; } ||
+    { echo "$0: error: cannot write $2" >&2; exit 1; }
+}
+# A temporary's name beside DEST, as mvtm names its own (a killed run's is removed first).
+temp_for() {  # DEST
+  rm -rf "$(dirname "$1")/.$(basename "$1").tmp-"*
+  echo "$(dirname "$1")/.$(basename "$1").tmp-$$"
+}
+# Copies SRC (a file or a folder) to DEST whole (commit_whole).
 copy_whole() {  # SRC DEST
   local tmp
-  tmp="$(dirname "$2")/.$(basename "$2").tmp-$$"  # named as mvtm names its temporaries
-  rm -rf "$(dirname "$2")/.$(basename "$2").tmp-"*
-  { cp -r "$1" "$tmp" && sync -f "$tmp" && { [ ! -d "$2" ] || rm -rf "$2"; } &&
-    mv -T -f "$tmp" "$2" && sync "$(dirname "$2")"; } ||
-    { echo "$0: error: cannot copy $1 to $2" >&2; exit 1; }
+  tmp=$(temp_for "$2")
+  cp -r "$1" "$tmp" || { echo "$0: error: cannot copy $1 to $2" >&2; exit 1; }
+  commit_whole "$tmp" "$2"
 }
 if [ -n "${CALIB:-}" ]; then
   log "0. calibrate: the camera from the chessboard views in $CALIB"
@@ -111,8 +122,9 @@ fi
 if [ "$poses" = - ]; then
   log "1. orb2colmap: the camera (when intrinsics are given) and the images into a COLMAP database, no poses"
   if [ $# -ge 1 ] && [ ! -f "$out/db.db" ]; then
+    rm -f "$out/db.db.tmp"  # a killed run's
     "$bin/orb2colmap" --images "$images" --database "$out/db.db.tmp" "$@" - "$out/prior"
-    mv "$out/db.db.tmp" "$out/db.db"
+    commit_whole "$out/db.db.tmp" "$out/db.db"
   fi
   log "2. COLMAP (CPU): SIFT, sequential matching, incremental SfM; georef: up and scale"
   if [ ! -f "$out/ba/images.bin" ]; then
@@ -123,8 +135,11 @@ if [ "$poses" = - ]; then
       ${SFM_THREADS:+--SiftExtraction.num_threads "$SFM_THREADS"}
     loop_opt=()
     if [ "${LOOP_DETECTION:-0}" = 1 ]; then
-      [ -f "$out/vocab_tree.bin" ] || colmap_log colmap vocab_tree_builder \
-        --database_path "$out/db.db" --vocab_tree_path "$out/vocab_tree.bin"
+      if [ ! -f "$out/vocab_tree.bin" ]; then
+        tmp=$(temp_for "$out/vocab_tree.bin")
+        colmap_log colmap vocab_tree_builder --database_path "$out/db.db" --vocab_tree_path "$tmp"
+        commit_whole "$tmp" "$out/vocab_tree.bin"
+      fi
       loop_opt=(--SequentialMatching.loop_detection 1 --SequentialMatching.vocab_tree_path "$out/vocab_tree.bin")
     fi
     colmap_log colmap sequential_matcher --database_path "$out/db.db" --SiftMatching.use_gpu 0 \
@@ -311,9 +326,9 @@ SQL
       [ -n "$gps_times" ] || { echo "$0: error: GPS with a folder of photos needs GPS_TIMES (each photo's time)" >&2; exit 2; }
       gps_opt=(--gps "$GPS" --times "$gps_times" --gps-offset "${GPS_OFFSET:-0}" --gps-search "${GPS_SEARCH:-0}")
     fi
-    rm -rf "$out/ba.tmp"
-    "$bin/georef" --binary ${CAMERA_HEIGHT:+--camera-height "$CAMERA_HEIGHT"} "${gps_opt[@]}" "$best" "$out/ba.tmp"
-    rm -rf "$out/ba"; mv "$out/ba.tmp" "$out/ba"
+    tmp=$(temp_for "$out/ba")
+    "$bin/georef" --binary ${CAMERA_HEIGHT:+--camera-height "$CAMERA_HEIGHT"} "${gps_opt[@]}" "$best" "$tmp"
+    commit_whole "$tmp" "$out/ba"
   fi
   if [ -n "${CAMERA_HEIGHT:-}" ] || [ -n "${GPS:-}" ]; then METRIC=1; fi
 else
@@ -326,14 +341,17 @@ else
       --SiftExtraction.use_gpu 0 --ImageReader.single_camera 1
     colmap_log colmap sequential_matcher --database_path "$out/db.db" --SiftMatching.use_gpu 0 \
       --SequentialMatching.overlap "${MATCH_OVERLAP:-5}"
-    mkdir -p "$out/tri" "$out/ba"
+    rm -rf "$out/tri"; tmp=$(temp_for "$out/ba")
+    mkdir -p "$out/tri" "$tmp"
     colmap_log colmap point_triangulator --database_path "$out/db.db" --image_path "$images" \
       --input_path "$out/prior" --output_path "$out/tri"
     # The poses are the poses of record (SLAM or ground truth, metric): bundle adjustment refines
     # the points only. Left free, COLMAP's gauge lets the whole trajectory drift and rescale.
-    colmap_log colmap bundle_adjuster --input_path "$out/tri" --output_path "$out/ba" \
+    # (COLMAP writes its three files in place, one after the other: under a temporary name.)
+    colmap_log colmap bundle_adjuster --input_path "$out/tri" --output_path "$tmp" \
       --BundleAdjustment.refine_extrinsics 0 --BundleAdjustment.refine_focal_length 0 \
       --BundleAdjustment.refine_principal_point 0 --BundleAdjustment.refine_extra_params 0
+    commit_whole "$tmp" "$out/ba"
   fi
 fi
 if [ "${SFM_ONLY:-0}" = 1 ]; then
@@ -341,9 +359,17 @@ if [ "${SFM_ONLY:-0}" = 1 ]; then
   exit 0
 fi
 if [ ! -d "$ws/sparse" ]; then
+  # The undistorter makes sparse/ first and its model last: it writes into a temporary folder,
+  # whose parts then go into the workspace (which may hold labels already), sparse/ the last.
+  tmp=$(temp_for "$out/undistorted")
   colmap_log colmap image_undistorter --image_path "$images" --input_path "$out/ba" \
-    --output_path "$ws" --output_type COLMAP
+    --output_path "$tmp" --output_type COLMAP
+  sync -f "$tmp" || { echo "$0: error: cannot write $ws" >&2; exit 1; }
+  mkdir -p "$ws"
+  for f in "$tmp"/*; do [ "$(basename "$f")" = sparse ] || commit_whole "$f" "$ws/$(basename "$f")"; done
   rm -rf "$out/sparse_record"
+  commit_whole "$tmp/sparse" "$ws/sparse"
+  rmdir "$tmp"
 fi
 # Poses of record carry the attitude of the vehicle's navigation, not of the camera: one mount
 # rotation (boresight) fitted to the photos' tracks turns every camera about its recorded centre
@@ -434,9 +460,11 @@ if [ ! -f "$ws/mesh.ply" ] && [ ! -f "$ws/meshed-poisson.ply" ]; then
   if colmap -h 2>&1 | grep -q "with CUDA"; then
     colmap_log colmap patch_match_stereo --workspace_path "$ws"
     colmap_log colmap stereo_fusion --workspace_path "$ws" --output_path "$ws/fused.ply"
-    colmap_log colmap poisson_mesher --input_path "$ws/fused.ply" --output_path "$ws/meshed-poisson.ply"
+    tmp=$(temp_for "$ws/meshed-poisson.ply")
+    colmap_log colmap poisson_mesher --input_path "$ws/fused.ply" --output_path "$tmp"
     # poisson_mesher can write an empty mesh and still exit 0.
-    grep -aq "element face [1-9]" "$ws/meshed-poisson.ply" || { rm -f "$ws/meshed-poisson.ply"; cpu_mesh "$ws"; }
+    if grep -aq "element face [1-9]" "$tmp"; then commit_whole "$tmp" "$ws/meshed-poisson.ply"; else
+      rm -f "$tmp"; cpu_mesh "$ws"; fi
   else
     cpu_mesh "$ws"
   fi
@@ -492,12 +520,14 @@ if [ "${HOLDOUT_STRICT:-0}" = 1 ]; then
   train=$out/train
   for i in "${sel[@]}"; do ls "$ws/images" | sed -n "$((i + 1))p"; done > "$out/heldout_names.txt"
   if [ ! -d "$train/sparse" ]; then
-    mkdir -p "$train/sparse" "$out/full_txt"
-    colmap_log colmap image_deleter --input_path "$ws/sparse" --output_path "$train/sparse" \
+    mkdir -p "$train"; tmp=$(temp_for "$train/sparse"); mkdir "$tmp"
+    colmap_log colmap image_deleter --input_path "$ws/sparse" --output_path "$tmp" \
       --image_names_path "$out/heldout_names.txt"
-    ln -s "$ws/images" "$train/images"
-    [ -d "$ws/masks" ] && ln -s "$ws/masks" "$train/masks"
+    ln -sfn "$ws/images" "$train/images"
+    if [ -d "$ws/masks" ]; then ln -sfn "$ws/masks" "$train/masks"; fi
+    commit_whole "$tmp" "$train/sparse"
   fi
+  mkdir -p "$out/full_txt"
   # The held-out poses of record (images.txt lines of the full model) as ptmrender's trajectory.
   colmap_log colmap model_converter --input_path "$ws/sparse" --output_path "$out/full_txt" --output_type TXT
   awk 'NR == FNR { keep[$1] = 1; next } /^#/ { next }
