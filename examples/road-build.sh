@@ -166,7 +166,7 @@ if [ "$poses" = - ]; then
         "${fixed[@]}" "$@" >> "$out/colmap.log" 2>&1 || true
     }
     largest() {  # SFM_DIR → "count path" of its largest model ("0 " when none)
-      local b= n=0 k m
+      local b='' n=0 k m
       for m in "$1"/*/; do
         [ -d "$m" ] || continue
         k=$(colmap model_analyzer --path "$m" 2>&1 | sed -n 's/.*Registered images: *\([0-9]*\).*/\1/p')
