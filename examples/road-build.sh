@@ -1,8 +1,12 @@
 #!/usr/bin/env bash
 # The whole road build as one shell script: photos (or a video) + poses (or none) + intrinsics
-# (or none) → a rendered, scored mvtm workspace. Each step skips when its output exists (delete
-# it, or the workspace, to redo). New poses (BORESIGHT, HOLDOUT_STRICT) redo the mesh; a new
-# first mesh also redoes dynmask's masks and the mesh it judges against (dynmask-mesh.ply).
+# (or none) → a rendered, scored mvtm workspace. A rerun skips what is done: each step skips when
+# its output exists and was made from the same inputs and settings (OUT/.keys: other photos,
+# poses, intrinsics or SfM settings redo the build, other mesh settings the mesh, another HOLDOUT
+# the held-out renders and the strict workspace; the mvtm programs keep their own records), and
+# COLMAP's outputs are committed whole, so a killed run's rerun redoes the step it was in. New
+# poses (BORESIGHT, HOLDOUT_STRICT) redo the mesh; a new first mesh also redoes dynmask's masks
+# and the mesh it judges against (dynmask-mesh.ply).
 #
 # usage: examples/road-build.sh IMAGES|VIDEO POSES|- OUT [-- INTRINSICS...]
 #   IMAGES      folder of the frames (sorted by name = frame order); every photo is kept
@@ -81,6 +85,9 @@ input=$1; poses=$2; out=$3; shift 3; [ $# -ge 1 ] && shift
 mkdir -p "$out"; out=$(cd "$out" && pwd); ws=$out/ws
 holdout=${HOLDOUT:-5}; lateral=${LATERAL:-1.5}
 log() { echo "== $*" >&2; }
+# COLMAP's version and build (read whole: grep -q or head would end the pipe early, and with
+# pipefail COLMAP's SIGPIPE would fail it).
+colmap_help=$(colmap -h 2>&1 || true)
 colmap_log() { "$@" > "$out/colmap.log" 2>&1 || { tail -20 "$out/colmap.log" >&2; exit 1; }; }
 # Puts TMP (a file or a folder another program wrote whole) in DEST's place: synced (the file
 # system's, sync -f: COLMAP syncs nothing), renamed into place over any old DEST, and the folder
@@ -96,6 +103,30 @@ commit_whole() {  # TMP DEST
 temp_for() {  # DEST
   rm -rf "$(dirname "$1")/.$(basename "$1").tmp-"*
   echo "$(dirname "$1")/.$(basename "$1").tmp-$$"
+}
+# What a stage's outputs are made from, in OUT/.keys/NAME: a stage whose key changed (other
+# photos, poses, intrinsics or settings) is done again from scratch, its outputs removed first
+# and then the new key written. So a rerun never hands back outputs made with other inputs or
+# settings; one with the same skips what is done (each output is committed whole, so a killed
+# run's rerun goes on from the outputs it finished).
+key_changed() {  # NAME TEXT; true when the key differs
+  [ "$(cat "$out/.keys/$1" 2> /dev/null)" != "$2" ]
+}
+key_done() {  # NAME TEXT
+  mkdir -p "$out/.keys"
+  printf '%s\n' "$2" > "$out/.keys/.$1.tmp-$$" || { echo "$0: error: cannot write $out/.keys/$1" >&2; exit 1; }
+  commit_whole "$out/.keys/.$1.tmp-$$" "$out/.keys/$1"
+}
+# A file's or a folder's content as one line: its files' names and md5 sums (the argument as
+# it is when it names neither).
+content_of() {  # PATH
+  if [ -d "$1" ]; then
+    (cd "$1" && find . -type f -print0 | LC_ALL=C sort -z | xargs -0 -r md5sum) | md5sum | cut -c1-32
+  elif [ -f "$1" ]; then
+    md5sum < "$1" | cut -c1-32
+  else
+    printf '%s\n' "$1"
+  fi
 }
 # Copies SRC (a file or a folder) to DEST whole (commit_whole).
 copy_whole() {  # SRC DEST
@@ -117,6 +148,23 @@ else
   "$bin/frames" ${FRAME_SPACING:+--spacing "$FRAME_SPACING"} "$input" "$out/frames"
   images=$out/frames/images
   [ -f "$out/frames/mask.png" ] && overlay=$out/frames
+fi
+
+# The model of record (steps 1-2) and all that follows is made from the photos, the poses, the
+# intrinsics (the files they name too) and the structure-from-motion settings.
+sfm_key="photos $(content_of "$images")
+poses $(content_of "$poses")
+intrinsics $(for a in "$@"; do printf '%s=%s ' "$a" "$(content_of "$a")"; done)
+gps $(content_of "${GPS:-}") $(content_of "${GPS_TIMES:-}") ${GPS_OFFSET:-} ${GPS_SEARCH:-}
+settings ${MATCH_OVERLAP:-}|${SFM_MAX_REPROJ:-}|${SFM_CHUNK:-}|${SFM_CHUNK_OVERLAP:-}|${SFM_THREADS:-}|${LOOP_DETECTION:-}|${CAMERA_HEIGHT:-}|${CAMERA_MODEL:-}
+colmap $(sed -n 1,3p <<< "$colmap_help" | tr '\n' ' ')"
+if key_changed sfm "$sfm_key"; then
+  [ -d "$out/.keys" ] && log "the photos, poses, intrinsics or SfM settings changed: the build is done again"
+  rm -rf "$out/.keys" "$out/db.db" "$out/db.db.tmp" "$out/prior" "$out/tri" "$out/ba" "$out/sfm" \
+    "$out"/sfm_* "$out/vocab_tree.bin" "$out/overlay" "$out/overlay_masks" "$out/sparse_record" \
+    "$out/train" "$ws/sparse" "$ws/mesh.ply" "$ws/dynmask-mesh.ply" "$ws/meshed-poisson.ply" \
+    "$ws/fused.ply" "$ws/partners.tsv" "$ws/tracks.tsv" "$ws/masks"
+  key_done sfm "$sfm_key"
 fi
 
 if [ "$poses" = - ]; then
@@ -432,6 +480,13 @@ cpu_mesh() {
 }
 
 log "3. mesh"
+# The first mesh (and the masks dynmask judged against it) is made with the mesh settings; with
+# DYNAMIC=0 after 1, the label-free masks go with it (below) and the mesh is made without them.
+mesh_key="MESH=${MESH:-dense} METRIC=${METRIC:-0} ROADMESH_FLAGS=${ROADMESH_FLAGS:-} DYNAMIC=${DYNAMIC:-1}"
+if key_changed mesh "$mesh_key"; then
+  rm -f "$ws/mesh.ply" "$ws/dynmask-mesh.ply" "$ws/meshed-poisson.ply" "$ws/fused.ply" "$out/.keys/holdout"
+  key_done mesh "$mesh_key"
+fi
 read -r -a dynmask_opts <<< "${DYNMASK_FLAGS:-}"
 # dynmask keeps the mesh it judges against (dynmask-mesh.ply) unless it is told to judge against
 # densify's maps (--depth stereo) or another mesh (--mesh FILE).
@@ -457,7 +512,7 @@ if [ ! -f "$ws/mesh.ply" ] && [ ! -f "$ws/meshed-poisson.ply" ]; then
     rm -rf "$ws/masks" "$ws/tracks.tsv"
     [ -z "$overlay_masks" ] || copy_whole "$overlay_masks" "$ws/masks"
   fi
-  if colmap -h 2>&1 | grep -q "with CUDA"; then
+  if [[ "$colmap_help" == *"with CUDA"* ]]; then
     colmap_log colmap patch_match_stereo --workspace_path "$ws"
     colmap_log colmap stereo_fusion --workspace_path "$ws" --output_path "$ws/fused.ply"
     tmp=$(temp_for "$ws/meshed-poisson.ply")
@@ -470,13 +525,14 @@ if [ ! -f "$ws/mesh.ply" ] && [ ! -f "$ws/meshed-poisson.ply" ]; then
   fi
 fi
 
+
 log "3b. exposure: a gain and an offset per photo, so that projectors blend at one exposure"
 "$bin/exposure" -q "$ws"
 
 log "4. vehicle masks and partners"
 [ -n "$overlay_masks" ] && dynmask_opts+=(--also "$overlay_masks")
 if [ -d "$ws/labels" ]; then
-  [ -f "$ws/tracks.tsv" ] || "$bin/segtrack" "$ws/labels" "$ws"
+  "$bin/segtrack" "$ws/labels" "$ws"  # its record redoes the masks when a label changed
 elif [ "${DYNAMIC:-1}" = 1 ]; then
   # No labels: label-free masks from the photos checked against each other through the first
   # mesh (dynmask), then the mesh again without the masked pixels (roadmesh's inputs include the
@@ -493,9 +549,21 @@ if [ -d "$ws/masks" ] && [ -f "$ws/partners.tsv" ]; then "$bin/inpaint3d" "$ws";
 
 log "6. ptmrender: every ${holdout}th pose held out (vertex colours, PTM), and a lane change of ${lateral} (model units: metres when the model is metric)"
 n=$(ls "$ws/images" | wc -l)
-mkdir -p "$out/heldout_truth"
 sel=()
 for i in $(seq 0 "$holdout" $((n - 1))); do sel+=("$i"); done
+# The held-out renders and scores, and the strict hold-out's workspace, are made for one choice
+# of held-out photos, from the workspace's model and with the mesh settings: another choice (a
+# new HOLDOUT) or model starts them again, so that no frame of an earlier choice is scored and no
+# held-out photo is in the strict workspace.
+holdout_key="held out: $(for i in "${sel[@]}"; do ls "$ws/images" | sed -n "$((i + 1))p"; done | tr '\n' ' ')
+model $(content_of "$ws/sparse")
+$mesh_key"
+if key_changed holdout "$holdout_key"; then
+  rm -rf "$out/heldout_truth" "$out"/heldout_vertex "$out"/heldout_ptm1 "$out"/heldout_ptm "$out/train" \
+    "$out"/strict_vertex "$out"/strict_ptm "$out"/ssim_*.tsv "$out/heldout_names.txt" "$out/heldout_poses.txt"
+  key_done holdout "$holdout_key"
+fi
+mkdir -p "$out/heldout_truth"
 for i in "${sel[@]}"; do
   name=$(ls "$ws/images" | sed -n "$((i + 1))p")
   ln -sf "$ws/images/$name" "$out/heldout_truth/${name%.*}.png"
