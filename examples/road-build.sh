@@ -67,9 +67,10 @@
 #
 # Steps: [frames (VIDEO)] → orb2colmap (poses as priors, or the camera alone with POSES -) →
 # COLMAP feature_extractor / sequential_matcher / point_triangulator / bundle_adjuster (poses of
-# record; then boresight) or mapper + georef (POSES -) / image_undistorter (CPU) → mesh (COLMAP dense MVS +
-# poisson_mesher when COLMAP has CUDA, else densify + roadmesh --dense, or roadmesh alone) → segtrack (when OUT/ws/labels exists;
-# else dynmask, label-free, and the mesh again without the masked pixels) →
+# record; then boresight) or mapper + georef (POSES -) / image_undistorter (CPU) → [segtrack,
+# when OUT/ws/labels exists] → mesh (COLMAP dense MVS + poisson_mesher when COLMAP has CUDA, else
+# densify + roadmesh --dense, or roadmesh alone; without the masked pixels) → [without labels:
+# dynmask, label-free, and the mesh again without the masked pixels] →
 # pickview --partners (when the names carry several passes, A_0000.png …) → bakedepth →
 # inpaint3d (when there are masks) → ptmrender (held-out poses and a lane change) → ssim.
 set -euo pipefail
@@ -504,6 +505,13 @@ if [ ! -d "$ws/labels" ] && [ -f "$ws/tracks.tsv" ] && [ -f "$ws/mesh.ply" ] &&
   [ "$dynmask_keeps" = 1 ] && [ ! -f "$ws/dynmask-mesh.ply" ]; then
   rm -f "$ws/mesh.ply"
 fi
+# Labelled photos: their masks first (segtrack's record redoes them when a label changed), so
+# that the mesh leaves the vehicles out of fusion and vertex colours. (Before 8 Dec 2026 the
+# mesh was made before segtrack ran, with the vehicles, and never again.)
+if [ -d "$ws/labels" ]; then
+  log "3a. segtrack: the vehicle masks from the labels"
+  "$bin/segtrack" "$ws/labels" "$ws"
+fi
 if [ ! -f "$ws/mesh.ply" ] && [ ! -f "$ws/meshed-poisson.ply" ]; then
   # dynmask judges against this new first mesh, the scene as recorded: the masks an earlier
   # dynmask run made (tracks.tsv says one did) are not left out of it, only a video's overlay.
@@ -532,7 +540,9 @@ log "3b. exposure: a gain and an offset per photo, so that projectors blend at o
 log "4. vehicle masks and partners"
 [ -n "$overlay_masks" ] && dynmask_opts+=(--also "$overlay_masks")
 if [ -d "$ws/labels" ]; then
-  "$bin/segtrack" "$ws/labels" "$ws"  # its record redoes the masks when a label changed
+  # segtrack's masks (step 3a): roadmesh's inputs include them, so it redoes a mesh made
+  # without the masks of now.
+  [ -f "$ws/meshed-poisson.ply" ] || cpu_mesh "$ws"
 elif [ "${DYNAMIC:-1}" = 1 ]; then
   # No labels: label-free masks from the photos checked against each other through the first
   # mesh (dynmask), then the mesh again without the masked pixels (roadmesh's inputs include the
