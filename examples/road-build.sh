@@ -88,7 +88,7 @@ holdout=${HOLDOUT:-5}; lateral=${LATERAL:-1.5}
 log() { echo "== $*" >&2; }
 # COLMAP's version and build (read whole: grep -q or head would end the pipe early, and with
 # pipefail COLMAP's SIGPIPE would fail it).
-colmap_help=$(colmap -h 2>&1 || true)
+colmap_help=$(colmap -h 2> /dev/null || true)
 colmap_log() { "$@" > "$out/colmap.log" 2>&1 || { tail -20 "$out/colmap.log" >&2; exit 1; }; }
 # Puts TMP (a file or a folder another program wrote whole) in DEST's place: synced (the file
 # system's, sync -f: COLMAP syncs nothing), renamed into place over any old DEST, and the folder
@@ -122,7 +122,9 @@ key_done() {  # NAME TEXT
 # it is when it names neither).
 content_of() {  # PATH
   if [ -d "$1" ]; then
-    (cd "$1" && find . -type f -print0 | LC_ALL=C sort -z | xargs -0 -r md5sum) | md5sum | cut -c1-32
+    # (linked files followed; temporaries, named .NAME.tmp-*, left out)
+    (cd "$1" && find -L . -type f ! -name '.*' -print0 | LC_ALL=C sort -z | xargs -0 -r md5sum) |
+      md5sum | cut -c1-32
   elif [ -f "$1" ]; then
     md5sum < "$1" | cut -c1-32
   else
@@ -154,7 +156,7 @@ fi
 # The model of record (steps 1-2) and all that follows is made from the photos, the poses, the
 # intrinsics (the files they name too) and the structure-from-motion settings.
 sfm_key="photos $(content_of "$images")
-poses $(content_of "$poses")
+poses $(content_of "$poses") $(case $(basename "$poses") in images.txt | images.bin) content_of "$(dirname "$poses")" ;; esac)
 intrinsics $(for a in "$@"; do printf '%s=%s ' "$a" "$(content_of "$a")"; done)
 gps $(content_of "${GPS:-}") $(content_of "${GPS_TIMES:-}") ${GPS_OFFSET:-} ${GPS_SEARCH:-}
 settings ${MATCH_OVERLAP:-}|${SFM_MAX_REPROJ:-}|${SFM_CHUNK:-}|${SFM_CHUNK_OVERLAP:-}|${SFM_THREADS:-}|${LOOP_DETECTION:-}|${CAMERA_HEIGHT:-}|${CAMERA_MODEL:-}
@@ -164,8 +166,16 @@ if key_changed sfm "$sfm_key"; then
   rm -rf "$out/.keys" "$out/db.db" "$out/db.db.tmp" "$out/prior" "$out/tri" "$out/ba" "$out/sfm" \
     "$out"/sfm_* "$out/vocab_tree.bin" "$out/overlay" "$out/overlay_masks" "$out/sparse_record" \
     "$out/train" "$ws/sparse" "$ws/mesh.ply" "$ws/dynmask-mesh.ply" "$ws/meshed-poisson.ply" \
-    "$ws/fused.ply" "$ws/partners.tsv" "$ws/tracks.tsv" "$ws/masks"
+    "$ws/fused.ply" "$ws/partners.tsv" "$ws/tracks.tsv" "$ws/masks" "$ws/georef.json" \
+    "$out/db.db-wal" "$out/db.db-shm"
   key_done sfm "$sfm_key"
+fi
+# COLMAP's database (SQLite, which COLMAP writes without syncing): one a power loss damaged is
+# made again before the steps that read it (without the sqlite3 shell it is trusted).
+if [ ! -f "$out/ba/images.bin" ] && [ -f "$out/db.db" ] && command -v sqlite3 > /dev/null &&
+  [ "$(sqlite3 -init /dev/null -batch "$out/db.db" 'PRAGMA quick_check;' 2> /dev/null)" != ok ]; then
+  log "COLMAP's database $out/db.db is damaged: it is made again"
+  rm -rf "$out/db.db" "$out/db.db-wal" "$out/db.db-shm" "$out/prior"
 fi
 
 if [ "$poses" = - ]; then
@@ -445,7 +455,8 @@ if [ "$poses" != - ]; then
   for f in cameras.bin images.bin points3D.bin; do
     # New poses: the first mesh (and the one dynmask kept of it) was built with the old ones.
     cmp -s "$model/$f" "$ws/sparse/$f" ||
-      { rm -f "$ws/mesh.ply" "$ws/dynmask-mesh.ply"; copy_whole "$model/$f" "$ws/sparse/$f"; }
+      { rm -f "$ws/mesh.ply" "$ws/dynmask-mesh.ply" "$ws/meshed-poisson.ply" "$ws/fused.ply"
+        copy_whole "$model/$f" "$ws/sparse/$f"; }
   done
 fi
 if [ -f "$out/ba/georef.json" ]; then
@@ -462,7 +473,7 @@ if [ -n "$overlay" ]; then
     for f in "$images"/*; do ln -s "$overlay/mask.png" "$out/overlay/in/$(basename "$f")"; done
     colmap_log colmap image_undistorter --image_path "$out/overlay/in" --input_path "$out/ba" \
       --output_path "$out/overlay/out" --output_type COLMAP
-    mv "$out/overlay/out/images" "$overlay_masks"
+    commit_whole "$out/overlay/out/images" "$overlay_masks"
   fi
   [ -d "$ws/masks" ] || copy_whole "$overlay_masks" "$ws/masks"
 fi
@@ -521,6 +532,8 @@ if [ ! -f "$ws/mesh.ply" ] && [ ! -f "$ws/meshed-poisson.ply" ]; then
     [ -z "$overlay_masks" ] || copy_whole "$overlay_masks" "$ws/masks"
   fi
   if [[ "$colmap_help" == *"with CUDA"* ]]; then
+    # patch_match_stereo skips a view whose maps exist: none may be a killed run's or of other poses.
+    rm -f "$ws"/stereo/depth_maps/* "$ws"/stereo/normal_maps/* "$ws"/stereo/consistency_graphs/*
     colmap_log colmap patch_match_stereo --workspace_path "$ws"
     colmap_log colmap stereo_fusion --workspace_path "$ws" --output_path "$ws/fused.ply"
     tmp=$(temp_for "$ws/meshed-poisson.ply")
@@ -551,7 +564,8 @@ elif [ "${DYNAMIC:-1}" = 1 ]; then
   [ -f "$ws/meshed-poisson.ply" ] || cpu_mesh "$ws"
 fi
 passes=$(ls "$ws/images" | sed -n 's/^\([^_]*\)_.*/\1/p' | sort -u | wc -l)
-if [ "$passes" -ge 2 ] && [ ! -f "$ws/partners.tsv" ]; then "$bin/pickview" --partners "$ws" > /dev/null; fi
+# (pickview's record redoes the partners when the poses changed)
+if [ "$passes" -ge 2 ]; then "$bin/pickview" --partners "$ws" > /dev/null; fi
 
 log "5. bakedepth, inpaint3d"
 "$bin/bakedepth" "$ws"
@@ -602,16 +616,16 @@ if [ "${HOLDOUT_STRICT:-0}" = 1 ]; then
     colmap_log colmap image_deleter --input_path "$ws/sparse" --output_path "$tmp" \
       --image_names_path "$out/heldout_names.txt"
     ln -sfn "$ws/images" "$train/images"
-    if [ -d "$ws/masks" ]; then ln -sfn "$ws/masks" "$train/masks"; fi
     commit_whole "$tmp" "$train/sparse"
   fi
+  if [ -d "$ws/masks" ]; then ln -sfn "$ws/masks" "$train/masks"; else rm -f "$train/masks"; fi
   mkdir -p "$out/full_txt"
   # The held-out poses of record (images.txt lines of the full model) as ptmrender's trajectory.
   colmap_log colmap model_converter --input_path "$ws/sparse" --output_path "$out/full_txt" --output_type TXT
   awk 'NR == FNR { keep[$1] = 1; next } /^#/ { next }
        ++n % 2 == 1 { ok = ($10 in keep); if (ok) print; next } ok { print "" }' \
     "$out/heldout_names.txt" "$out/full_txt/images.txt" > "$out/heldout_poses.txt"
-  [ -f "$train/mesh.ply" ] || cpu_mesh "$train"
+  cpu_mesh "$train"  # (the records of densify and roadmesh redo it when the masks changed)
   "$bin/exposure" -q "$train"
   "$bin/bakedepth" -q "$train"
   "$bin/ptmrender" -q --mode vertex --poses "$out/heldout_poses.txt" "$train" "$out/strict_vertex"
