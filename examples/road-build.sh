@@ -114,10 +114,13 @@ key_changed() {  # NAME TEXT; true when the key differs
   [ "$(cat "$out/.keys/$1" 2> /dev/null)" != "$2" ]
 }
 key_done() {  # NAME TEXT
-  mkdir -p "$out/.keys"
-  printf '%s\n' "$2" > "$out/.keys/.$1.tmp-$$" || { echo "$0: error: cannot write $out/.keys/$1" >&2; exit 1; }
-  commit_whole "$out/.keys/.$1.tmp-$$" "$out/.keys/$1"
+  local tmp
+  mkdir -p "$out/.keys"; tmp=$(temp_for "$out/.keys/$1")
+  printf '%s\n' "$2" > "$tmp" || { echo "$0: error: cannot write $out/.keys/$1" >&2; exit 1; }
+  commit_whole "$tmp" "$out/.keys/$1"
 }
+# The first mesh and what is made with it: dynmask's kept copy, COLMAP's fused points and mesh.
+drop_meshes() { rm -f "$ws/mesh.ply" "$ws/dynmask-mesh.ply" "$ws/meshed-poisson.ply" "$ws/fused.ply"; }
 # A file's or a folder's content as one line: its files' names and md5 sums (the argument as
 # it is when it names neither).
 content_of() {  # PATH
@@ -165,9 +168,9 @@ if key_changed sfm "$sfm_key"; then
   [ -d "$out/.keys" ] && log "the photos, poses, intrinsics or SfM settings changed: the build is done again"
   rm -rf "$out/.keys" "$out/db.db" "$out/db.db.tmp" "$out/prior" "$out/tri" "$out/ba" "$out/sfm" \
     "$out"/sfm_* "$out/vocab_tree.bin" "$out/overlay" "$out/overlay_masks" "$out/sparse_record" \
-    "$out/train" "$ws/sparse" "$ws/mesh.ply" "$ws/dynmask-mesh.ply" "$ws/meshed-poisson.ply" \
-    "$ws/fused.ply" "$ws/partners.tsv" "$ws/tracks.tsv" "$ws/masks" "$ws/georef.json" \
+    "$out/train" "$ws/sparse" "$ws/partners.tsv" "$ws/tracks.tsv" "$ws/masks" "$ws/georef.json" \
     "$out/db.db-wal" "$out/db.db-shm"
+  drop_meshes
   key_done sfm "$sfm_key"
 fi
 # COLMAP's database (SQLite, which COLMAP writes without syncing): one a power loss damaged is
@@ -423,7 +426,6 @@ if [ ! -d "$ws/sparse" ]; then
   tmp=$(temp_for "$out/undistorted")
   colmap_log colmap image_undistorter --image_path "$images" --input_path "$out/ba" \
     --output_path "$tmp" --output_type COLMAP
-  sync -f "$tmp" || { echo "$0: error: cannot write $ws" >&2; exit 1; }
   mkdir -p "$ws"
   for f in "$tmp"/*; do [ "$(basename "$f")" = sparse ] || commit_whole "$f" "$ws/$(basename "$f")"; done
   rm -rf "$out/sparse_record"
@@ -455,8 +457,7 @@ if [ "$poses" != - ]; then
   for f in cameras.bin images.bin points3D.bin; do
     # New poses: the first mesh (and the one dynmask kept of it) was built with the old ones.
     cmp -s "$model/$f" "$ws/sparse/$f" ||
-      { rm -f "$ws/mesh.ply" "$ws/dynmask-mesh.ply" "$ws/meshed-poisson.ply" "$ws/fused.ply"
-        copy_whole "$model/$f" "$ws/sparse/$f"; }
+      { drop_meshes; copy_whole "$model/$f" "$ws/sparse/$f"; }
   done
 fi
 if [ -f "$out/ba/georef.json" ]; then
@@ -496,7 +497,7 @@ log "3. mesh"
 # DYNAMIC=0 after 1, the label-free masks go with it (below) and the mesh is made without them.
 mesh_key="MESH=${MESH:-dense} METRIC=${METRIC:-0} ROADMESH_FLAGS=${ROADMESH_FLAGS:-} DYNAMIC=${DYNAMIC:-1}"
 if key_changed mesh "$mesh_key"; then
-  rm -f "$ws/mesh.ply" "$ws/dynmask-mesh.ply" "$ws/meshed-poisson.ply" "$ws/fused.ply" "$out/.keys/holdout"
+  drop_meshes; rm -f "$out/.keys/holdout"
   key_done mesh "$mesh_key"
 fi
 read -r -a dynmask_opts <<< "${DYNMASK_FLAGS:-}"
@@ -572,14 +573,14 @@ log "5. bakedepth, inpaint3d"
 if [ -d "$ws/masks" ] && [ -f "$ws/partners.tsv" ]; then "$bin/inpaint3d" "$ws"; fi
 
 log "6. ptmrender: every ${holdout}th pose held out (vertex colours, PTM), and a lane change of ${lateral} (model units: metres when the model is metric)"
-n=$(ls "$ws/images" | wc -l)
-sel=()
-for i in $(seq 0 "$holdout" $((n - 1))); do sel+=("$i"); done
+mapfile -t photos < <(ls "$ws/images")
+sel=(); held=()  # the held-out photos' indices and names
+for i in $(seq 0 "$holdout" $((${#photos[@]} - 1))); do sel+=("$i"); held+=("${photos[$i]}"); done
 # The held-out renders and scores, and the strict hold-out's workspace, are made for one choice
 # of held-out photos, from the workspace's model and with the mesh settings: another choice (a
 # new HOLDOUT) or model starts them again, so that no frame of an earlier choice is scored and no
 # held-out photo is in the strict workspace.
-holdout_key="held out: $(for i in "${sel[@]}"; do ls "$ws/images" | sed -n "$((i + 1))p"; done | tr '\n' ' ')
+holdout_key="held out: $(printf '%s ' "${held[@]}")
 model $(content_of "$ws/sparse")
 $mesh_key"
 if key_changed holdout "$holdout_key"; then
@@ -588,8 +589,8 @@ if key_changed holdout "$holdout_key"; then
   key_done holdout "$holdout_key"
 fi
 mkdir -p "$out/heldout_truth"
-for i in "${sel[@]}"; do
-  name=$(ls "$ws/images" | sed -n "$((i + 1))p")
+for k in "${!sel[@]}"; do
+  i=${sel[$k]} name=${held[$k]}
   ln -sf "$ws/images/$name" "$out/heldout_truth/${name%.*}.png"
   "$bin/ptmrender" -q --mode vertex --frames "$i" "$ws" "$out/heldout_vertex"
   "$bin/ptmrender" -q --at-images --exclude-self --projectors 1 --no-occlusion --frames "$i" "$ws" "$out/heldout_ptm1"
@@ -610,7 +611,7 @@ echo "PTM, all effects, held-out photo's exposure fitted (ssim --fit-exposure): 
 if [ "${HOLDOUT_STRICT:-0}" = 1 ]; then
   log "8. strict hold-out: mesh, colours and projectors from a workspace without the held-out photos"
   train=$out/train
-  for i in "${sel[@]}"; do ls "$ws/images" | sed -n "$((i + 1))p"; done > "$out/heldout_names.txt"
+  printf '%s\n' "${held[@]}" > "$out/heldout_names.txt"
   if [ ! -d "$train/sparse" ]; then
     mkdir -p "$train"; tmp=$(temp_for "$train/sparse"); mkdir "$tmp"
     colmap_log colmap image_deleter --input_path "$ws/sparse" --output_path "$tmp" \
